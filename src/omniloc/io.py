@@ -1,0 +1,534 @@
+"""Bearing files and in-memory bearing validation: everything that checks bearings at the door.
+
+Inside omniloc bearings are radians wrapped to [-pi, pi), in a float64 array of shape (m,).
+Degrees exist only at the edges: in files (``bearing_deg`` columns, ``"units": "deg"``) and
+behind ``degrees=True`` flags.
+
+File formats understood by :func:`load_bearings` (chosen by extension):
+
+``.csv``
+    A header with exactly one column named ``bearing``, ``bearing_rad`` or ``bearing_deg``
+    (other columns are allowed and ignored), or a single column of numbers without header.
+    ``bearing_deg`` means degrees, ``bearing_rad`` radians, ``bearing`` follows ``degrees``.
+``.json``
+    A list of numbers, or ``{"bearings": [...], "units": "deg" | "rad"}``.
+anything else
+    Plain text: numbers separated by whitespace, commas or newlines; ``#`` starts a comment.
+
+In every format blank lines are skipped and lines starting with ``#`` are comments.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import enum
+import json
+import math
+import os
+import re
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from omniloc.errors import InputError, ObservationError
+
+__all__ = [
+    "check_bearings",
+    "load_bearings",
+    "save_bearings",
+    "to_jsonable",
+    "write_json",
+]
+
+PathLike = str | os.PathLike[str]
+
+_BEARING_COLUMNS = ("bearing", "bearing_rad", "bearing_deg")
+_TEXT_SEPARATORS = re.compile(r"[\s,]+")
+
+
+# --------------------------------------------------------------------------------------------
+# Shared helpers for reading and writing text files (also used by omniloc.maps)
+# --------------------------------------------------------------------------------------------
+
+
+def _read_text(path: PathLike, error: type[InputError]) -> str:
+    """Read a UTF-8 text file, turning every OS or decoding failure into ``error``."""
+    src = os.fspath(path)
+    try:
+        with open(path, encoding="utf-8-sig") as f:
+            return f.read()
+    except FileNotFoundError:
+        raise error(f"{src}: file not found") from None
+    except IsADirectoryError:
+        raise error(f"{src}: is a directory, not a file") from None
+    except PermissionError:
+        raise error(f"{src}: permission denied") from None
+    except OSError as e:
+        raise error(f"{src}: cannot read file: {e.strerror or e}") from None
+    except UnicodeDecodeError as e:
+        raise error(
+            f"{src}: not a UTF-8 text file (undecodable byte at offset {e.start})"
+        ) from None
+
+
+def _write_text(path: PathLike, text: str, error: type[InputError]) -> None:
+    """Write ``text`` (already complete in memory) to ``path`` as UTF-8."""
+    try:
+        with open(path, "w", encoding="utf-8", newline="") as f:
+            f.write(text)
+    except OSError as e:
+        raise error(f"{os.fspath(path)}: cannot write file: {e.strerror or e}") from None
+
+
+def _content_lines(text: str) -> list[tuple[int, str]]:
+    """Return ``(line_number, line)`` for every line that is neither blank nor a comment.
+
+    Line numbers count from 1 and only ``\\n`` ends a line, as in any text editor.
+    """
+    out = []
+    for lineno, raw in enumerate(text.split("\n"), start=1):
+        line = raw.rstrip("\r")
+        stripped = line.strip()
+        if stripped and not stripped.startswith("#"):
+            out.append((lineno, line))
+    return out
+
+
+def _split_csv_line(line: str, where: str, error: type[InputError]) -> list[str]:
+    """Split one CSV line into stripped fields (quotes allowed, no line breaks in fields)."""
+    try:
+        row = next(csv.reader([line], strict=True))
+    except csv.Error as e:
+        raise error(f"{where}: malformed CSV: {e}") from None
+    return [field.strip() for field in row]
+
+
+def _parse_json(text: str, src: str, error: type[InputError]) -> Any:
+    """``json.loads`` with syntax errors reported as ``error`` naming file, line and column."""
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as e:
+        raise error(f"{src} line {e.lineno} column {e.colno}: invalid JSON: {e.msg}") from None
+    except RecursionError:
+        raise error(f"{src}: invalid JSON: nested too deeply") from None
+
+
+def _parse_float(token: str, where: str, what: str, error: type[InputError]) -> float:
+    """Parse a finite float from text, else raise ``error`` quoting the offending token."""
+    try:
+        value = float(token)
+    except ValueError:
+        raise error(f"{where}: {what} is not a number: {token!r}") from None
+    if not math.isfinite(value):
+        raise error(f"{where}: {what} is not finite: {token!r}")
+    return value
+
+
+def _json_float(value: object, where: str, what: str, error: type[InputError]) -> float:
+    """Accept a JSON number (not a bool, not a string) that is finite."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise error(f"{where}: {what} is not a number: {value!r}")
+    out = float(value)
+    if not math.isfinite(out):
+        raise error(f"{where}: {what} is not finite: {value!r}")
+    return out
+
+
+def _type_name(value: object) -> str:
+    """JSON-flavoured name of a parsed JSON value's type, for messages."""
+    names = {dict: "an object", list: "a list", str: "a string", bool: "a boolean"}
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "a boolean"
+    if isinstance(value, int | float):
+        return "a number"
+    return names.get(type(value), type(value).__name__)
+
+
+def _wrap_keep_in_range(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Wrap to [-pi, pi), leaving values already in range bit-for-bit unchanged."""
+    out = np.array(a, dtype=np.float64, copy=True)
+    bad = (out < -np.pi) | (out >= np.pi)
+    if np.any(bad):
+        wrapped = np.mod(out[bad] + np.pi, 2.0 * np.pi) - np.pi
+        # np.mod can round up to exactly 2*pi for tiny negative inputs.
+        wrapped[wrapped >= np.pi] -= 2.0 * np.pi
+        out[bad] = wrapped
+    return out
+
+
+def _real_array(values: ArrayLike, name: str, error: type[InputError]) -> NDArray[np.float64]:
+    """Convert to a float64 array, refusing strings, booleans, complex numbers and ragged data."""
+    try:
+        arr = np.asarray(values)
+    except (ValueError, TypeError):
+        raise error(f"{name} must be a rectangular array of real numbers") from None
+    if arr.dtype.kind == "O":
+        try:
+            return np.array(arr, dtype=np.float64)
+        except (ValueError, TypeError):
+            raise error(f"{name} must contain only real numbers") from None
+    if arr.dtype.kind not in "iuf":
+        raise error(f"{name} must contain real numbers, got an array of dtype {arr.dtype}")
+    return np.array(arr, dtype=np.float64)
+
+
+# --------------------------------------------------------------------------------------------
+# In-memory validation
+# --------------------------------------------------------------------------------------------
+
+
+def check_bearings(
+    bearings: ArrayLike,
+    *,
+    n_landmarks: int | None = None,
+    min_count: int = 3,
+    name: str = "bearings",
+) -> NDArray[np.float64]:
+    """Validate bearings at the door of a public function and return a wrapped copy.
+
+    Parameters
+    ----------
+    bearings : array_like, shape (m,)
+        Bearings in radians, any range.
+    n_landmarks : int, optional
+        Number of landmarks in the map; more bearings than this is an error.
+    min_count : int, default 3
+        Smallest acceptable number of bearings.
+    name : str, default "bearings"
+        What to call the array in error messages.
+
+    Returns
+    -------
+    ndarray of float64, shape (m,)
+        A new array with the bearings wrapped to [-pi, pi) (values already in range are kept
+        exactly).
+
+    Raises
+    ------
+    ObservationError
+        If ``bearings`` is not a 1-D array of real numbers (a (m, 1) or (1, m) array is
+        refused, not flattened), has a non-finite entry, has fewer than ``min_count`` entries
+        or more than ``n_landmarks``.
+
+    Examples
+    --------
+    >>> check_bearings([0.0, 3 * np.pi / 2, -np.pi])
+    array([ 0.        , -1.57079633, -3.14159265])
+    >>> check_bearings([[0.1, 0.2, 0.3]])
+    Traceback (most recent call last):
+    ...
+    omniloc.errors.ObservationError: bearings must have shape (m,), got (1, 3)
+    >>> check_bearings([0.1, 0.2, 0.3, 0.4], n_landmarks=3)
+    Traceback (most recent call last):
+    ...
+    omniloc.errors.ObservationError: 4 bearings but the map has only 3 landmarks
+    """
+    arr = _real_array(bearings, name, ObservationError)
+    if arr.ndim != 1:
+        raise ObservationError(f"{name} must have shape (m,), got {arr.shape}")
+    finite = np.isfinite(arr)
+    if not np.all(finite):
+        bad = np.flatnonzero(~finite)
+        more = f" (and {bad.size - 1} more)" if bad.size > 1 else ""
+        raise ObservationError(f"{name}[{int(bad[0])}] is not finite: {float(arr[bad[0]])!r}{more}")
+    m = arr.shape[0]
+    if m < min_count:
+        raise ObservationError(f"localization needs at least {min_count} {name}, got {m}")
+    if n_landmarks is not None and m > n_landmarks:
+        raise ObservationError(f"{m} {name} but the map has only {n_landmarks} landmarks")
+    return _wrap_keep_in_range(arr)
+
+
+# --------------------------------------------------------------------------------------------
+# Bearing files
+# --------------------------------------------------------------------------------------------
+
+
+def _units_conflict(where: str, says: str, degrees: bool) -> None:
+    """Raise if the file declares radians while the caller asked for degrees."""
+    if degrees and says == "rad":
+        raise ObservationError(
+            f"{where}: the file declares radians but degrees=True was given; "
+            "drop degrees=True or fix the file"
+        )
+
+
+def _bearings_from_csv(text: str, src: str, degrees: bool) -> tuple[list[float], bool]:
+    values: list[float] = []
+    column = 0
+    n_fields = 1
+    in_degrees = degrees
+    header_done = False
+    for lineno, line in _content_lines(text):
+        where = f"{src} line {lineno}"
+        fields = _split_csv_line(line, where, ObservationError)
+        if not header_done:
+            header_done = True
+            if len(fields) == 1 and _looks_numeric(fields[0]):
+                pass  # a single column of numbers, no header: this line is data
+            else:
+                names = [f.lower() for f in fields]
+                found = [k for k, nm in enumerate(names) if nm in _BEARING_COLUMNS]
+                if not found:
+                    raise ObservationError(
+                        f"{where}: header must contain a column named bearing, bearing_rad "
+                        f"or bearing_deg (or the file must be a single column of numbers "
+                        f"without header); found: {', '.join(repr(f) for f in fields)}"
+                    )
+                if len(found) > 1:
+                    cols = ", ".join(repr(fields[k]) for k in found)
+                    raise ObservationError(f"{where}: several bearing columns ({cols}); keep one")
+                column, n_fields = found[0], len(fields)
+                if names[column] == "bearing_deg":
+                    in_degrees = True
+                elif names[column] == "bearing_rad":
+                    _units_conflict(where, "rad", degrees)
+                continue
+        if len(fields) != n_fields:
+            raise ObservationError(f"{where}: expected {n_fields} fields, got {len(fields)}")
+        values.append(_parse_float(fields[column], where, "bearing", ObservationError))
+    return values, in_degrees
+
+
+def _looks_numeric(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
+def _bearings_from_json(text: str, src: str, degrees: bool) -> tuple[list[float], bool]:
+    data = _parse_json(text, src, ObservationError)
+    in_degrees = degrees
+    if isinstance(data, dict):
+        if "bearings" not in data:
+            keys = ", ".join(repr(k) for k in data) or "none"
+            raise ObservationError(
+                f"{src}: expected a list of numbers or an object with a 'bearings' list; "
+                f"got an object with keys {keys}"
+            )
+        units = data.get("units")
+        if units is not None:
+            if units not in ("deg", "rad"):
+                raise ObservationError(f"{src}: units must be 'deg' or 'rad', got {units!r}")
+            _units_conflict(src, units, degrees)
+            in_degrees = units == "deg"
+        items = data["bearings"]
+        if not isinstance(items, list):
+            raise ObservationError(
+                f"{src}: 'bearings' must be a list of numbers, got {_type_name(items)}"
+            )
+    elif isinstance(data, list):
+        items = data
+    else:
+        raise ObservationError(
+            f"{src}: expected a list of numbers or an object with a 'bearings' list; "
+            f"got {_type_name(data)}"
+        )
+    values = [_json_float(v, src, f"bearings[{k}]", ObservationError) for k, v in enumerate(items)]
+    return values, in_degrees
+
+
+def _bearings_from_text(text: str, src: str) -> list[float]:
+    values: list[float] = []
+    for lineno, raw in enumerate(text.split("\n"), start=1):
+        line = raw.split("#", 1)[0].strip()
+        if not line:
+            continue
+        where = f"{src} line {lineno}"
+        for token in _TEXT_SEPARATORS.split(line):
+            if token:
+                values.append(_parse_float(token, where, "bearing", ObservationError))
+    return values
+
+
+def load_bearings(path: PathLike, *, degrees: bool = False) -> NDArray[np.float64]:
+    """Read bearings from a CSV, JSON or plain-text file.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file; its extension (``.csv``, ``.json``, anything else = plain text) chooses the
+        format (see the module docstring).
+    degrees : bool, default False
+        Read the numbers as degrees. Units written in the file (a ``bearing_deg`` or
+        ``bearing_rad`` column, a JSON ``"units"``) take precedence over the default; a file
+        that declares radians while ``degrees=True`` is an error rather than a guess.
+
+    Returns
+    -------
+    ndarray of float64, shape (m,)
+        Bearings in radians wrapped to [-pi, pi), in file order.
+
+    Raises
+    ------
+    ObservationError
+        If the file cannot be read, is empty, has a value that is not a finite number (the
+        message names the file and the line or entry), or its units conflict with ``degrees``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (d / "b.txt").write_text("# three bearings\\n0, 90\\n270\\n")
+    >>> np.rad2deg(load_bearings(d / "b.txt", degrees=True))
+    array([  0.,  90., -90.])
+    """
+    src = os.fspath(path)
+    text = _read_text(path, ObservationError)
+    suffix = Path(src).suffix.lower()
+    in_degrees = degrees
+    if suffix == ".csv":
+        values, in_degrees = _bearings_from_csv(text, src, degrees)
+    elif suffix == ".json":
+        values, in_degrees = _bearings_from_json(text, src, degrees)
+    else:
+        values = _bearings_from_text(text, src)
+    if not values:
+        raise ObservationError(f"{src}: no bearings found (the file is empty)")
+    arr = np.array(values, dtype=np.float64)
+    if in_degrees:
+        arr = np.deg2rad(arr)
+    return _wrap_keep_in_range(arr)
+
+
+def _float_text(value: float) -> str:
+    """Shortest text that reads back as exactly the same float."""
+    return repr(float(value))
+
+
+def save_bearings(path: PathLike, bearings: ArrayLike, *, degrees: bool = False) -> None:
+    """Write bearings to a CSV, JSON or plain-text file (the format follows the extension).
+
+    The file reads back with :func:`load_bearings` (for plain text, pass the same
+    ``degrees``; CSV and JSON record their units). Values are written wrapped to [-pi, pi)
+    (or the same range in degrees) with enough digits to read back exactly.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Destination; ``.csv`` writes a ``bearing_rad``/``bearing_deg`` column, ``.json`` writes
+        ``{"bearings": [...], "units": ...}``, anything else one number per line.
+    bearings : array_like, shape (m,)
+        Bearings in radians, m >= 1.
+    degrees : bool, default False
+        Write degrees instead of radians.
+
+    Raises
+    ------
+    ObservationError
+        If ``bearings`` is invalid (see :func:`check_bearings`) or the file cannot be written.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "b.csv"
+    >>> save_bearings(p, [0.5, -1.0, 4.0])
+    >>> print(p.read_text(), end="")
+    bearing_rad
+    0.5
+    -1.0
+    -2.2831853071795862
+    >>> load_bearings(p)
+    array([ 0.5       , -1.        , -2.28318531])
+    """
+    arr = check_bearings(bearings, min_count=1)
+    if degrees:
+        arr = np.rad2deg(arr)
+    units = "deg" if degrees else "rad"
+    suffix = Path(os.fspath(path)).suffix.lower()
+    if suffix == ".csv":
+        text = f"bearing_{units}\n" + "".join(f"{_float_text(v)}\n" for v in arr)
+    elif suffix == ".json":
+        items = ", ".join(_float_text(v) for v in arr)
+        text = f'{{"bearings": [{items}], "units": "{units}"}}\n'
+    else:
+        unit_word = "degrees (load with degrees=True)" if degrees else "radians"
+        text = f"# bearings in {unit_word}\n" + "".join(f"{_float_text(v)}\n" for v in arr)
+    _write_text(path, text, ObservationError)
+
+
+# --------------------------------------------------------------------------------------------
+# JSON output
+# --------------------------------------------------------------------------------------------
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Turn numpy arrays and scalars, dataclasses, enums and paths into plain JSON values.
+
+    Non-finite floats become ``None`` (JSON ``null``) because strict JSON has no NaN.
+    Tuples become lists; dictionary keys that are numpy scalars or enums become their values.
+
+    Examples
+    --------
+    >>> to_jsonable({"xy": np.array([[1.0, 2.0]]), "n": np.int64(3), "r": float("nan")})
+    {'xy': [[1.0, 2.0]], 'n': 3, 'r': None}
+    """
+    if obj is None or isinstance(obj, bool | str):
+        return obj
+    if isinstance(obj, enum.Enum):
+        return to_jsonable(obj.value)
+    if isinstance(obj, int):
+        return int(obj)
+    if isinstance(obj, float):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.generic):
+        return to_jsonable(obj.item())
+    if isinstance(obj, os.PathLike):
+        return os.fspath(obj)
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return {f.name: to_jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if isinstance(obj, dict):
+        return {_json_key(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    raise TypeError(f"cannot convert {type(obj).__name__} to JSON")
+
+
+def _json_key(key: object) -> str | int | float | bool | None:
+    if isinstance(key, enum.Enum):
+        key = key.value
+    if isinstance(key, np.generic):
+        key = key.item()
+    if key is None or isinstance(key, str | int | float | bool):
+        return key
+    return str(key)
+
+
+def write_json(path: PathLike, obj: Any, *, indent: int | None = 2) -> None:
+    """Write ``obj`` as strict JSON (see :func:`to_jsonable` for what is converted).
+
+    Parameters
+    ----------
+    path : str or path-like
+        Destination file, written as UTF-8 with a final newline.
+    obj : object
+        Dicts, lists, tuples, numbers, strings, numpy arrays and scalars, dataclasses, enums.
+    indent : int or None, default 2
+        Indentation passed to :func:`json.dumps`.
+
+    Raises
+    ------
+    InputError
+        If the file cannot be written.
+    TypeError
+        If ``obj`` contains something with no JSON form.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "out.json"
+    >>> write_json(p, {"bearings": np.array([0.5, 1.5])}, indent=None)
+    >>> p.read_text()
+    '{"bearings": [0.5, 1.5]}\\n'
+    """
+    text = json.dumps(to_jsonable(obj), indent=indent, allow_nan=False) + "\n"
+    _write_text(path, text, InputError)
