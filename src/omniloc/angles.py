@@ -5,14 +5,12 @@ Inside omniloc every angle is in radians. Bearings and headings are wrapped to [
 
 from __future__ import annotations
 
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ["TWO_PI", "angdiff", "deg2rad", "rad2deg", "wrap"]
 
 TWO_PI = 2.0 * np.pi
-
 
 
 def wrap(angle: ArrayLike) -> NDArray[np.float64] | float:
