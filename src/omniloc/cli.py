@@ -1,0 +1,391 @@
+"""The ``omniloc`` command: ``localize``, ``bearings``, ``demo``, ``evaluate``.
+
+Each subcommand calls one library function. Errors that omniloc raises on purpose
+(:class:`~omniloc.errors.OmnilocError`) become one line on stderr and exit status 1; anything
+else keeps its traceback, because it is a bug.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, NoReturn
+
+import numpy as np
+
+from . import __version__
+from .errors import InputError, OmnilocError
+
+log = logging.getLogger("omniloc")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports a usage error as one line and exit status 1."""
+
+    def error(self, message: str) -> NoReturn:
+        raise InputError(f"{self.prog}: {message}")
+
+
+def _deg(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from exc
+    if not np.isfinite(v):
+        raise argparse.ArgumentTypeError(f"not finite: {text!r}")
+    return v
+
+
+def _add_image_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("image options (conic-mirror camera)")
+    g.add_argument("--center", nargs=2, type=_deg, metavar=("CX", "CY"), help="rim centre, px")
+    g.add_argument("--aspect", type=_deg, help="rim semi-axis along u / along v")
+    g.add_argument(
+        "--forward", type=_deg, default=0.0, help="image angle of the robot's forward axis, deg"
+    )
+    g.add_argument("--mirrored", action="store_true", help="the mirror flips the rotation sense")
+
+
+def _build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(
+        prog="omniloc",
+        description="Absolute localization of a mobile robot from unlabelled landmark bearings.",
+    )
+    parser.add_argument("--version", action="version", version=f"omniloc {__version__}")
+    parser.add_argument("-v", "--verbose", action="count", default=0, help="more logging")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress, warnings only")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("localize", help="find the pose and correspondences from bearings")
+    p.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--bearings", type=Path, help="bearings file: CSV, JSON or plain text")
+    src.add_argument("--image", type=Path, help="an omnidirectional (conic-mirror) image")
+    p.add_argument(
+        "--degrees",
+        action="store_true",
+        help="the bearings file is in degrees, and human output shows degrees",
+    )
+    p.add_argument("--threshold", type=_deg, default=1.0, help="rule (ii) gate, deg (default 1)")
+    p.add_argument("--sigma", type=_deg, help="bearing noise std, deg: chi-square gating")
+    p.add_argument("--method", choices=["robust", "paper"], default="robust")
+    p.add_argument(
+        "--max-spurious", type=float, default=0, help="spurious bearings allowed (int or fraction)"
+    )
+    p.add_argument("--ordering", action="store_true", help="apply the angular ordering constraint")
+    p.add_argument("--max-range", type=_deg, help="sensor range, m")
+    p.add_argument("--min-range", type=_deg, help="minimum sensor range, m")
+    p.add_argument("--fov", type=_deg, help="full field of view, deg (omit for 360)")
+    p.add_argument("--p-miss", type=_deg, help="probability of missing a visible landmark")
+    p.add_argument("--max-nodes", type=int, help="node budget")
+    p.add_argument("--timeout", type=_deg, help="time budget, s")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument("--plot", type=Path, metavar="OUT.png", help="save a figure of the solutions")
+    _add_image_options(p)
+
+    b = sub.add_parser("bearings", help="extract landmark bearings from an omnidirectional image")
+    b.add_argument("image", type=Path)
+    _add_image_options(b)
+    b.add_argument("--degrees", action="store_true", help="print degrees rather than radians")
+    b.add_argument("--json", action="store_true", help="machine-readable output")
+    b.add_argument("--plot", type=Path, metavar="OUT.png", help="image with the detected lines")
+
+    d = sub.add_parser("demo", help="reproduce the paper's Table 1 and show the vision chain")
+    d.add_argument("--out", type=Path, default=Path("demo-output"), help="folder for figures")
+    d.add_argument("--no-vision", action="store_true", help="skip the vision section")
+
+    e = sub.add_parser("evaluate", help="Monte Carlo sweeps and real-data evaluation")
+    e.add_argument(
+        "--preset",
+        choices=["quick", "default", "targets-spurious", "targets-crlb"],
+        default="quick",
+        help="which sweep to run (default: quick)",
+    )
+    e.add_argument("--trials", type=int, help="trials per condition (overrides the preset)")
+    e.add_argument(
+        "--dataset",
+        nargs=2,
+        metavar=("KIND", "PATH"),
+        help="evaluate on real data instead: KIND is roh or mrclam",
+    )
+    e.add_argument("--max-samples", type=int, help="use at most this many dataset samples")
+    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--out", type=Path, default=Path("evaluation"), help="folder for results")
+    return parser
+
+
+# --------------------------------------------------------------------------------------------
+# Subcommands
+# --------------------------------------------------------------------------------------------
+
+
+def _fmt_angle(rad: float, degrees: bool) -> str:
+    return f"{np.rad2deg(rad):.3f} deg" if degrees else f"{rad:.5f} rad"
+
+
+def _cmd_localize(args: argparse.Namespace) -> int:
+    from .io import load_bearings, to_jsonable
+    from .maps import LandmarkMap
+    from .search import localize
+
+    lm = LandmarkMap.load(args.map)
+    if args.image is not None:
+        from .vision import bearings_from_image
+
+        det = bearings_from_image(
+            args.image,
+            center=None if args.center is None else tuple(args.center),
+            aspect=args.aspect,
+            forward=float(np.deg2rad(args.forward)),
+            mirrored=args.mirrored,
+        )
+        bearings = det.bearings
+        if bearings.size < 3:
+            raise InputError(
+                f"{args.image}: found {bearings.size} bearings in the image, need at least 3"
+            )
+    else:
+        bearings = load_bearings(args.bearings, degrees=args.degrees)
+    ms = args.max_spurious
+    max_spurious: int | float = int(ms) if float(ms).is_integer() else float(ms)
+    result = localize(
+        lm,
+        bearings,
+        threshold=float(np.deg2rad(args.threshold)),
+        method=args.method,
+        sigma=None if args.sigma is None else float(np.deg2rad(args.sigma)),
+        max_spurious=max_spurious,
+        ordering=args.ordering,
+        max_range=args.max_range,
+        min_range=args.min_range,
+        fov=None if args.fov is None else float(np.deg2rad(args.fov)),
+        p_miss=args.p_miss,
+        max_nodes=args.max_nodes,
+        timeout_s=args.timeout,
+    )
+    if args.plot is not None:
+        from .plot import plot_localization
+
+        plot_localization(result, bearings, args.plot)
+    if args.json:
+        out = {
+            "units": "metres and radians",
+            "bearings": bearings,
+            "solutions": [
+                {
+                    "x": s.pose.x,
+                    "y": s.pose.y,
+                    "theta": s.pose.theta,
+                    "assignment": result.assignment_ids(s),
+                    "residual_rms": s.residual_rms,
+                    "matched": s.matched,
+                    "confidence": s.confidence,
+                }
+                for s in result.solutions
+            ],
+            "ambiguous": result.ambiguous,
+            "complete": result.complete,
+            "stats": result.stats.as_dict(),
+        }
+        print(json.dumps(to_jsonable(out), indent=2))
+        return 0
+    deg = args.degrees
+    n = len(bearings)
+    st = result.stats
+    if not result:
+        print(
+            f"No pose is consistent with these {n} bearings "
+            f"({st.nodes} nodes searched in {st.elapsed_s * 1e3:.1f} ms"
+            + ("" if st.complete else ", stopped by the budget")
+            + ")."
+        )
+        return 0
+    print(
+        f"{len(result)} solution{'s' if len(result) != 1 else ''} for {n} bearings "
+        f"({st.nodes} nodes, {st.examined_paths} paths examined, "
+        f"{st.elapsed_s * 1e3:.1f} ms)"
+        + (" -- AMBIGUOUS: several poses fit" if result.ambiguous else "")
+        + ("" if st.complete else " -- INCOMPLETE: stopped by the budget")
+    )
+    for k, s in enumerate(result.solutions, 1):
+        ids = ["-" if i is None else str(i) for i in result.assignment_ids(s)]
+        print(
+            f"  #{k}: x = {s.pose.x:.3f} m, y = {s.pose.y:.3f} m, "
+            f"theta = {_fmt_angle(s.pose.theta, deg)}; "
+            f"landmarks [{', '.join(ids)}]; residual rms {_fmt_angle(s.residual_rms, deg)}; "
+            f"confidence {s.confidence:.2f}"
+        )
+    return 0
+
+
+def _cmd_bearings(args: argparse.Namespace) -> int:
+    from .io import to_jsonable
+    from .vision import bearings_from_image, load_image
+
+    image = load_image(args.image)
+    det = bearings_from_image(
+        image,
+        center=None if args.center is None else tuple(args.center),
+        aspect=args.aspect,
+        forward=float(np.deg2rad(args.forward)),
+        mirrored=args.mirrored,
+    )
+    if args.plot is not None:
+        from .vision import plot_detections
+
+        plot_detections(image, det, args.plot)
+    cal = det.calibration
+    conv = np.rad2deg if args.degrees else (lambda a: a)
+    if args.json:
+        out = {
+            "units": "degrees" if args.degrees else "radians",
+            "calibration": {"center": cal.center, "aspect": cal.aspect, "radius": cal.radius},
+            "detections": [
+                {"bearing": float(conv(b)), "strength": float(s), "kind": str(k)}
+                for b, s, k in zip(det.bearings, det.strength, det.kind, strict=True)
+            ],
+        }
+        print(json.dumps(to_jsonable(out), indent=2))
+        return 0
+    unit = "deg" if args.degrees else "rad"
+    print(
+        f"mirror rim: centre ({cal.center[0]:.2f}, {cal.center[1]:.2f}) px, "
+        f"aspect {cal.aspect:.4f}, radius {cal.radius:.1f} px; {len(det)} detections"
+    )
+    for b, s, k in zip(det.bearings, det.strength, det.kind, strict=True):
+        print(f"  {float(conv(b)):10.5f} {unit}  {k:4s}  strength {float(s):.1f}")
+    return 0
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from .plot import plot_localization
+    from .search import localize
+    from .simulate import DEMO_POSE, demo_room, observe, paper_experiment
+
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    print("omniloc demo: the seed paper's experiment (Lee & Chung, section 4, Table 1)")
+    print(
+        f"Demo room: {len(demo_room())} landmarks; robot at ({DEMO_POSE.x}, {DEMO_POSE.y}) "
+        f"heading {np.rad2deg(DEMO_POSE.theta):.0f} deg; noise-free bearings; threshold 1 deg."
+    )
+    rows, runs = paper_experiment()
+    header = (
+        "| observations | total paths in IT | examined paths | solutions | true pose found "
+        "| time (ms) |"
+    )
+    print()
+    print(header)
+    print("|---:|---:|---:|---:|:---:|---:|")
+    for r in rows:
+        print(
+            f"| {r.n_obs} | {r.total_paths} | {r.examined_paths} | {r.solutions} | "
+            f"{'yes' if r.true_pose_found else 'NO'} | {r.elapsed_s * 1e3:.1f} |"
+        )
+    print()
+    print("(examined paths = nodes the search visited at depth 4 or deeper, as in the paper)")
+    for m, (scene, res) in runs.items():
+        path = out / f"solutions-{m}-observations.png"
+        plot_localization(
+            res,
+            scene.bearings,
+            path,
+            true_pose=DEMO_POSE,
+            title=f"{m} observations: {len(res)} solution(s)",
+        )
+    print(f"Figures like the paper's Figs. 4-6: {out}/solutions-*-observations.png")
+
+    # Beyond the paper: a noisy scene with two spurious bearings.
+    lm = demo_room()
+    scene = observe(
+        lm, DEMO_POSE, n_obs=7, sigma=np.deg2rad(0.3), n_spurious=2, rng=np.random.default_rng(7)
+    )
+    res = localize(lm, scene.bearings, sigma=np.deg2rad(0.3), max_spurious=2)
+    print()
+    print(
+        "Beyond the paper: 7 landmarks + 2 spurious bearings, noise 0.3 deg, "
+        "localize(..., sigma=0.3 deg, max_spurious=2):"
+    )
+    best = res.best
+    if best is None:
+        print("  no solution")
+    else:
+        err_xy, err_th = best.pose.distance_to(DEMO_POSE)
+        print(
+            f"  best pose ({best.pose.x:.3f}, {best.pose.y:.3f}, "
+            f"{np.rad2deg(best.pose.theta):.2f} deg): error {err_xy * 100:.1f} cm, "
+            f"{np.rad2deg(err_th):.2f} deg; spurious bearings found: "
+            f"{[k for k, a in enumerate(best.assignment) if a is None]} "
+            f"(truth {[k for k, a in enumerate(scene.assignment) if a is None]}); "
+            f"{res.stats.elapsed_s * 1e3:.1f} ms"
+        )
+    if not args.no_vision:
+        from .vision import vision_demo
+
+        print()
+        print("Vision front end (rendered conic-mirror image -> bearings):")
+        print("  " + vision_demo(out).replace("\n", "\n  "))
+    return 0
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    from . import evaluate as ev
+
+    progress = not args.quiet
+    if args.dataset is not None:
+        kind, path = args.dataset
+        res: Any = ev.evaluate_dataset(
+            kind, path, max_samples=args.max_samples, rng=args.seed, progress=progress
+        )
+    else:
+        presets = {
+            "quick": ev.SweepConfig.quick,
+            "default": ev.SweepConfig.default,
+            "targets-spurious": ev.SweepConfig.targets_spurious,
+            "targets-crlb": ev.SweepConfig.targets_crlb,
+        }
+        config = presets[args.preset]()
+        if args.trials is not None:
+            if args.trials < 1:
+                raise InputError(f"--trials must be >= 1, got {args.trials}")
+            config = config.with_trials(args.trials)
+        res = ev.run_sweep(config, rng=args.seed, progress=progress)
+    print(res.summary())
+    written = ev.save_report(res, args.out)
+    print(f"written: {', '.join(str(p) for p in written)}")
+    return 0
+
+
+_COMMANDS = {
+    "localize": _cmd_localize,
+    "bearings": _cmd_bearings,
+    "demo": _cmd_demo,
+    "evaluate": _cmd_evaluate,
+}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    parser = _build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except OmnilocError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    level = logging.WARNING if args.quiet else (logging.INFO if args.verbose else logging.WARNING)
+    if args.verbose > 1:
+        level = logging.DEBUG
+    logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        return _COMMANDS[args.command](args)
+    except OmnilocError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

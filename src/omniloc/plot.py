@@ -1,0 +1,190 @@
+"""Figures of maps, bearings and solutions (like the seed paper's Figs. 4-6).
+
+The only module of the core that imports matplotlib, and only inside its functions, with the
+object-oriented API (no pyplot state), so it works headless and in threads.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .errors import InputError
+from .maps import LandmarkMap, as_landmark_map
+from .pose import Pose
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
+    from .search import LocalizationResult
+
+__all__ = ["plot_localization", "plot_solutions_grid"]
+
+
+def _new_figure(ncols: int = 1, size: float = 5.0) -> tuple[Figure, list[Axes]]:
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(size * ncols, size), layout="constrained")
+    axes = [fig.add_subplot(1, ncols, i + 1) for i in range(ncols)]
+    return fig, axes
+
+
+def _draw_robot(ax: Axes, pose: Pose, *, color: str, size: float, label: str | None) -> None:
+    ax.plot(pose.x, pose.y, "o", color=color, ms=7, label=label, zorder=5)
+    ax.annotate(
+        "",
+        xy=(pose.x + size * np.cos(pose.theta), pose.y + size * np.sin(pose.theta)),
+        xytext=(pose.x, pose.y),
+        arrowprops={"arrowstyle": "->", "color": color, "lw": 2},
+        zorder=5,
+    )
+
+
+def draw_scene(
+    ax: Axes,
+    landmarks: LandmarkMap,
+    bearings: ArrayLike,
+    pose: Pose,
+    assignment: Sequence[int | None] | None = None,
+    *,
+    color: str = "tab:blue",
+    true_pose: Pose | None = None,
+    title: str | None = None,
+) -> None:
+    """Draw the map, a pose, its rays along the measured bearings and the matched landmarks."""
+    L = landmarks.xy
+    b = np.asarray(bearings, dtype=float)
+    span = float(np.ptp(L, axis=0).max()) or 1.0
+    ax.plot(L[:, 0], L[:, 1], "ks", ms=6, label="landmarks")
+    for i, lid in enumerate(landmarks.ids):
+        ax.annotate(str(lid), L[i], textcoords="offset points", xytext=(4, 4), fontsize=8)
+    ray = 1.5 * span
+    for k, beta in enumerate(b):
+        ang = pose.theta + beta
+        matched = assignment is not None and assignment[k] is not None
+        end = (pose.x + ray * np.cos(ang), pose.y + ray * np.sin(ang))
+        if matched and assignment is not None:
+            lm_i = assignment[k]
+            assert lm_i is not None
+            end = (L[lm_i, 0], L[lm_i, 1])
+        ax.plot(
+            [pose.x, end[0]],
+            [pose.y, end[1]],
+            "-" if matched else ":",
+            color=color,
+            lw=1.0,
+            alpha=0.8,
+        )
+    if true_pose is not None:
+        _draw_robot(ax, true_pose, color="tab:green", size=0.08 * span, label="true pose")
+    _draw_robot(ax, pose, color=color, size=0.08 * span, label="solution")
+    pad = 0.1 * span
+    ax.set_xlim(L[:, 0].min() - pad, L[:, 0].max() + pad)
+    ax.set_ylim(L[:, 1].min() - pad, L[:, 1].max() + pad)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    if title:
+        ax.set_title(title, fontsize=10)
+
+
+def plot_localization(
+    result: LocalizationResult,
+    bearings: ArrayLike,
+    path: str | Path | None = None,
+    *,
+    true_pose: Pose | None = None,
+    max_solutions: int = 6,
+    title: str | None = None,
+) -> Figure:
+    """The map, the true pose (if known) and every solution with its rays (paper Figs. 4-6).
+
+    Parameters
+    ----------
+    result : LocalizationResult
+        From :func:`omniloc.localize`.
+    bearings : array_like, shape (m,)
+        The bearings that were localized, radians.
+    path : str or Path, optional
+        Where to save a PNG.
+    true_pose : Pose, optional
+        Drawn in green when known (simulation).
+    max_solutions : int
+        At most this many solutions get a panel each.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    lm = as_landmark_map(result.landmarks)
+    sols = result.solutions[:max_solutions]
+    n = max(1, len(sols))
+    fig, axes = _new_figure(ncols=n, size=4.5)
+    if not sols:
+        draw_scene(
+            axes[0],
+            lm,
+            np.zeros(0),
+            true_pose or Pose(0.0, 0.0, 0.0),
+            title="no solution",
+        )
+    palette = ["tab:blue", "tab:orange", "tab:red", "tab:purple", "tab:brown", "tab:pink"]
+    for k, (ax, sol) in enumerate(zip(axes, sols, strict=False)):
+        p = sol.pose
+        draw_scene(
+            ax,
+            lm,
+            bearings,
+            p,
+            sol.assignment,
+            color=palette[k % len(palette)],
+            true_pose=true_pose,
+            title=(
+                f"solution {k + 1}/{len(result.solutions)}: ({p.x:.2f}, {p.y:.2f}, "
+                f"{np.rad2deg(p.theta):.1f} deg)\nconfidence {sol.confidence:.2f}"
+            ),
+        )
+    axes[0].legend(loc="best", fontsize=7)
+    if title:
+        fig.suptitle(title)
+    if path is not None:
+        _save(fig, path)
+    return fig
+
+
+def plot_solutions_grid(
+    panels: Sequence[tuple[str, LocalizationResult, ArrayLike, Pose | None]],
+    path: str | Path | None = None,
+) -> Figure:
+    """One panel per run: its best solution (and the true pose) on the map.
+
+    ``panels`` holds ``(title, result, bearings, true_pose)`` tuples.
+    """
+    if not panels:
+        raise InputError("plot_solutions_grid needs at least one panel")
+    fig, axes = _new_figure(ncols=len(panels), size=4.0)
+    for ax, (ttl, res, b, truth) in zip(axes, panels, strict=True):
+        lm = as_landmark_map(res.landmarks)
+        best = res.best
+        if best is None:
+            draw_scene(ax, lm, np.zeros(0), truth or Pose(0, 0, 0), title=f"{ttl}: none")
+            continue
+        draw_scene(ax, lm, b, best.pose, best.assignment, true_pose=truth, title=ttl)
+    if path is not None:
+        _save(fig, path)
+    return fig
+
+
+def _save(fig: Any, path: str | Path) -> None:
+    p = Path(path)
+    try:
+        p.parent.mkdir(parents=True, exist_ok=True)
+        fig.savefig(p, dpi=110)
+    except OSError as exc:
+        raise InputError(f"cannot write figure {p}: {exc.strerror or exc}") from exc

@@ -1,0 +1,1130 @@
+"""Interpretation Tree search: correspondences and pose together (the seed paper's section 3).
+
+Level ``k`` of the tree assigns observation ``k`` to a landmark (or, with ``max_spurious``, to
+the wildcard "not on the map"). A path is pruned by the paper's two rules:
+
+(i)  when its third landmark is assigned, a pose must exist (eqs. 1-6 with positive distance
+     ratios);
+(ii) below that, the bearing predicted from the path's pose must match the measured one,
+     ``|wrap(predicted - measured)| <= threshold`` (or, with ``sigma``, a chi-square gate on the
+     innovation whose variance includes the pose uncertainty).
+
+Every validated node re-estimates the pose from all its pairs (eq. 4 over the path's pairs;
+the sums of eq. 4 are kept incrementally, which gives the same numbers). Every complete path
+that survives is a solution. Beyond the paper, the search also offers wildcards for spurious
+bearings with a branch-and-bound on the number of matches, the angular ordering constraint,
+visibility limits (range, field of view) with negative evidence, merging of equivalent
+solutions, ambiguity reporting and node/time budgets.
+
+Implementation: the tree is walked depth first, but a whole batch of sibling paths is expanded
+at once with numpy (a "batched" depth-first search). Without a budget this visits exactly the
+nodes the plain depth-first reading visits, in another order, so the solutions and the
+statistics are the same; memory stays bounded by the batch size times the depth.
+"""
+
+from __future__ import annotations
+
+import enum
+import itertools
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.special import ndtri
+
+from .angles import TWO_PI, wrap
+from .errors import InputError
+from .io import check_bearings
+from .maps import LandmarkMap, as_landmark_map
+from .pose import SINGULAR_RTOL, Pose, _bearing_jacobian, refine_batch
+
+__all__ = [
+    "LocalizationResult",
+    "Method",
+    "SearchStats",
+    "Solution",
+    "localize",
+]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Upper bound on candidate (path, landmark) pairs evaluated in one numpy batch.
+BATCH_PAIRS = 1 << 16
+
+#: With wildcards, solutions matching up to this many fewer bearings than the best are kept
+#: (and searched for); paths that cannot reach that are cut (branch and bound).
+MATCH_SLACK = 1
+
+
+class Method(str, enum.Enum):
+    """Which search semantics :func:`localize` follows.
+
+    ``paper``
+        The published algorithm to the letter: observations in the order given, rules (i) and
+        (ii) with a fixed threshold, every consistent complete path reported as its own
+        solution (this reproduces the paper's Table 1). Robust options are refused.
+    ``robust``
+        The same tree with everything beyond the paper available (wildcards, chi-square
+        gating, ordering, visibility, negative evidence); the observation order is chosen to
+        prune early, and solutions that are the same pose are merged.
+    """
+
+    PAPER = "paper"
+    ROBUST = "robust"
+
+
+@dataclass(frozen=True)
+class SearchStats:
+    """What the search did.
+
+    Attributes
+    ----------
+    total_paths : int
+        Complete paths of the tree without wildcards, ``N! / (N - m)!`` (the paper's Table 1,
+        second column).
+    examined_paths : int
+        Nodes visited at depth four or deeper: each is a path the search traced more than
+        three nodes deep (Table 1, third column). A wildcard node deeper than three counts too.
+    nodes : int
+        Every node visited, at any depth, wildcards included (a node is "visited" when its
+        pairing is generated and tested, whether it passes or not).
+    elapsed_s : float
+        Wall-clock time of the search and the final refinement, seconds.
+    triples_solved : int
+        Depth-3 pose solutions attempted (rule i).
+    pruned_existence, pruned_gate, pruned_ordering, pruned_visibility, pruned_bound : int
+        Nodes cut by rule (i), by rule (ii), by the ordering constraint, by range/field of
+        view, and paths cut by the match-count bound (wildcards).
+    complete : bool
+        False when a budget (``max_nodes``, ``timeout_s``) stopped the search early.
+    """
+
+    total_paths: int
+    examined_paths: int
+    nodes: int
+    elapsed_s: float
+    triples_solved: int = 0
+    pruned_existence: int = 0
+    pruned_gate: int = 0
+    pruned_ordering: int = 0
+    pruned_visibility: int = 0
+    pruned_bound: int = 0
+    complete: bool = True
+
+    def as_dict(self) -> dict[str, int | float | bool]:
+        """Plain-JSON dictionary of the statistics."""
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+@dataclass(frozen=True)
+class Solution:
+    """One consistent interpretation: which landmark each bearing is, and the pose.
+
+    Attributes
+    ----------
+    pose : Pose
+        Maximum-likelihood pose refined from all matched pairs.
+    assignment : tuple of (int or None)
+        For each observation, in the order given, the index of its landmark in the map, or
+        None when the observation was declared spurious (wildcard).
+    residual_rms : float
+        RMS of the wrapped bearing residuals over the matched observations, radians.
+    matched : int
+        Number of matched observations.
+    covariance : ndarray, shape (3, 3)
+        Covariance of (x, y, theta); from ``sigma`` when given, else from ``threshold / 3``.
+    cost : float
+        Negative log-likelihood used for ranking after ``matched`` (bearing residuals,
+        spurious observations and, with ``p_miss``, landmarks that should have been seen).
+    confidence : float
+        Normalised posterior weight among the returned solutions (they sum to 1).
+    missed : int
+        Landmarks plainly visible from ``pose`` (by ``max_range``/``fov``) but not observed.
+    """
+
+    pose: Pose
+    assignment: tuple[int | None, ...]
+    residual_rms: float
+    matched: int
+    covariance: FloatArray = field(repr=False, compare=False)
+    cost: float = 0.0
+    confidence: float = 1.0
+    missed: int = 0
+
+
+@dataclass(frozen=True)
+class LocalizationResult:
+    """The outcome of :func:`localize`; tests false when there is no solution.
+
+    Attributes
+    ----------
+    solutions : list of Solution
+        Best first: most matched observations, then lowest cost.
+    stats : SearchStats
+    landmarks : LandmarkMap
+        The map searched (for landmark ids).
+    ambiguous : bool
+        More than one distinct pose fits about as well as the best (same number of matches and
+        confidence at least 1 % of the best): symmetric maps, too few observations.
+    """
+
+    solutions: list[Solution]
+    stats: SearchStats
+    landmarks: LandmarkMap
+    ambiguous: bool = False
+
+    @property
+    def best(self) -> Solution | None:
+        """The best solution, or None."""
+        return self.solutions[0] if self.solutions else None
+
+    @property
+    def complete(self) -> bool:
+        """False when a budget stopped the search before the whole tree was walked."""
+        return self.stats.complete
+
+    def __bool__(self) -> bool:
+        return bool(self.solutions)
+
+    def __len__(self) -> int:
+        return len(self.solutions)
+
+    def assignment_ids(self, solution: Solution) -> list[int | str | None]:
+        """A solution's assignment as landmark ids (None for spurious observations)."""
+        return [None if i is None else self.landmarks.ids[i] for i in solution.assignment]
+
+
+# --------------------------------------------------------------------------------------------
+# Option handling
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Options:
+    threshold: float
+    sigma: float | None
+    gate_chi2: float
+    max_wild: int
+    min_match: int
+    ordering: bool
+    max_range: float | None
+    min_range: float | None
+    half_fov: float | None
+    p_miss: float | None
+    max_nodes: int | None
+    timeout_s: float | None
+    merge: bool
+
+    @property
+    def sigma_eff(self) -> float:
+        """Bearing noise used for likelihoods and covariances."""
+        return self.sigma if self.sigma is not None else self.threshold / 3.0
+
+
+def _positive(name: str, value: float | None, *, allow_zero: bool = False) -> float | None:
+    if value is None:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be a number, got {value!r}") from exc
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        raise InputError(f"{name} must be a positive finite number, got {value!r}")
+    return v
+
+
+def _make_options(
+    m: int,
+    *,
+    method: Method,
+    threshold: float,
+    sigma: float | None,
+    confidence: float,
+    max_spurious: int | float,
+    ordering: bool,
+    max_range: float | None,
+    min_range: float | None,
+    fov: float | None,
+    p_miss: float | None,
+    max_nodes: int | None,
+    timeout_s: float | None,
+) -> _Options:
+    thr = _positive("threshold", threshold, allow_zero=True)
+    assert thr is not None
+    sig = _positive("sigma", sigma)
+    if not (0.0 < float(confidence) < 1.0):
+        raise InputError(f"confidence must lie strictly between 0 and 1, got {confidence!r}")
+    if isinstance(max_spurious, bool) or not isinstance(max_spurious, (int, float, np.number)):
+        raise InputError(f"max_spurious must be an int or a fraction of m, got {max_spurious!r}")
+    if isinstance(max_spurious, (float, np.floating)) and not float(max_spurious).is_integer():
+        if not 0.0 <= float(max_spurious) < 1.0:
+            raise InputError(f"max_spurious as a fraction must lie in [0, 1), got {max_spurious}")
+        k = math.floor(float(max_spurious) * m)
+    else:
+        k = int(max_spurious)
+    if k < 0:
+        raise InputError(f"max_spurious must be >= 0, got {max_spurious}")
+    if m - k < 3:
+        raise InputError(
+            f"max_spurious={max_spurious} leaves {m - k} matched bearings out of {m}; "
+            "a pose needs at least 3"
+        )
+    rmax = _positive("max_range", max_range)
+    rmin = _positive("min_range", min_range, allow_zero=True)
+    if rmax is not None and rmin is not None and rmin >= rmax:
+        raise InputError(f"min_range ({rmin}) must be smaller than max_range ({rmax})")
+    fv = _positive("fov", fov)
+    if fv is not None and fv > TWO_PI + 1e-9:
+        raise InputError(f"fov is a full angle in radians, at most 2*pi, got {fv}")
+    pm = None
+    if p_miss is not None:
+        pm = float(p_miss)
+        if not 0.0 < pm < 1.0:
+            raise InputError(f"p_miss must lie strictly between 0 and 1, got {p_miss!r}")
+    if max_nodes is not None and (not isinstance(max_nodes, (int, np.integer)) or max_nodes < 1):
+        raise InputError(f"max_nodes must be a positive integer, got {max_nodes!r}")
+    tmo = _positive("timeout_s", timeout_s)
+    if method is Method.PAPER:
+        extras = {
+            "sigma": sig is not None,
+            "max_spurious": k > 0,
+            "ordering": bool(ordering),
+            "max_range": rmax is not None,
+            "min_range": rmin is not None,
+            "fov": fv is not None,
+            "p_miss": pm is not None,
+        }
+        used = [name for name, on in extras.items() if on]
+        if used:
+            raise InputError(
+                f"method='paper' is the published algorithm and takes no {', '.join(used)}; "
+                "use method='robust'"
+            )
+    gate = float(ndtri(0.5 + 0.5 * float(confidence)) ** 2)
+    return _Options(
+        threshold=thr,
+        sigma=sig,
+        gate_chi2=gate,
+        max_wild=k,
+        min_match=m - k,
+        ordering=bool(ordering),
+        max_range=rmax,
+        min_range=rmin,
+        half_fov=None if fv is None or fv >= TWO_PI - 1e-9 else 0.5 * fv,
+        p_miss=pm,
+        max_nodes=None if max_nodes is None else int(max_nodes),
+        timeout_s=tmo,
+        merge=method is Method.ROBUST,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# The batched tree
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class _Batch:
+    """A batch of sibling paths at one level, as parallel arrays (K rows)."""
+
+    level: int
+    assign: IntArray  # (K, m) landmark per level; -1 wildcard, -2 not yet assigned
+    nmatch: IntArray  # (K,)
+    nwild: IntArray  # (K,)
+    anchor: IntArray  # (K,) first matched landmark (L_0 of eq. 1), -1 if none
+    anchor_b: FloatArray  # (K,) its bearing
+    S: FloatArray  # (K, 3) sum of P_i: s00, s01, s11 (eq. 4)
+    T: FloatArray  # (K, 2) sum of P_i b_i
+    a1: NDArray[np.complex128]  # (K,) a_1 and b_1 of the first pair after the anchor
+    b1: NDArray[np.complex128]
+    pose: FloatArray  # (K, 3), valid where nmatch >= 3
+
+    def __len__(self) -> int:
+        return int(self.nmatch.shape[0])
+
+    def take(self, idx: IntArray | slice) -> _Batch:
+        return _Batch(
+            self.level,
+            self.assign[idx],
+            self.nmatch[idx],
+            self.nwild[idx],
+            self.anchor[idx],
+            self.anchor_b[idx],
+            self.S[idx],
+            self.T[idx],
+            self.a1[idx],
+            self.b1[idx],
+            self.pose[idx],
+        )
+
+
+def _concat(level: int, parts: list[_Batch]) -> _Batch:
+    def cat(name: str) -> Any:
+        return np.concatenate([getattr(p, name) for p in parts])
+
+    return _Batch(
+        level,
+        cat("assign"),
+        cat("nmatch"),
+        cat("nwild"),
+        cat("anchor"),
+        cat("anchor_b"),
+        cat("S"),
+        cat("T"),
+        cat("a1"),
+        cat("b1"),
+        cat("pose"),
+    )
+
+
+def _root(m: int) -> _Batch:
+    return _Batch(
+        0,
+        np.full((1, m), -2, dtype=np.int64),
+        np.zeros(1, dtype=np.int64),
+        np.zeros(1, dtype=np.int64),
+        np.full(1, -1, dtype=np.int64),
+        np.zeros(1),
+        np.zeros((1, 3)),
+        np.zeros((1, 2)),
+        np.zeros(1, dtype=np.complex128),
+        np.zeros(1, dtype=np.complex128),
+        np.zeros((1, 3)),
+    )
+
+
+class _Counter:
+    def __init__(self) -> None:
+        self.nodes = 0
+        self.examined = 0
+        self.triples = 0
+        self.existence = 0
+        self.gate = 0
+        self.ordering = 0
+        self.visibility = 0
+        self.bound = 0
+
+
+def _projector(a: NDArray[np.complex128], b: NDArray[np.complex128]) -> tuple[FloatArray, ...]:
+    """Entries of P = a a^T / a^T a - I (eq. 3) and of P b, for complex a and b."""
+    ar, ai = a.real, a.imag
+    aa = ar * ar + ai * ai
+    p00 = ar * ar / aa - 1.0
+    p01 = ar * ai / aa
+    p11 = ai * ai / aa - 1.0
+    br, bi = b.real, b.imag
+    return p00, p01, p11, p00 * br + p01 * bi, p01 * br + p11 * bi
+
+
+def _solve_f(S: FloatArray, T: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """f = -S^-1 T (eq. 4) for S given as (s00, s01, s11); returns f_x, f_y and det S."""
+    s00, s01, s11 = S[:, 0], S[:, 1], S[:, 2]
+    det = s00 * s11 - s01 * s01
+    with np.errstate(divide="ignore", invalid="ignore"):
+        fx = -(s11 * T[:, 0] - s01 * T[:, 1]) / det
+        fy = -(-s01 * T[:, 0] + s00 * T[:, 1]) / det
+    return fx, fy, det
+
+
+def _pose_from_f(
+    fx: FloatArray, fy: FloatArray, L0: FloatArray, b0: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Eqs. (5) and (6): the pose from f, the anchor landmark and its bearing."""
+    f2 = fx * fx + fy * fy
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rx = L0[:, 0] - fx / f2
+        ry = L0[:, 1] + fy / f2
+    theta = np.arctan2(L0[:, 1] - ry, L0[:, 0] - rx) - b0
+    return np.stack([rx, ry, np.asarray(wrap(theta))], axis=1), f2
+
+
+class _Search:
+    """One run of the tree: the map, the bearings in level order, options and counters."""
+
+    def __init__(
+        self, lm: LandmarkMap, bearings: FloatArray, order: IntArray, opt: _Options
+    ) -> None:
+        self.L = lm.xy
+        self.lm = lm
+        self.N = lm.n
+        self.beta = bearings[order]  # bearings in level order
+        self.order = order
+        self.m = int(bearings.shape[0])
+        self.opt = opt
+        self.count = _Counter()
+        self.leaves: list[_Batch] = []
+        self.best_match = 0
+        self.complete = True
+        self.t0 = time.perf_counter()
+        # Scale for "robot at infinity" tests.
+        self.scale = float(np.ptp(self.L, axis=0).max()) or 1.0
+
+    # ---- budget --------------------------------------------------------------------------
+    def _over_budget(self) -> bool:
+        o = self.opt
+        if o.max_nodes is not None and self.count.nodes >= o.max_nodes:
+            return True
+        return o.timeout_s is not None and time.perf_counter() - self.t0 > o.timeout_s
+
+    # ---- driver ----------------------------------------------------------------------------
+    def run(self) -> None:
+        stack: list[_Batch] = [_root(self.m)]
+        while stack:
+            if self._over_budget():
+                self.complete = False
+                break
+            batch = stack.pop()
+            if batch.level == self.m:
+                self.leaves.append(batch)
+                self.best_match = max(self.best_match, int(batch.nmatch.max()))
+                continue
+            per = max(1, BATCH_PAIRS // (self.N + 1))
+            if len(batch) > per:
+                parts = [batch.take(slice(i, i + per)) for i in range(0, len(batch), per)]
+                stack.extend(reversed(parts))
+                continue
+            children = self._expand(batch)
+            if children is not None and len(children):
+                stack.append(children)
+
+    # ---- one level -------------------------------------------------------------------------
+    def _expand(self, B: _Batch) -> _Batch | None:
+        lev = B.level
+        depth = lev + 1  # depth of the children in the tree
+        beta = float(self.beta[lev])
+        remaining = self.m - depth  # levels left below the children
+        opt = self.opt
+        parts: list[_Batch] = []
+
+        # Branch and bound on the number of matches (JCBB): a path that can no longer reach
+        # the best complete path found so far, less the slack, is cut with all its children.
+        need = max(opt.min_match, self.best_match - MATCH_SLACK)
+        alive = B.nmatch + (self.m - lev) >= need
+        if not alive.all():
+            self.count.bound += int((~alive).sum())
+            B = B.take(np.flatnonzero(alive))
+            if len(B) == 0:
+                return None
+
+        # Wildcard children ("this bearing is not on the map"), explored after the matches.
+        wild: _Batch | None = None
+        if opt.max_wild > 0:
+            ok = (B.nwild < opt.max_wild) & (B.nmatch + remaining >= need)
+            n_wild = int(ok.sum())
+            self.count.nodes += n_wild
+            self.count.bound += int((B.nwild < opt.max_wild).sum()) - n_wild
+            if depth > 3:
+                self.count.examined += n_wild
+            if n_wild:
+                wild = B.take(np.flatnonzero(ok))
+                wild.assign = wild.assign.copy()
+                wild.assign[:, lev] = -1
+                wild.nwild = wild.nwild + 1
+                wild.level = depth
+
+        # Landmark children, by how many pairs their parent already has.
+        groups: list[tuple[int, IntArray | None]]
+        if B.nmatch.min() == B.nmatch.max():
+            groups = [(int(B.nmatch[0]), None)]
+        else:
+            groups = [(int(k), np.flatnonzero(B.nmatch == k)) for k in np.unique(B.nmatch)]
+        for k, idx in groups:
+            G = B if idx is None else B.take(idx)
+            child: _Batch | None
+            par, lmk = self._candidates(G, k)
+            n_cand = int(par.size)
+            self.count.nodes += n_cand
+            if depth > 3:
+                self.count.examined += n_cand
+            if n_cand == 0:
+                continue
+            if k < 2:
+                child = self._add_pair(G, par, lmk, beta)
+            elif k == 2:
+                child = self._add_third(G, par, lmk, beta)
+            else:
+                child = self._add_checked(G, par, lmk, beta)
+            if child is not None and len(child):
+                parts.append(child)
+        if wild is not None:
+            parts.append(wild)
+        if not parts:
+            return None
+        out = parts[0] if len(parts) == 1 else _concat(depth, parts)
+        out.level = depth
+        return out
+
+    def _candidates(self, G: _Batch, k: int) -> tuple[IntArray, IntArray]:
+        """(parent row, landmark) pairs to test: unused landmarks, cut by range if known."""
+        K, N = len(G), self.N
+        opt = self.opt
+        if opt.max_range is not None and k >= 1 and N > 64:
+            par, lmk = self._range_candidates(G, k)
+        else:
+            par = np.repeat(np.arange(K), N)
+            lmk = np.tile(np.arange(N), K)
+        # Distinct landmarks along a path.
+        used = (G.assign[par] == lmk[:, None]).any(axis=1)
+        if used.any():
+            keep = ~used
+            par, lmk = par[keep], lmk[keep]
+        if opt.max_range is not None and 1 <= k <= 2:
+            # Two landmarks seen from one point within max_range are at most 2 max_range apart.
+            lim = (2.0 * opt.max_range) ** 2
+            d = self.L[lmk] - self.L[G.anchor[par]]
+            far = (d * d).sum(axis=1) > lim
+            if k == 2:  # the second landmark is L_0 + 1 / b_1 (eq. 2)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    z1 = 1.0 / G.b1[par]
+                d1 = d - np.stack([z1.real, z1.imag], axis=1)
+                far |= (d1 * d1).sum(axis=1) > lim
+            if far.any():
+                self.count.visibility += int(far.sum())
+                par, lmk = par[~far], lmk[~far]
+        return par, lmk
+
+    def _range_candidates(self, G: _Batch, k: int) -> tuple[IntArray, IntArray]:
+        """Candidate landmarks from the spatial index: near the anchor, or near the pose."""
+        assert self.opt.max_range is not None
+        tree = self.lm.kdtree
+        if k >= 3:
+            centres, radius = G.pose[:, :2], self.opt.max_range
+        else:
+            centres, radius = self.L[G.anchor], 2.0 * self.opt.max_range
+        lists = tree.query_ball_point(centres, radius, return_sorted=False)
+        lens = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
+        par = np.repeat(np.arange(len(G)), lens)
+        lmk = (
+            np.concatenate([np.asarray(x, dtype=np.int64) for x in lists])
+            if lens.sum()
+            else np.zeros(0, dtype=np.int64)
+        )
+        return par, lmk
+
+    # ---- children before a pose exists (depth 1, 2) ------------------------------------------
+    def _add_pair(self, G: _Batch, par: IntArray, lmk: IntArray, beta: float) -> _Batch:
+        C = G.take(par)
+        C.assign = C.assign.copy()
+        C.assign[:, G.level] = lmk
+        first = C.nmatch == 0
+        C.anchor = np.where(first, lmk, C.anchor)
+        C.anchor_b = np.where(first, beta, C.anchor_b)
+        second = ~first
+        if second.any():
+            z = self._z(lmk[second], C.anchor[second])
+            a = np.exp(1j * (beta - C.anchor_b[second])) / z
+            b = 1.0 / z
+            p00, p01, p11, pb0, pb1 = _projector(a, b)
+            C.S = C.S.copy()
+            C.T = C.T.copy()
+            C.S[second] = np.stack([p00, p01, p11], axis=1)
+            C.T[second] = np.stack([pb0, pb1], axis=1)
+            C.a1 = C.a1.copy()
+            C.b1 = C.b1.copy()
+            C.a1[second] = a
+            C.b1[second] = b
+        C.nmatch = C.nmatch + 1
+        C.level = G.level + 1
+        return C
+
+    def _z(self, lmk: IntArray, anchor: IntArray) -> NDArray[np.complex128]:
+        d = self.L[lmk] - self.L[anchor]
+        return d[:, 0] + 1j * d[:, 1]
+
+    # ---- rule (i): the third pair --------------------------------------------------------------
+    def _add_third(self, G: _Batch, par: IntArray, lmk: IntArray, beta: float) -> _Batch | None:
+        self.count.triples += int(par.size)
+        anchor = G.anchor[par]
+        z = self._z(lmk, anchor)
+        a = np.exp(1j * (beta - G.anchor_b[par])) / z
+        b = 1.0 / z
+        p00, p01, p11, pb0, pb1 = _projector(a, b)
+        S = G.S[par] + np.stack([p00, p01, p11], axis=1)
+        T = G.T[par] + np.stack([pb0, pb1], axis=1)
+        fx, fy, det = _solve_f(S, T)
+        # Rule (i): the pose exists -- S invertible, both distance ratios positive, f finite.
+        a1, b1 = G.a1[par], G.b1[par]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r1 = (a1.real * (fx + b1.real) + a1.imag * (fy + b1.imag)) / np.abs(a1) ** 2
+            r2 = (a.real * (fx + b.real) + a.imag * (fy + b.imag)) / np.abs(a) ** 2
+        smax = np.maximum(1.0, np.abs(S).max(axis=1))
+        ok = (np.abs(det) > SINGULAR_RTOL * smax * smax) & (r1 > 0) & (r2 > 0)
+        pose, f2 = _pose_from_f(fx, fy, self.L[anchor], G.anchor_b[par])
+        ok &= np.isfinite(f2) & (f2 > (1e-12 / self.scale) ** 2) & np.isfinite(pose).all(axis=1)
+        self.count.existence += int((~ok).sum())
+        keep = np.flatnonzero(ok)
+        if keep.size == 0:
+            return None
+        C = G.take(par[keep])
+        C.assign = C.assign.copy()
+        C.assign[:, G.level] = lmk[keep]
+        C.S, C.T, C.pose = S[keep], T[keep], pose[keep]
+        C.nmatch = C.nmatch + 1
+        C.level = G.level + 1
+        if self.opt.sigma is not None:
+            C.pose = self._refine(C)
+        return self._visible_path(C)
+
+    # ---- rule (ii): depth > 3 ------------------------------------------------------------------
+    def _add_checked(self, G: _Batch, par: IntArray, lmk: IntArray, beta: float) -> _Batch | None:
+        opt = self.opt
+        P = G.pose[par]
+        Lc = self.L[lmk]
+        dx = Lc[:, 0] - P[:, 0]
+        dy = Lc[:, 1] - P[:, 1]
+        pred = np.arctan2(dy, dx) - P[:, 2]
+        innov = np.asarray(wrap(pred - beta))
+        if opt.sigma is None:
+            ok = np.abs(innov) <= opt.threshold
+        else:
+            var = self._predicted_variance(G, par, dx, dy)
+            ok = innov * innov <= opt.gate_chi2 * var
+        self.count.gate += int((~ok).sum())
+        if opt.max_range is not None or opt.min_range is not None:
+            r2 = dx * dx + dy * dy
+            vis = np.ones_like(ok)
+            if opt.max_range is not None:
+                vis &= r2 <= opt.max_range**2
+            if opt.min_range is not None:
+                vis &= r2 >= opt.min_range**2
+            self.count.visibility += int((ok & ~vis).sum())
+            ok &= vis
+        if opt.ordering and ok.any():
+            sel = np.flatnonzero(ok)
+            good = self._order_ok_candidate(G, par[sel], np.asarray(wrap(pred[sel])), beta)
+            self.count.ordering += int((~good).sum())
+            ok[sel[~good]] = False
+        keep = np.flatnonzero(ok)
+        if keep.size == 0:
+            return None
+        par, lmk = par[keep], lmk[keep]
+        # A validated node re-estimates the pose from all its pairs (eq. 4 over the path).
+        z = self._z(lmk, G.anchor[par])
+        a = np.exp(1j * (beta - G.anchor_b[par])) / z
+        b = 1.0 / z
+        p00, p01, p11, pb0, pb1 = _projector(a, b)
+        S = G.S[par] + np.stack([p00, p01, p11], axis=1)
+        T = G.T[par] + np.stack([pb0, pb1], axis=1)
+        fx, fy, _ = _solve_f(S, T)
+        pose, _ = _pose_from_f(fx, fy, self.L[G.anchor[par]], G.anchor_b[par])
+        C = G.take(par)
+        C.assign = C.assign.copy()
+        C.assign[:, G.level] = lmk
+        C.S, C.T = S, T
+        bad = np.asarray(~np.isfinite(pose).all(axis=1))
+        C.pose = np.where(bad[:, None], G.pose[par], pose)
+        C.nmatch = C.nmatch + 1
+        C.level = G.level + 1
+        if opt.sigma is not None:
+            C.pose = self._refine(C)
+        if opt.ordering:
+            good = self._order_ok_path(C)
+            self.count.ordering += int((~good).sum())
+            if not good.all():
+                C = C.take(np.flatnonzero(good))
+        return C
+
+    # ---- helpers for the robust rules -----------------------------------------------------------
+    def _matched(self, C: _Batch) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Matched landmarks, bearings and weights of each path, padded to the depth."""
+        d = C.level
+        A = C.assign[:, :d]
+        w = (A >= 0).astype(np.float64)
+        Lm = self.L[np.maximum(A, 0)]
+        bm = np.broadcast_to(self.beta[:d], A.shape)
+        return Lm, np.ascontiguousarray(bm), w
+
+    def _refine(self, C: _Batch) -> FloatArray:
+        """A few Gauss-Newton steps from the linear pose (sigma mode): the ML pose."""
+        Lm, bm, w = self._matched(C)
+        p, _ = refine_batch(Lm, bm, C.pose, w, max_iter=3)
+        return p
+
+    def _predicted_variance(
+        self, G: _Batch, par: IntArray, dx: FloatArray, dy: FloatArray
+    ) -> FloatArray:
+        """Variance of a predicted bearing: g^T Cov(pose) g + sigma^2."""
+        sig = self.opt.sigma
+        assert sig is not None
+        Lm, _, w = self._matched(G)
+        _, g = _bearing_jacobian(Lm, G.pose)
+        gw = g * w[..., None]
+        J = np.einsum("kni,knj->kij", gw, gw)  # information times sigma^2
+        # Pseudo-inverse with a floor: a near-singular geometry (robot near the circle through
+        # three landmarks) gives a huge variance, which admits rather than rejects.
+        J = J + 1e-9 * np.eye(3)
+        cov = np.linalg.inv(J) * sig * sig
+        r2 = dx * dx + dy * dy
+        gc = np.stack([dy / r2, -dx / r2, -np.ones_like(r2)], axis=1)
+        cp = cov[par]
+        v = np.einsum("pi,pij,pj->p", gc, cp, gc)
+        return np.maximum(v, 0.0) + sig * sig
+
+    def _order_ok_candidate(
+        self, G: _Batch, par: IntArray, pred: FloatArray, beta: float
+    ) -> NDArray[np.bool_]:
+        """Ordering: the candidate's predicted bearing falls between the same matched
+        neighbours, around the pose, as the measured bearing does among the measured ones."""
+        Lm, bm, w = self._matched(G)
+        P = G.pose
+        predm = np.arctan2(Lm[..., 1] - P[:, None, 1], Lm[..., 0] - P[:, None, 0]) - P[:, None, 2]
+        # Angle of each matched observation counter-clockwise from the new one.
+        ccw_meas = np.mod(bm - beta, TWO_PI)
+        big = 10.0
+        ccw_meas = np.where(w > 0, ccw_meas, big)
+        nxt = np.argmin(ccw_meas, axis=1)  # next matched observation counter-clockwise
+        prv = np.argmax(np.where(w > 0, ccw_meas, -big), axis=1)  # previous one
+        rows = np.arange(len(G))
+        p_next = predm[rows, nxt][par]
+        p_prev = predm[rows, prv][par]
+        # The candidate must lie in the counter-clockwise arc from prev to next.
+        span = np.mod(p_next - p_prev, TWO_PI)
+        pos = np.mod(pred - p_prev, TWO_PI)
+        return np.asarray(pos <= span + 1e-12)
+
+    def _order_ok_path(self, C: _Batch) -> NDArray[np.bool_]:
+        """Ordering over a whole path at its re-estimated pose: the matched landmarks go round
+        the pose in the measured cyclic order (one turn exactly)."""
+        Lm, bm, w = self._matched(C)
+        P = C.pose
+        predm = np.arctan2(Lm[..., 1] - P[:, None, 1], Lm[..., 0] - P[:, None, 0]) - P[:, None, 2]
+        key = np.where(w > 0, np.mod(bm, TWO_PI), np.inf)
+        idx = np.argsort(key, axis=1, kind="stable")
+        ps = np.take_along_axis(predm, idx, axis=1)
+        ws = np.take_along_axis(w, idx, axis=1)
+        n = ws.sum(axis=1).astype(np.int64)
+        turns = np.zeros(len(C))
+        for k in np.unique(n):
+            rows = np.flatnonzero(n == k)
+            seq = ps[rows, :k]
+            steps = np.mod(np.diff(np.concatenate([seq, seq[:, :1]], axis=1), axis=1), TWO_PI)
+            turns[rows] = steps.sum(axis=1)
+        return np.asarray(np.abs(turns - TWO_PI) < 1e-6)
+
+    def _visible_path(self, C: _Batch) -> _Batch | None:
+        """Range limits on a fresh triple: the pose must see its three landmarks in range."""
+        opt = self.opt
+        if opt.max_range is None and opt.min_range is None:
+            return C
+        Lm, _, w = self._matched(C)
+        d2 = ((Lm - C.pose[:, None, :2]) ** 2).sum(axis=2)
+        ok = np.ones(len(C), dtype=bool)
+        if opt.max_range is not None:
+            ok &= ((d2 <= opt.max_range**2) | (w == 0)).all(axis=1)
+        if opt.min_range is not None:
+            ok &= ((d2 >= opt.min_range**2) | (w == 0)).all(axis=1)
+        self.count.visibility += int((~ok).sum())
+        return C.take(np.flatnonzero(ok)) if not ok.all() else C
+
+
+# --------------------------------------------------------------------------------------------
+# Observation order
+# --------------------------------------------------------------------------------------------
+
+
+def _robust_order(bearings: FloatArray) -> IntArray:
+    """Observation order that prunes early: the widest-spread triple first.
+
+    Three bearings spread round the robot fix the pose best (their pose has the smallest
+    covariance), so the depth > 3 gates are tightest. The rest follow in the order given.
+    """
+    m = bearings.shape[0]
+    if m <= 3:
+        return np.arange(m)
+    triples = _TRIPLES[min(m, 12)]
+    s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
+    gaps = np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1)
+    best = triples[int(np.argmax(gaps.min(axis=1)))]  # first of the widest, deterministic
+    rest = np.setdiff1d(np.arange(m), best)
+    return np.concatenate([best, rest]).astype(np.int64)
+
+
+_TRIPLES = {
+    n: np.array(list(itertools.combinations(range(n), 3)), dtype=np.int64) for n in range(3, 13)
+}
+
+
+# --------------------------------------------------------------------------------------------
+# Solutions: refinement, ranking, merging
+# --------------------------------------------------------------------------------------------
+
+
+def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solution], bool]:
+    if not s.leaves:
+        return [], False
+    leaves = _concat(s.m, s.leaves) if len(s.leaves) > 1 else s.leaves[0]
+    # The bound may have let a few weaker paths through before the best was known: drop them,
+    # so the answer does not depend on the order of the walk.
+    strong = leaves.nmatch >= int(leaves.nmatch.max()) - MATCH_SLACK
+    if not strong.all():
+        leaves = leaves.take(np.flatnonzero(strong))
+    m = s.m
+    # Back from level order to observation order.
+    assign = np.full((len(leaves), m), -1, dtype=np.int64)
+    assign[:, s.order] = leaves.assign
+    w = (assign >= 0).astype(np.float64)
+    Lm = s.L[np.maximum(assign, 0)]
+    bm = np.broadcast_to(bearings, assign.shape)
+    poses, sse = refine_batch(Lm, np.ascontiguousarray(bm), leaves.pose, w)
+    nmatch = w.sum(axis=1).astype(np.int64)
+    rms = np.sqrt(sse / nmatch)
+    sig = opt.sigma_eff
+    # Covariance at the refined pose: sigma^2 (G^T G)^-1 over the matched pairs.
+    _, g = _bearing_jacobian(Lm, poses)
+    gw = g * w[..., None]
+    H = np.einsum("kni,knj->kij", gw, gw) + 1e-12 * np.eye(3)
+    cov = np.linalg.inv(H) * sig * sig
+    # Cost: Gaussian bearing residuals, plus clutter for each spurious observation (uniform on
+    # the circle against the matched bearing's density), plus missed landmarks.
+    spur = max(0.5 * math.log(TWO_PI) - math.log(sig), 0.0)  # ln(density ratio) at the peak
+    cost = 0.5 * sse / (sig * sig) + (m - nmatch) * spur
+    missed = np.zeros(len(poses), dtype=np.int64)
+    if opt.p_miss is not None:
+        missed = _missed(s, poses, assign, bearings, opt)
+        cost = cost + missed * -math.log(opt.p_miss) + nmatch * -math.log1p(-opt.p_miss)
+    rank = np.lexsort((cost, -nmatch))
+    keep = _merge(rank, poses, cov) if opt.merge else [int(i) for i in rank]
+    c = cost[keep]
+    lik = np.exp(-(c - c.min()))
+    conf = lik / lik.sum()
+    sols = [
+        Solution(
+            pose=Pose.from_array(poses[i]),
+            assignment=tuple(int(v) if v >= 0 else None for v in assign[i]),
+            residual_rms=float(rms[i]),
+            matched=int(nmatch[i]),
+            covariance=cov[i],
+            cost=float(cost[i]),
+            confidence=float(cf),
+            missed=int(missed[i]),
+        )
+        for i, cf in zip(keep, conf, strict=True)
+    ]
+    top = sols[0]
+    rivals = [
+        t
+        for t in sols[1:]
+        if t.matched == top.matched
+        and t.confidence >= 0.01 * top.confidence
+        and not _same_pose(t.pose.as_array(), t.covariance, top.pose.as_array(), top.covariance)
+    ]
+    return sols, bool(rivals)
+
+
+#: Chi-square, 3 degrees of freedom, 99.9 %: two poses closer than this are the same.
+SAME_POSE_CHI2 = 16.27
+
+
+def _inv_cov(cov: FloatArray) -> FloatArray:
+    """Inverses of (K, 3, 3) covariances, regularised so that exact fits stay finite."""
+    scale = np.maximum(np.abs(cov).max(axis=(1, 2)), 1e-300)
+    reg = cov + (1e-12 * scale + 1e-24)[:, None, None] * np.eye(3)
+    return np.asarray(np.linalg.inv(reg))
+
+
+def _pose_gaps(p: FloatArray, q: FloatArray) -> FloatArray:
+    d = q - p
+    d[..., 2] = np.asarray(wrap(d[..., 2]))
+    return d
+
+
+def _merge(rank: IntArray, poses: FloatArray, cov: FloatArray) -> list[int]:
+    """Greedy merge in rank order: a solution indistinguishable from a better one (inside
+    the confidence ellipsoid of each, or within a micrometre) is dropped."""
+    inv = _inv_cov(cov)
+    keep: list[int] = []
+    for i in rank:
+        if keep:
+            k = np.asarray(keep)
+            d = _pose_gaps(poses[i], poses[k])
+            tiny = (np.abs(d[:, :2]).max(axis=1) < 1e-6) & (np.abs(d[:, 2]) < 1e-6)
+            m_k = np.einsum("ki,kij,kj->k", d, inv[k], d)
+            m_i = np.einsum("ki,ij,kj->k", d, inv[i], d)
+            if (tiny | (np.maximum(m_k, m_i) <= SAME_POSE_CHI2)).any():
+                continue
+        keep.append(int(i))
+    return keep
+
+
+def _same_pose(p: FloatArray, cp: FloatArray, q: FloatArray, cq: FloatArray) -> bool:
+    """Two poses indistinguishable at the uncertainty of each (chi-square, 3 dof, 99.9 %).
+
+    Both must lie inside the other's confidence ellipsoid: a vague solution cannot swallow a
+    precise one that happens to fall inside its own wide ellipsoid.
+    """
+    d = _pose_gaps(p, q)
+    if np.abs(d[:2]).max() < 1e-6 and abs(d[2]) < 1e-6:
+        return True
+    inv = _inv_cov(np.stack([cp, cq]))
+    return max(float(d @ inv[0] @ d), float(d @ inv[1] @ d)) <= SAME_POSE_CHI2
+
+
+def _missed(
+    s: _Search, poses: FloatArray, assign: IntArray, bearings: FloatArray, opt: _Options
+) -> IntArray:
+    """Landmarks plainly visible from each pose but not observed (negative evidence)."""
+    margin = 3.0 * opt.sigma_eff
+    out = np.zeros(len(poses), dtype=np.int64)
+    for k, p in enumerate(poses):
+        if opt.max_range is not None:
+            near = np.asarray(s.lm.kdtree.query_ball_point(p[:2], 0.95 * opt.max_range))
+            near = near.astype(np.int64)
+        else:
+            near = np.arange(s.N)
+        if near.size == 0:
+            continue
+        near = near[~np.isin(near, assign[k])]
+        d = s.L[near] - p[:2]
+        r = np.hypot(d[:, 0], d[:, 1])
+        pred = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - p[2]))
+        vis = np.ones(near.size, dtype=bool)
+        if opt.min_range is not None:
+            vis &= r >= 1.05 * opt.min_range
+        if opt.half_fov is not None:
+            vis &= np.abs(pred) <= opt.half_fov - margin
+        # Not hidden behind (or merged with) a bearing the robot did report.
+        if bearings.size:
+            sep = np.abs(np.asarray(wrap(pred[:, None] - bearings[None, :])))
+            vis &= sep.min(axis=1) > 2.0 * margin
+        out[k] = int(vis.sum())
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# Public entry point
+# --------------------------------------------------------------------------------------------
+
+
+def localize(
+    landmarks: LandmarkMap | ArrayLike,
+    bearings: ArrayLike,
+    *,
+    threshold: float = float(np.deg2rad(1.0)),
+    method: Method | str = Method.ROBUST,
+    sigma: float | None = None,
+    confidence: float = 0.99,
+    max_spurious: int | float = 0,
+    ordering: bool = False,
+    max_range: float | None = None,
+    min_range: float | None = None,
+    fov: float | None = None,
+    p_miss: float | None = None,
+    max_nodes: int | None = None,
+    timeout_s: float | None = None,
+) -> LocalizationResult:
+    """Find where the robot is, and which landmark each bearing is, from bearings alone.
+
+    Parameters
+    ----------
+    landmarks : LandmarkMap or array_like, shape (N, 2)
+        The known map, metres.
+    bearings : array_like, shape (m,)
+        Measured bearings in the robot frame, radians, counter-clockwise from forward.
+        3 <= m <= N (at most N + max_spurious with wildcards).
+    threshold : float, default 1 degree
+        Rule (ii): largest accepted ``|predicted - measured|`` bearing, radians. Used when
+        ``sigma`` is not given.
+    method : {"robust", "paper"}
+        ``"paper"`` is the published algorithm to the letter (see :class:`Method`).
+    sigma : float, optional
+        Bearing noise standard deviation, radians. Replaces the fixed threshold with a
+        chi-square gate on the innovation at ``confidence``, using the predicted bearing's
+        variance (pose covariance propagated through the bearing function, plus sigma^2).
+    confidence : float, default 0.99
+        Confidence level of the chi-square gate.
+    max_spurious : int or float, default 0
+        How many bearings may be spurious (not on the map): an int, or a fraction of m.
+        Unmatched observations appear as None in :attr:`Solution.assignment`.
+    ordering : bool, default False
+        Prune paths whose landmarks go round the hypothesised pose in another cyclic order
+        than the measured bearings (the paper's future work).
+    max_range, min_range : float, optional
+        Sensor range limits, metres: prune, and with a large map restrict candidates to the
+        landmarks near the pose with a k-d tree.
+    fov : float, optional
+        Full field of view in radians for non-omnidirectional sensors (e.g. 65 degrees).
+    p_miss : float, optional
+        Probability that a plainly visible landmark is not detected. When given, every such
+        landmark costs a solution ``-log(p_miss)`` (negative evidence).
+    max_nodes, timeout_s : optional
+        Budget. Past it the search stops and returns what it has; ``result.complete`` is then
+        False.
+
+    Returns
+    -------
+    LocalizationResult
+        Falsy when no interpretation is consistent.
+
+    Raises
+    ------
+    InputError
+        Malformed map or bearings, or options out of range.
+
+    References
+    ----------
+    Lee & Chung, section 3 (rules i and ii); Grimson (1990) for the wildcard branch.
+
+    Examples
+    --------
+    >>> from omniloc.pose import Pose, predict_bearings
+    >>> L = np.array([[0, 0], [6, 0], [6, 4], [0, 4], [3, 7], [-2, 2]], dtype=float)
+    >>> z = predict_bearings(L[[1, 4, 0, 2]], Pose(2.0, 1.5, 0.4))
+    >>> result = localize(L, z)
+    >>> result.best.assignment
+    (1, 4, 0, 2)
+    >>> round(result.best.pose.x, 6), round(result.best.pose.y, 6)
+    (2.0, 1.5)
+    """
+    t0 = time.perf_counter()
+    lm = as_landmark_map(landmarks)
+    try:
+        meth = Method(method)
+    except ValueError as exc:
+        raise InputError(
+            f"method must be one of {[m.value for m in Method]}, got {method!r}"
+        ) from exc
+    b = check_bearings(bearings, n_landmarks=None, min_count=3)
+    m = int(b.shape[0])
+    opt = _make_options(
+        m,
+        method=meth,
+        threshold=threshold,
+        sigma=sigma,
+        confidence=confidence,
+        max_spurious=max_spurious,
+        ordering=ordering,
+        max_range=max_range,
+        min_range=min_range,
+        fov=fov,
+        p_miss=p_miss,
+        max_nodes=max_nodes,
+        timeout_s=timeout_s,
+    )
+    if opt.min_match > lm.n:
+        raise InputError(
+            f"{m} bearings but the map has only {lm.n} landmarks"
+            + (f" (with max_spurious={opt.max_wild})" if opt.max_wild else "")
+        )
+    order = np.arange(m) if meth is Method.PAPER else _robust_order(b)
+    s = _Search(lm, b, order, opt)
+    s.run()
+    solutions, ambiguous = _finish(s, b, opt)
+    c = s.count
+    stats = SearchStats(
+        total_paths=math.perm(lm.n, m) if m <= lm.n else 0,
+        examined_paths=c.examined,
+        nodes=c.nodes,
+        elapsed_s=time.perf_counter() - t0,
+        triples_solved=c.triples,
+        pruned_existence=c.existence,
+        pruned_gate=c.gate,
+        pruned_ordering=c.ordering,
+        pruned_visibility=c.visibility,
+        pruned_bound=c.bound,
+        complete=s.complete,
+    )
+    return LocalizationResult(solutions, stats, lm, ambiguous)

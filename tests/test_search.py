@@ -1,0 +1,309 @@
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omniloc.errors import InputError
+from omniloc.maps import LandmarkMap
+from omniloc.pose import Pose, predict_bearings
+from omniloc.search import Method, localize
+from omniloc.simulate import demo_room, observe, random_map, random_pose, symmetric_map
+
+DEG = np.pi / 180
+
+
+def _has_pose(result, pose: Pose, tol_xy: float = 1e-6, tol_th: float = 1e-6) -> bool:
+    return any(
+        s.pose.distance_to(pose)[0] <= tol_xy and s.pose.distance_to(pose)[1] <= tol_th
+        for s in result.solutions
+    )
+
+
+@pytest.mark.parametrize(("n", "m"), [(12, 4), (12, 7), (5, 5), (30, 3)])
+def test_total_paths_is_n_perm_m(n: int, m: int) -> None:
+    lm = random_map(n, rng=n)
+    scene = observe(lm, random_pose(lm, rng=1), n_obs=m, rng=2)
+    res = localize(lm, scene.bearings, method="paper")
+    assert res.stats.total_paths == math.factorial(n) // math.factorial(n - m)
+    assert res.stats.total_paths == math.perm(n, m)
+
+
+@pytest.mark.parametrize("method", ["paper", "robust"])
+@pytest.mark.parametrize("seed", range(8))
+def test_true_pose_among_solutions_noise_free(method: str, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    lm = demo_room() if seed % 2 == 0 else random_map(15, rng=rng)
+    pose = random_pose(lm, rng=rng)
+    scene = observe(lm, pose, n_obs=int(rng.integers(4, 8)), rng=rng)
+    res = localize(lm, scene.bearings, method=method)
+    assert res
+    assert _has_pose(res, pose)
+    assert any(s.assignment == scene.assignment for s in res.solutions) or method == "robust"
+    best = res.best
+    assert best is not None and best.residual_rms < 1e-9
+
+
+def test_result_fields_and_stats() -> None:
+    lm = demo_room()
+    pose = Pose(5.6, 2.1, 0.5)
+    scene = observe(lm, pose, visible=[10, 3, 0, 6, 8, 4], rng=0)
+    res = localize(lm, scene.bearings, method="paper")
+    st = res.stats
+    assert st.complete and res.complete
+    assert 0 < st.examined_paths < st.nodes < st.total_paths
+    assert st.triples_solved == st.pruned_existence + (st.triples_solved - st.pruned_existence)
+    d = st.as_dict()
+    assert d["total_paths"] == math.perm(12, 6) and isinstance(d["elapsed_s"], float)
+    assert len(res) == len(res.solutions) and bool(res)
+    assert res.assignment_ids(res.best) == [lm.ids[i] for i in res.best.assignment]
+    assert abs(sum(s.confidence for s in res.solutions) - 1.0) < 1e-9
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_invariant_to_observation_order(seed: int) -> None:
+    rng = np.random.default_rng(100 + seed)
+    lm = random_map(14, rng=rng)
+    pose = random_pose(lm, rng=rng)
+    scene = observe(lm, pose, n_obs=6, rng=rng)
+    perm = rng.permutation(6)
+    inv = np.argsort(perm)
+    for method in ("paper", "robust"):
+        a = localize(lm, scene.bearings, method=method)
+        b = localize(lm, scene.bearings[perm], method=method)
+        # The true interpretation and the best pose do not depend on the order of the
+        # bearings (the set of false interpretations near the gate may: the paper's gate uses
+        # the pose of whichever three bearings come first).
+        assert a.best is not None and b.best is not None
+        assert tuple(b.best.assignment[k] for k in inv) == a.best.assignment == scene.assignment
+        assert np.allclose(a.best.pose.as_array(), b.best.pose.as_array(), atol=1e-8)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_invariant_to_rigid_motion_of_the_world(seed: int) -> None:
+    rng = np.random.default_rng(200 + seed)
+    lm = random_map(12, rng=rng)
+    pose = random_pose(lm, rng=rng)
+    scene = observe(lm, pose, n_obs=5, rng=rng)
+    rot, t = rng.uniform(-np.pi, np.pi), rng.uniform(-50, 50, 2)
+    c, s = np.cos(rot), np.sin(rot)
+    R = np.array([[c, -s], [s, c]])
+    lm2 = LandmarkMap(lm.xy @ R.T + t)
+    a = localize(lm, scene.bearings)
+    b = localize(lm2, scene.bearings)
+    assert [x.assignment for x in a.solutions] == [x.assignment for x in b.solutions]
+    for x, y in zip(a.solutions, b.solutions, strict=True):
+        moved = R @ x.pose.xy + t
+        assert np.allclose(moved, y.pose.xy, atol=1e-6)
+        assert abs(np.angle(np.exp(1j * (x.pose.theta + rot - y.pose.theta)))) < 1e-8
+
+
+def test_spurious_bearings_are_wildcards() -> None:
+    lm = demo_room()
+    pose = Pose(5.6, 2.1, 0.5)
+    scene = observe(lm, pose, n_obs=6, n_spurious=2, sigma=0.2 * DEG, rng=4)
+    plain = localize(lm, scene.bearings, sigma=0.2 * DEG)
+    assert not _has_pose(plain, pose, 0.1, DEG)
+    res = localize(lm, scene.bearings, sigma=0.2 * DEG, max_spurious=2)
+    best = res.best
+    assert best is not None
+    assert best.assignment == scene.assignment  # None exactly at the spurious bearings
+    assert best.matched == 6
+    assert best.pose.distance_to(pose)[0] < 0.1
+    # A fraction of m works too: 2 of 8 bearings.
+    frac = localize(lm, scene.bearings, sigma=0.2 * DEG, max_spurious=0.25)
+    assert frac.best is not None and frac.best.assignment == scene.assignment
+
+
+def test_branch_and_bound_on_matches() -> None:
+    lm = demo_room()
+    pose = Pose(5.6, 2.1, 0.5)
+    scene = observe(lm, pose, n_obs=7, rng=1)  # no spurious bearing at all
+    res = localize(lm, scene.bearings, max_spurious=3)
+    assert res.best is not None and res.best.assignment == scene.assignment
+    assert res.stats.pruned_bound > 0
+    # Once all 7 match, interpretations with 3 wildcards are not worth finding.
+    assert min(s.matched for s in res.solutions) >= 6
+
+
+def test_spurious_success_rate() -> None:
+    lm = demo_room()
+    pose = Pose(5.6, 2.1, 0.5)
+    good = 0
+    for seed in range(20):
+        scene = observe(lm, pose, n_obs=6, n_spurious=2, sigma=0.2 * DEG, rng=seed)
+        best = localize(lm, scene.bearings, sigma=0.2 * DEG, max_spurious=2).best
+        good += best is not None and best.pose.distance_to(pose)[0] < 0.1
+    assert good >= 16
+
+
+def test_max_spurious_rejects_too_few_left() -> None:
+    lm = demo_room()
+    z = predict_bearings(lm.xy[:4], Pose(5, 3, 0))
+    with pytest.raises(InputError, match="leaves 2 matched"):
+        localize(lm, z, max_spurious=2)
+
+
+def test_sigma_gating_keeps_true_matches_under_noise() -> None:
+    rng = np.random.default_rng(7)
+    sig = 0.5 * DEG
+    hits = 0
+    trials = 15
+    for _ in range(trials):
+        lm = demo_room()
+        pose = random_pose(lm, rng=rng)
+        scene = observe(lm, pose, n_obs=6, sigma=sig, rng=rng)
+        res = localize(lm, scene.bearings, sigma=sig)
+        hits += any(s.assignment == scene.assignment for s in res.solutions) or _has_pose(
+            res, pose, 0.2, 2 * DEG
+        )
+    assert hits >= trials - 1
+
+
+def test_threshold_gate_is_the_papers_rule() -> None:
+    lm = demo_room()
+    pose = Pose(5.6, 2.1, 0.5)
+    scene = observe(lm, pose, visible=[10, 3, 0, 6, 8, 4], rng=0)
+    z = scene.bearings.copy()
+    z[4] += 2 * DEG  # the fifth observation is off by 2 degrees
+    narrow = localize(lm, z, method="paper")
+    assert not any(s.assignment == scene.assignment for s in narrow.solutions)
+    wide = localize(lm, z, method="paper", threshold=5 * DEG)
+    assert any(s.assignment == scene.assignment for s in wide.solutions)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_ordering_never_loses_the_truth_and_only_prunes(seed: int) -> None:
+    rng = np.random.default_rng(300 + seed)
+    lm = random_map(15, rng=rng)
+    pose = random_pose(lm, rng=rng)
+    sig = 0.5 * DEG
+    scene = observe(lm, pose, n_obs=6, sigma=sig, rng=rng)
+    plain = localize(lm, scene.bearings, sigma=sig)
+    ordered = localize(lm, scene.bearings, sigma=sig, ordering=True)
+    assert ordered.stats.nodes <= plain.stats.nodes
+    # Equivalent solutions are merged after the search, so compare poses, not assignments.
+    for s in ordered.solutions:
+        assert any(s.pose.distance_to(t.pose)[0] < 0.5 for t in plain.solutions)
+    if any(s.assignment == scene.assignment for s in plain.solutions):
+        assert any(s.assignment == scene.assignment for s in ordered.solutions)
+
+
+def test_ordering_prunes_a_swapped_pair() -> None:
+    # Two landmarks nearly in line: a wide gate admits them swapped; ordering does not.
+    L = np.array([[0, 0], [10, 0], [10, 10], [0, 10], [5, 14], [5.4, 16]], float)
+    pose = Pose(5.0, 4.0, 0.0)
+    z = predict_bearings(L, pose)
+    loose = localize(L, z, threshold=8 * DEG)
+    strict = localize(L, z, threshold=8 * DEG, ordering=True)
+    assert strict.stats.pruned_ordering > 0
+    assert len(strict.solutions) <= len(loose.solutions)
+    assert _has_pose(strict, pose)
+
+
+def test_visibility_prunes_and_negative_evidence_ranks() -> None:
+    # A square (4-fold symmetric) plus one far landmark that only some of the symmetric
+    # poses would see within range.
+    L = np.array([[0, 0], [6, 0], [6, 6], [0, 6], [3, -8]], float)
+    truth = Pose(1.5, 4.5, 0.3)
+    z = predict_bearings(L[:4], truth)
+    plain = localize(L, z, max_range=11.0)
+    assert len(plain) == 4 and plain.ambiguous
+    neg = localize(L, z, max_range=11.0, p_miss=0.05)
+    assert [s.missed for s in neg.solutions] == [0, 0, 1, 1]
+    assert _has_pose(neg, truth)
+    top2 = neg.solutions[:2]
+    assert any(s.pose.distance_to(truth)[0] < 1e-6 for s in top2)
+    assert neg.solutions[2].confidence < 0.1 * top2[0].confidence
+    # With a range limit that excludes two corners, the search prunes by visibility.
+    short = localize(L, z, max_range=5.0)
+    assert short.stats.pruned_visibility > 0 and not _has_pose(short, truth)
+
+
+def test_fov_limits_negative_evidence() -> None:
+    L = np.array([[0, 0], [6, 0], [6, 6], [0, 6], [3, -8]], float)
+    truth = Pose(1.5, 4.5, 0.3)
+    z = predict_bearings(L[:4], truth)
+    res = localize(L, z, fov=2 * np.pi, p_miss=0.2)
+    # 360-degree field of view and no range: every unobserved landmark counts as missed.
+    assert all(s.missed == 1 for s in res.solutions)
+
+
+def test_symmetric_map_is_ambiguous_with_equal_confidence() -> None:
+    lm = symmetric_map("square", size=6.0)
+    truth = Pose(1.5, 2.0, 0.7)
+    res = localize(lm, predict_bearings(lm.xy, truth))
+    assert len(res) == 4 and res.ambiguous
+    assert np.allclose([s.confidence for s in res.solutions], 0.25, atol=1e-6)
+    assert _has_pose(res, truth)
+
+
+def test_unique_solution_is_not_ambiguous() -> None:
+    lm = demo_room()
+    scene = observe(lm, Pose(5.6, 2.1, 0.5), visible=[10, 3, 0, 6, 8, 4, 11], rng=0)
+    res = localize(lm, scene.bearings)
+    assert len(res) == 1 and not res.ambiguous and res.best.confidence == pytest.approx(1.0)
+
+
+def test_equivalent_assignments_are_merged() -> None:
+    # Landmarks 4 and 5 lie on one ray from the robot: swapping them gives the same pose.
+    pose = Pose(2.0, 2.0, 0.0)
+    L = np.array([[8, 2], [2, 9], [-4, 1], [-1, -5], [6, 6], [10, 10]], float)
+    z = predict_bearings(L[:5], pose)
+    paper = localize(L, z, method="paper")
+    robust = localize(L, z)
+    assert len(paper) == 2  # (..., 4) and (..., 5) are both consistent complete paths
+    assert len(robust) == 1
+
+
+def test_budget_stops_early_and_says_so() -> None:
+    lm = random_map(25, rng=0)
+    scene = observe(lm, random_pose(lm, rng=0), n_obs=7, rng=0)
+    res = localize(lm, scene.bearings, max_nodes=50)
+    assert not res.complete and not res.stats.complete
+    full = localize(lm, scene.bearings)
+    assert full.complete and full.stats.nodes > res.stats.nodes
+    quick = localize(lm, scene.bearings, max_spurious=2, timeout_s=1e-4)
+    assert not quick.complete
+
+
+def test_no_solution_is_falsy() -> None:
+    lm = symmetric_map("square")
+    res = localize(lm, np.deg2rad([0.0, 5.0, 10.0, 180.0]))
+    assert not res and res.best is None and len(res) == 0
+
+
+def test_paper_method_refuses_robust_options() -> None:
+    lm = demo_room()
+    z = predict_bearings(lm.xy[:4], Pose(5, 3, 0))
+    for kw in ({"sigma": 0.01}, {"max_spurious": 1}, {"ordering": True}, {"fov": 1.0}):
+        with pytest.raises(InputError, match="method='paper'"):
+            localize(lm, z, method=Method.PAPER, **kw)
+
+
+@pytest.mark.parametrize(
+    ("landmarks", "bearings", "kw", "match"),
+    [
+        (np.zeros((2, 2)), [0.1, 0.2, 0.3], {}, "at least 3 landmarks"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, np.nan, 0.3], {}, "not finite|non-finite"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2], {}, "at least 3"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3, 0.4], {}, "only 3 landmarks"),
+        ([[0, 0], [1, 0], [0, 1]], [[0.1, 0.2, 0.3]], {}, "shape"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"threshold": -1.0}, "threshold"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"method": "magic"}, "method"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"sigma": 0.0}, "sigma"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"confidence": 1.0}, "confidence"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"max_spurious": -1}, "max_spurious"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"max_spurious": 1.5}, "max_spurious"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"max_range": np.nan}, "max_range"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"min_range": 5, "max_range": 2}, "min_range"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"fov": 7.0}, "fov"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"p_miss": 1.0}, "p_miss"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"max_nodes": 0}, "max_nodes"),
+        ([[0, 0], [1, 0], [0, 1]], [0.1, 0.2, 0.3], {"timeout_s": -1}, "timeout_s"),
+    ],
+)
+def test_bad_input_gets_a_clear_error(landmarks, bearings, kw, match) -> None:
+    with pytest.raises(InputError, match=match):
+        localize(landmarks, bearings, **kw)
