@@ -1,0 +1,58 @@
+"""Omnidirectional vision front end: image of a conic mirror -> landmark bearings.
+
+Vertical edges of the room (door frames, wall corners, poles) are radial lines in the image
+of a camera looking at a conic mirror along its axis, so their image angles are bearings
+(seed paper, section 1). This package finds the mirror rim (:func:`calibrate_mirror`),
+extracts the bearings of radial edges and poles (:func:`extract_bearings`), renders synthetic
+images with known truth (:func:`render_omni_image`, :func:`true_features`) and plots the
+result (:func:`plot_detections`). Conventions are in ``docs/vision.md``.
+
+matplotlib is imported only inside the plotting functions.
+"""
+
+from __future__ import annotations
+
+from omniloc.vision.bearings import (
+    EdgeDetections,
+    bearings_from_image,
+    extract_bearings,
+    load_image,
+    unwrap_panorama,
+)
+from omniloc.vision.calibrate import MirrorCalibration, calibrate_mirror
+from omniloc.vision.plot import plot_conventions, plot_detections, vision_demo
+from omniloc.vision.render import (
+    DEMO_POSE,
+    OmniCamera,
+    OmniScene,
+    Pole,
+    TrueFeatures,
+    WallEdge,
+    demo_scene,
+    random_scene,
+    render_omni_image,
+    true_features,
+)
+
+__all__ = [
+    "DEMO_POSE",
+    "EdgeDetections",
+    "MirrorCalibration",
+    "OmniCamera",
+    "OmniScene",
+    "Pole",
+    "TrueFeatures",
+    "WallEdge",
+    "bearings_from_image",
+    "calibrate_mirror",
+    "demo_scene",
+    "extract_bearings",
+    "load_image",
+    "plot_conventions",
+    "plot_detections",
+    "random_scene",
+    "render_omni_image",
+    "true_features",
+    "unwrap_panorama",
+    "vision_demo",
+]

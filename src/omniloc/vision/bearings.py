@@ -1,0 +1,513 @@
+"""Bearings of vertical edges and poles from an omnidirectional image.
+
+Vertical structures in the room become radial lines in the image of a conic mirror, so their
+image angles are their bearings (seed paper, section 1). Conventions (fixed for all of
+omniloc):
+
+* pixel ``(u, v)``: u = column to the right, v = row downward, (0, 0) the centre of the
+  top-left pixel;
+* image angle ``phi = atan2(-(v - cy) * aspect, u - cx)`` (counter-clockwise as displayed,
+  0 to the right), with the rim centre ``(cx, cy)`` and ``aspect`` = rim semi-axis along u /
+  rim semi-axis along v;
+* bearing ``wrap(s * phi - forward)`` with ``s = -1`` for a mirrored sensor, else ``+1``;
+  ``forward`` is the image angle of the robot's forward axis. Bearings are in radians,
+  counter-clockwise from forward, in [-pi, pi).
+
+Method: unwrap the mirror annulus (without the camera's own reflection and the rim) to a
+panorama whose columns are image angles and rows radii; take the azimuthal derivative of
+every row; combine the rows by their median and keep the peaks that most rows agree with in
+sign (so texture that varies along the radius cancels out); refine each peak to sub-column
+accuracy with a parabola; suppress duplicates (wrap-around aware); and merge a pair of
+opposite steps closer than ``max_pole_width`` into one pole at their middle.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from omniloc.angles import wrap
+from omniloc.errors import VisionError
+from omniloc.vision.calibrate import (
+    MirrorCalibration,
+    _check_aspect,
+    _finite_float,
+    as_gray,
+    calibrate_mirror,
+    check_center,
+)
+
+__all__ = [
+    "EdgeDetections",
+    "bearings_from_image",
+    "extract_bearings",
+    "load_image",
+    "unwrap_panorama",
+]
+
+_PAD = 16  # wrap-around padding (columns) for azimuthal filtering
+
+
+@dataclass(frozen=True, eq=False)
+class EdgeDetections:
+    """Radial features found in one image, sorted by bearing.
+
+    Attributes
+    ----------
+    bearings : ndarray, shape (k,)
+        Bearings in the robot frame, radians in [-pi, pi).
+    strength : ndarray, shape (k,)
+        Contrast in 8-bit grey levels: the step height of an edge, the mean step height of
+        the two sides of a pole.
+    kind : ndarray of str, shape (k,)
+        ``"edge"`` (an intensity step across azimuth) or ``"pole"`` (a narrow dark or bright
+        stripe, reported once at its centre).
+    image_angles : ndarray, shape (k,)
+        Image angles ``phi`` of the detections, radians in [-pi, pi).
+    calibration : MirrorCalibration
+        The rim used.
+    forward : float
+        Image angle of the robot's forward axis, radians.
+    mirrored : bool
+        Whether the sense of rotation was flipped.
+
+    A result with no detections has length 0 and is falsy.
+    """
+
+    bearings: NDArray[np.float64]
+    strength: NDArray[np.float64]
+    kind: NDArray[np.str_]
+    image_angles: NDArray[np.float64]
+    calibration: MirrorCalibration
+    forward: float = 0.0
+    mirrored: bool = False
+
+    def __post_init__(self) -> None:
+        for name in ("bearings", "strength", "kind", "image_angles"):
+            arr = np.array(getattr(self, name))
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
+    def __len__(self) -> int:
+        return int(self.bearings.shape[0])
+
+
+def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
+    """Read an image file (PNG, JPEG, TIFF, ... anything OpenCV reads).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file.
+
+    Returns
+    -------
+    ndarray
+        ``(H, W)`` grey or ``(H, W, 3)`` RGB (``(H, W, 4)`` RGBA), as stored: usually
+        uint8, uint16 for 16-bit PNG/TIFF.
+
+    Raises
+    ------
+    VisionError
+        If the file does not exist or cannot be decoded as an image.
+    """
+    p = Path(path)
+    if not p.is_file():
+        raise VisionError(f"cannot read image {str(p)!r}: no such file")
+    data = np.fromfile(p, dtype=np.uint8)
+    img: NDArray[Any] | None = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    if img is None:
+        raise VisionError(f"cannot read image {str(p)!r}: not an image format OpenCV can decode")
+    if img.ndim == 3 and img.shape[2] == 3:
+        img = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+    elif img.ndim == 3 and img.shape[2] == 4:
+        img = cv2.cvtColor(img, cv2.COLOR_BGRA2RGBA)
+    return img
+
+
+def _gray8(image: object) -> NDArray[np.float32]:
+    """Grey float32 image in 8-bit units (uint16 divided by 257, floats in [0, 1] scaled)."""
+    arr = image if isinstance(image, np.ndarray) else np.asarray(image)
+    gray = as_gray(arr)
+    if arr.dtype == np.uint16:
+        gray *= np.float32(1.0 / 257.0)
+    elif np.issubdtype(arr.dtype, np.floating) and float(gray.max()) <= 1.0:
+        gray *= np.float32(255.0)
+    return gray
+
+
+def _panorama_size(cal: MirrorCalibration, radial_range: tuple[float, float]) -> tuple[int, int]:
+    """Rows and columns: about 2 px per row and 1 px per column at the outer radius."""
+    r0, r1 = radial_range
+    outer = r1 * cal.radius * max(cal.aspect, 1.0)
+    n_cols = int(np.clip(4 * math.ceil(2 * math.pi * outer / 4), 360, 4096))
+    n_rows = int(np.clip(round((r1 - r0) * cal.radius / 2.0), 8, 64))
+    return n_rows, n_cols
+
+
+def _check_radial_range(radial_range: object) -> tuple[float, float]:
+    try:
+        r0, r1 = (float(r) for r in radial_range)  # type: ignore[attr-defined]
+    except (TypeError, ValueError):
+        raise VisionError(
+            f"radial_range must be (inner, outer) fractions of the rim, got {radial_range!r}"
+        ) from None
+    if not (math.isfinite(r0) and math.isfinite(r1) and 0 <= r0 < r1 <= 1.5):
+        raise VisionError(f"radial_range must satisfy 0 <= inner < outer <= 1.5, got {(r0, r1)}")
+    return r0, r1
+
+
+def unwrap_panorama(
+    image: object,
+    calibration: MirrorCalibration,
+    *,
+    radial_range: tuple[float, float] = (0.4, 0.95),
+    n_rows: int | None = None,
+    n_cols: int | None = None,
+) -> NDArray[np.float32]:
+    """Unwrap the mirror annulus into a panorama of image angle by radius.
+
+    Parameters
+    ----------
+    image : ndarray
+        ``(H, W)`` or ``(H, W, 3)`` image.
+    calibration : MirrorCalibration
+        The rim.
+    radial_range : tuple of float
+        Inner and outer radius as fractions of the rim (normalised elliptic radius).
+    n_rows, n_cols : int, optional
+        Panorama size; by default about 2 px per row and 1 px per column at the outer radius.
+
+    Returns
+    -------
+    ndarray of float32, shape (n_rows, n_cols)
+        Grey levels (8-bit units); NaN where the sample falls outside the image. Column ``j``
+        is at image angle ``phi = 2 pi j / n_cols``; row ``i`` at the radius
+        ``linspace(inner, outer, n_rows)[i]``.
+
+    Raises
+    ------
+    VisionError
+        If the image or the parameters are malformed.
+    """
+    gray = _gray8(image)
+    r0, r1 = _check_radial_range(radial_range)
+    rows, cols = _panorama_size(calibration, (r0, r1))
+    rows = rows if n_rows is None else int(n_rows)
+    cols = cols if n_cols is None else int(n_cols)
+    if rows < 1 or cols < 8:
+        raise VisionError(f"panorama must have >= 1 row and >= 8 columns, got {rows}x{cols}")
+    return _remap_panorama(gray, calibration, r0, r1, rows, cols)
+
+
+def _remap_panorama(
+    gray: NDArray[np.float32],
+    cal: MirrorCalibration,
+    r0: float,
+    r1: float,
+    rows: int,
+    cols: int,
+) -> NDArray[np.float32]:
+    cx, cy = cal.center
+    phi = np.arange(cols) * (2 * np.pi / cols)
+    rho = np.linspace(r0, r1, rows)
+    map_x = (cx + cal.aspect * cal.radius * rho[:, None] * np.cos(phi)[None, :]).astype(np.float32)
+    map_y = (cy - cal.radius * rho[:, None] * np.sin(phi)[None, :]).astype(np.float32)
+    out: NDArray[np.float32] = np.asarray(
+        cv2.remap(
+            gray,
+            map_x,
+            map_y,
+            cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+            borderValue=float("nan"),
+        ),
+        dtype=np.float32,
+    )
+    return out
+
+
+def _azimuth_derivative(pano: NDArray[np.float32], sigma: float) -> NDArray[np.float32]:
+    """Derivative along columns (grey levels per column) after Gaussian smoothing, wrapped."""
+    padded = np.concatenate([pano[:, -_PAD:], pano, pano[:, :_PAD]], axis=1)
+    if sigma > 0:
+        padded = cv2.GaussianBlur(
+            padded, (0, 0), sigmaX=sigma, sigmaY=1e-3, borderType=cv2.BORDER_REPLICATE
+        )
+    d = (padded[:, _PAD + 1 : -_PAD + 1] - padded[:, _PAD - 1 : -_PAD - 1]) * np.float32(0.5)
+    return np.ascontiguousarray(d)
+
+
+def _resolve_calibration(
+    gray: NDArray[np.float32],
+    center: object,
+    aspect: object,
+    calibration: MirrorCalibration | None,
+) -> MirrorCalibration:
+    if calibration is not None and not isinstance(calibration, MirrorCalibration):
+        raise VisionError(
+            f"calibration must be a MirrorCalibration, got {type(calibration).__name__}"
+        )
+    c = None if center is None else check_center(center, gray.shape)
+    a = None if aspect is None else _check_aspect(aspect)
+    if calibration is None:
+        return calibrate_mirror(gray, center=c, aspect=a)
+    check_center(calibration.center, gray.shape)
+    return MirrorCalibration(
+        calibration.center if c is None else c,
+        calibration.aspect if a is None else a,
+        calibration.radius,
+    )
+
+
+def _find_steps(
+    d_med: NDArray[np.float64],
+    agree: NDArray[np.float64],
+    min_contrast: float,
+    min_agreement: float,
+    min_sep_cols: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Sub-column positions and signed heights of the steps in the median derivative."""
+    n = d_med.shape[0]
+    mad = float(np.median(np.abs(d_med - np.median(d_med))))
+    thr = max(4.0 * 1.4826 * mad, 0.05 * min_contrast)
+    a = np.abs(d_med)
+    left, right = np.roll(a, 1), np.roll(a, -1)
+    cand = np.flatnonzero((a > thr) & (a >= left) & (a > right) & (agree >= min_agreement))
+    pos: list[float] = []
+    height: list[float] = []
+    for j in cand:
+        s = 1.0 if d_med[j] > 0 else -1.0
+        # Step height: the area of the derivative lobe (same sign, contiguous, bounded).
+        total = float(d_med[j])
+        for direction in (1, -1):
+            k = 1
+            while k <= 24:
+                val = float(d_med[(j + direction * k) % n])
+                if val * s <= 0:
+                    break
+                total += val
+                k += 1
+        if abs(total) < min_contrast:
+            continue
+        y0, y1, y2 = a[(j - 1) % n], a[j], a[(j + 1) % n]
+        den = y0 - 2 * y1 + y2
+        delta = 0.5 * (y0 - y2) / den if den < 0 else 0.0
+        pos.append(j + float(np.clip(delta, -0.5, 0.5)))
+        height.append(total)
+    p = np.asarray(pos)
+    h = np.asarray(height)
+    # Non-maximum suppression among same-sign steps, wrap-around aware.
+    keep: list[int] = []
+    for i in np.argsort(-np.abs(h), kind="stable"):
+        ok = True
+        for k in keep:
+            gap = abs((p[i] - p[k] + n / 2) % n - n / 2)
+            if gap < min_sep_cols and np.sign(h[i]) == np.sign(h[k]):
+                ok = False
+                break
+        if ok:
+            keep.append(int(i))
+    idx = np.sort(np.asarray(keep, dtype=np.int64))
+    if idx.size:
+        idx = idx[np.argsort(p[idx], kind="stable")]
+    return p[idx], h[idx]
+
+
+def _pair_poles(
+    pos: NDArray[np.float64], height: NDArray[np.float64], n: int, max_width_cols: float
+) -> list[tuple[int, ...]]:
+    """Group steps: a pole is two neighbouring opposite steps closer than `max_width_cols`.
+
+    The two steps of a pole have about the same height (the wall on both sides of it is the
+    same), so candidate pairs are taken in order of increasing imbalance
+    ``|h_i + h_j| / max(|h_i|, |h_j|)`` (pairs above 0.6 are refused), then of width.
+    """
+    m = pos.shape[0]
+    pairs: list[tuple[float, float, int, int]] = []
+    for i in range(m if m > 2 else m - 1):
+        j = (i + 1) % m
+        gap = (pos[j] - pos[i]) % n
+        hi, hj = height[i], height[j]
+        if np.sign(hi) == np.sign(hj) or gap > max_width_cols:
+            continue
+        imbalance = abs(hi + hj) / max(abs(hi), abs(hj))
+        if imbalance <= 0.6:
+            pairs.append((round(imbalance, 1), gap, i, j))
+    used: set[int] = set()
+    groups: list[tuple[int, ...]] = []
+    for _, _, i, j in sorted(pairs):
+        if i in used or j in used:
+            continue
+        used.update((i, j))
+        groups.append((i, j))
+    groups.extend((i,) for i in range(m) if i not in used)
+    return groups
+
+
+def extract_bearings(
+    image: object,
+    *,
+    center: tuple[float, float] | None = None,
+    aspect: float | None = None,
+    forward: float = 0.0,
+    mirrored: bool = False,
+    calibration: MirrorCalibration | None = None,
+    radial_range: tuple[float, float] = (0.4, 0.95),
+    min_contrast: float = 10.0,
+    min_agreement: float = 0.7,
+    max_pole_width: float = np.deg2rad(8.0),
+    min_separation: float = np.deg2rad(1.0),
+    smoothing: float = 1.0,
+) -> EdgeDetections:
+    """Detect radial edges and poles in an omnidirectional image and return their bearings.
+
+    Parameters
+    ----------
+    image : ndarray
+        ``(H, W)`` grey or ``(H, W, 3)`` RGB image; uint8, uint16 or float (floats with
+        maximum <= 1 are taken as [0, 1]).
+    center : tuple of float, optional
+        Rim centre ``(cx, cy)`` in pixels; overrides `calibration` or is held fixed while the
+        rest of the rim is fitted.
+    aspect : float, optional
+        Rim semi-axis along u / along v, in (0, 10]; same role as `center`.
+    forward : float
+        Image angle of the robot's forward axis, radians.
+    mirrored : bool
+        True if the mirror flips the sense of rotation (bearing = -phi - forward).
+    calibration : MirrorCalibration, optional
+        A known rim; by default :func:`calibrate_mirror` finds it in `image`.
+    radial_range : tuple of float
+        Part of the annulus used, as fractions of the rim: excludes the camera's reflection
+        (inside) and the rim itself (outside).
+    min_contrast : float
+        Smallest step height kept, 8-bit grey levels.
+    min_agreement : float
+        Smallest fraction of panorama rows whose derivative has the sign of the median, in
+        [0, 1]: a radial line is consistent along the radius, texture is not.
+    max_pole_width : float
+        Widest stripe, radians, reported as one pole rather than two edges.
+    min_separation : float
+        Same-sign steps closer than this (radians) are duplicates; the weaker is dropped.
+    smoothing : float
+        Gaussian smoothing along the azimuth before differentiation, panorama columns.
+
+    Returns
+    -------
+    EdgeDetections
+        Bearings (radians, robot frame), strengths, kinds, sorted by bearing.
+
+    Raises
+    ------
+    VisionError
+        If the image is malformed or shows no rim (and none is given), or a parameter is
+        absurd (aspect <= 0 or > 10, centre outside the image, non-finite values).
+
+    Examples
+    --------
+    >>> from omniloc.vision.render import DEMO_POSE, demo_scene, render_omni_image, true_features
+    >>> img = render_omni_image(demo_scene(), DEMO_POSE, rng=0)
+    >>> det = extract_bearings(img)
+    >>> len(det) == len(true_features(demo_scene(), DEMO_POSE))
+    True
+    """
+    gray = _gray8(image)
+    fwd = _finite_float("forward", forward)
+    r0, r1 = _check_radial_range(radial_range)
+    for name, val in (
+        ("min_contrast", min_contrast),
+        ("min_agreement", min_agreement),
+        ("max_pole_width", max_pole_width),
+        ("min_separation", min_separation),
+        ("smoothing", smoothing),
+    ):
+        if _finite_float(name, val) < 0:
+            raise VisionError(f"{name} must be >= 0, got {val}")
+    if min_agreement > 1:
+        raise VisionError(f"min_agreement must be in [0, 1], got {min_agreement}")
+    cal = _resolve_calibration(gray, center, aspect, calibration)
+    rows, cols = _panorama_size(cal, (r0, r1))
+    pano = _remap_panorama(gray, cal, r0, r1, rows, cols)
+    valid_rows = np.isfinite(pano).all(axis=1)
+    if not valid_rows.any():
+        # Rim partly outside the image: keep rows, ignoring the missing samples.
+        deriv = _azimuth_derivative(np.nan_to_num(pano, nan=0.0), smoothing)
+        deriv[~np.isfinite(pano)] = np.nan
+        with np.errstate(all="ignore"):
+            d_med = np.nanmedian(deriv, axis=0)
+        d_med = np.nan_to_num(d_med)
+        signs = np.sign(deriv) == np.sign(d_med)[None, :]
+        agree = np.nanmean(np.where(np.isfinite(deriv), signs, np.nan), axis=0)
+        agree = np.nan_to_num(agree)
+    else:
+        deriv = _azimuth_derivative(pano[valid_rows], smoothing)
+        d_med = np.median(deriv, axis=0)
+        agree = np.mean(np.sign(deriv) == np.sign(d_med)[None, :], axis=0)
+    col = 2 * np.pi / cols
+    pos, height = _find_steps(
+        d_med.astype(np.float64),
+        agree.astype(np.float64),
+        float(min_contrast),
+        float(min_agreement),
+        float(min_separation) / col,
+    )
+    phis: list[float] = []
+    strengths: list[float] = []
+    kinds: list[str] = []
+    for group in _pair_poles(pos, height, cols, float(max_pole_width) / col):
+        if len(group) == 2:
+            i, j = group
+            mid = pos[i] + ((pos[j] - pos[i]) % cols) / 2
+            phis.append(mid * col)
+            strengths.append(0.5 * (abs(height[i]) + abs(height[j])))
+            kinds.append("pole")
+        else:
+            phis.append(pos[group[0]] * col)
+            strengths.append(abs(height[group[0]]))
+            kinds.append("edge")
+    phi_arr = np.asarray(wrap(np.asarray(phis, dtype=np.float64)), dtype=np.float64).reshape(-1)
+    s = -1.0 if mirrored else 1.0
+    bearings = np.asarray(wrap(s * phi_arr - fwd), dtype=np.float64).reshape(-1)
+    order = np.argsort(bearings, kind="stable")
+    return EdgeDetections(
+        bearings=bearings[order],
+        strength=np.asarray(strengths, dtype=np.float64)[order],
+        kind=np.asarray(kinds, dtype="<U4")[order],
+        image_angles=phi_arr[order],
+        calibration=cal,
+        forward=fwd,
+        mirrored=bool(mirrored),
+    )
+
+
+def bearings_from_image(
+    image: str | os.PathLike[str] | NDArray[np.generic], **kwargs: object
+) -> EdgeDetections:
+    """Load an image (if given a path) and extract its bearings.
+
+    Parameters
+    ----------
+    image : str, path-like or ndarray
+        An image file or an image array.
+    **kwargs
+        Passed to :func:`extract_bearings`.
+
+    Returns
+    -------
+    EdgeDetections
+
+    Raises
+    ------
+    VisionError
+        As :func:`load_image` and :func:`extract_bearings`.
+    """
+    arr = load_image(image) if isinstance(image, (str, os.PathLike)) else image
+    return extract_bearings(arr, **kwargs)  # type: ignore[arg-type]

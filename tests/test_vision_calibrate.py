@@ -1,0 +1,131 @@
+"""Tests for omniloc.vision.calibrate: finding the mirror rim."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from omniloc.errors import VisionError
+from omniloc.vision import (
+    DEMO_POSE,
+    MirrorCalibration,
+    OmniCamera,
+    calibrate_mirror,
+    demo_scene,
+    render_omni_image,
+)
+
+
+def render(cam: OmniCamera, seed: int = 0) -> np.ndarray:
+    return render_omni_image(demo_scene(), DEMO_POSE, cam, rng=seed)
+
+
+def assert_close(cal: MirrorCalibration, cam: OmniCamera) -> None:
+    np.testing.assert_allclose(cal.center, cam.center, atol=0.5)
+    assert abs(cal.aspect / cam.aspect - 1) < 0.005
+    assert abs(cal.radius - cam.radius) < 0.5
+
+
+@pytest.mark.parametrize(
+    ("size", "center", "aspect", "radius"),
+    [
+        ((640, 480), (321.7, 238.4), 1.0, 215.0),
+        ((640, 480), (300.2, 251.9), 1.07, 205.0),
+        ((640, 480), (338.8, 229.1), 0.94, 220.0),
+        ((517, 389), (260.3, 190.6), 1.02, 170.0),  # odd size
+        ((301, 403), (150.9, 200.2), 0.7, 185.0),  # portrait, squashed along u
+    ],
+)
+def test_recovers_rim(
+    size: tuple[int, int], center: tuple[float, float], aspect: float, radius: float
+) -> None:
+    cam = OmniCamera(image_size=size, center=center, aspect=aspect, radius=radius)
+    img = render(cam, seed=len(size) + int(center[0]))
+    assert_close(calibrate_mirror(img), cam)
+
+
+def test_colour_uint16_and_float_inputs_agree() -> None:
+    cam = OmniCamera(center=(310.4, 244.7), aspect=1.03, radius=208.0)
+    grey = render(cam, seed=3)
+    colour = np.stack([grey, (grey * 0.8).astype(np.uint8), (grey * 0.6).astype(np.uint8)], -1)
+    for img in (colour, grey.astype(np.uint16) * 257, grey / 255.0, grey[:, :, None]):
+        assert_close(calibrate_mirror(img), cam)
+
+
+def test_given_parameters_are_held_fixed() -> None:
+    cam = OmniCamera(center=(315.0, 240.0), aspect=1.05, radius=200.0)
+    img = render(cam, seed=4)
+    cal = calibrate_mirror(img, aspect=1.05)
+    assert cal.aspect == 1.05
+    assert_close(cal, cam)
+    cal = calibrate_mirror(img, center=(315.0, 240.0))
+    assert cal.center == (315.0, 240.0)
+    assert_close(cal, cam)
+    full = calibrate_mirror(img, center=(1.0, 2.0), aspect=2.0, radius=30.0)
+    assert full == MirrorCalibration((1.0, 2.0), 2.0, 30.0)
+
+
+def test_bright_outside_dark_mirror() -> None:
+    cam = OmniCamera(center=(330.0, 236.0), aspect=1.02, radius=200.0, background_level=250.0)
+    img = 255 - render(cam, seed=8)  # everything inverted: the outside is now bright
+    assert_close(calibrate_mirror(img), cam)
+
+
+def test_calibration_helpers() -> None:
+    cal = MirrorCalibration((100.0, 80.0), 1.25, 40.0)
+    assert cal.semi_axes == (50.0, 40.0)
+    for phi in np.linspace(-3, 3, 7):
+        u, v = cal.pixel(float(phi), 0.8)
+        assert abs(cal.image_angle(u, v) - phi) < 1e-12
+
+
+@pytest.mark.parametrize(
+    ("image", "message"),
+    [
+        (np.zeros((100, 120), np.uint8), "no mirror rim"),
+        (np.full((100, 120, 3), 77, np.uint8), "no mirror rim"),
+        (np.full((100, 120), np.nan), "NaN"),
+        (np.zeros(100), "2-D"),
+        (np.zeros((50, 60, 5)), "channels"),
+        (np.zeros((8, 8)), "too small"),
+        (np.array([["a"] * 20] * 20), "numbers"),
+    ],
+)
+def test_bad_images_raise(image: np.ndarray, message: str) -> None:
+    with pytest.raises(VisionError, match=message):
+        calibrate_mirror(image)
+
+
+def test_noise_without_rim_raises() -> None:
+    noise = np.random.default_rng(0).normal(128, 3, size=(120, 160)).clip(0, 255)
+    with pytest.raises(VisionError, match="no mirror rim"):
+        calibrate_mirror(noise.astype(np.uint8))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"aspect": 0.0}, r"aspect must be in \(0, 10\]"),
+        ({"aspect": -1.0}, "aspect"),
+        ({"aspect": 10.5}, "aspect"),
+        ({"aspect": float("nan")}, "finite"),
+        ({"center": (700.0, 100.0)}, "outside the 640x480 image"),
+        ({"center": (-1.0, 100.0)}, "outside"),
+        ({"center": (float("nan"), 100.0)}, "finite"),
+        ({"center": (1.0, 2.0, 3.0)}, "2 values"),
+        ({"radius": 0.0}, "radius"),
+    ],
+)
+def test_absurd_parameters_raise(kwargs: dict[str, object], message: str) -> None:
+    img = np.zeros((480, 640), np.uint8)
+    with pytest.raises(VisionError, match=message):
+        calibrate_mirror(img, **kwargs)  # type: ignore[arg-type]
+
+
+def test_bad_calibration_values_raise() -> None:
+    with pytest.raises(VisionError, match="aspect"):
+        MirrorCalibration((1.0, 1.0), 0.0, 10.0)
+    with pytest.raises(VisionError, match="radius"):
+        MirrorCalibration((1.0, 1.0), 1.0, -10.0)
+    with pytest.raises(VisionError, match="finite"):
+        MirrorCalibration((np.inf, 1.0), 1.0, 10.0)
