@@ -19,6 +19,7 @@ import numpy as np
 
 from . import __version__
 from .errors import InputError, OmnilocError
+from .pose import Pose
 
 log = logging.getLogger("omniloc")
 
@@ -329,7 +330,32 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         print()
         print("Vision front end (rendered conic-mirror image -> bearings):")
         print("  " + vision_demo(out).replace("\n", "\n  "))
+        _demo_image_to_pose()
     return 0
+
+
+def _demo_image_to_pose() -> None:
+    """The whole chain on the vision demo's room: image -> bearings -> pose."""
+    from .search import localize
+    from .vision import DEMO_POSE, demo_scene, extract_bearings, render_omni_image
+    from .vision.plot import DEMO_CAMERA
+
+    scene = demo_scene()
+    image = render_omni_image(scene, DEMO_POSE, DEMO_CAMERA, rng=0)
+    det = extract_bearings(image, forward=DEMO_CAMERA.forward, mirrored=DEMO_CAMERA.mirrored)
+    res = localize(scene.landmarks_xy, det.bearings, sigma=float(np.deg2rad(0.1)))
+    truth = Pose(*DEMO_POSE)
+    best = res.best
+    if best is None:
+        print("  image -> pose: no solution")
+        return
+    err_xy, err_th = best.pose.distance_to(truth)
+    print(
+        f"  image -> pose: ({best.pose.x:.3f} m, {best.pose.y:.3f} m, "
+        f"{np.rad2deg(best.pose.theta):.2f} deg), error {err_xy * 100:.1f} cm and "
+        f"{np.rad2deg(err_th):.2f} deg, {len(res)} solution(s), "
+        f"{res.stats.elapsed_s * 1e3:.0f} ms search"
+    )
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:

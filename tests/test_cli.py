@@ -1,0 +1,138 @@
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from omniloc.cli import main
+from omniloc.pose import Pose, predict_bearings
+from omniloc.simulate import demo_room
+
+ROOM_POSE = Pose(5.6, 2.1, np.deg2rad(30))
+SEEN = [10, 3, 0, 6, 8, 4]
+
+
+@pytest.fixture
+def room_files(tmp_path: Path) -> tuple[Path, Path]:
+    lm = demo_room()
+    map_path = tmp_path / "room.csv"
+    lm.to_csv(map_path)
+    z = np.rad2deg(predict_bearings(lm.xy[SEEN], ROOM_POSE))
+    b_path = tmp_path / "bearings.txt"
+    b_path.write_text("# degrees\n" + "\n".join(f"{v:.6f}" for v in z) + "\n")
+    return map_path, b_path
+
+
+def test_localize_human_output(room_files, capsys) -> None:
+    m, b = room_files
+    assert main(["localize", "--map", str(m), "--bearings", str(b), "--degrees"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("1 solution for 6 bearings")
+    assert "x = 5.600 m, y = 2.100 m, theta = 30.000 deg" in out
+    assert "landmarks [11, 4, 1, 7, 9, 5]" in out
+
+
+def test_localize_json(room_files, capsys) -> None:
+    m, b = room_files
+    code = main(["localize", "--map", str(m), "--bearings", str(b), "--degrees", "--json"])
+    assert code == 0
+    data = json.loads(capsys.readouterr().out)
+    (sol,) = data["solutions"]
+    assert set(sol) >= {"x", "y", "theta", "assignment", "residual_rms"}
+    assert sol["x"] == pytest.approx(5.6) and sol["theta"] == pytest.approx(np.deg2rad(30))
+    assert sol["assignment"] == [11, 4, 1, 7, 9, 5]
+    assert data["stats"]["total_paths"] == 665280
+    assert data["ambiguous"] is False and data["complete"] is True
+
+
+def test_localize_with_robust_options_and_plot(room_files, tmp_path, capsys) -> None:
+    m, b = room_files
+    png = tmp_path / "out" / "sol.png"
+    args = ["localize", "--map", str(m), "--bearings", str(b), "--degrees", "--sigma", "0.3"]
+    args += ["--max-spurious", "1", "--ordering", "--plot", str(png), "--json"]
+    assert main(args) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["solutions"][0]["assignment"] == [11, 4, 1, 7, 9, 5]
+    assert png.stat().st_size > 10_000
+
+
+def test_no_solution_is_a_sentence_and_exit_0(tmp_path, capsys) -> None:
+    m = tmp_path / "sq.csv"
+    m.write_text("id,x,y\n1,0,0\n2,6,0\n3,6,6\n4,0,6\n")
+    b = tmp_path / "b.json"
+    b.write_text(json.dumps({"bearings": [0, 5, 10, 180], "units": "deg"}))
+    assert main(["localize", "--map", str(m), "--bearings", str(b)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("No pose is consistent with these 4 bearings")
+    assert main(["localize", "--map", str(m), "--bearings", str(b), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["solutions"] == []
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["localize", "--map", "missing.csv", "--bearings", "b.txt"], "missing.csv"),
+        (["localize", "--map", "{map}", "--bearings", "{bad}"], "line 2"),
+        (["localize", "--map", "{map}", "--bearings", "{few}"], "at least 3"),
+        (["localize", "--map", "{map}", "--bearings", "{b}", "--threshold", "x"], "threshold"),
+        (["localize", "--map", "{map}"], "required"),
+        (["localize", "--map", "{map}", "--bearings", "{b}", "--method", "x"], "method"),
+        (["localize", "--map", "{map}", "--bearings", "{b}", "--sigma", "-1"], "sigma"),
+        (["localize", "--map", "{map}", "--image", "{bad}"], "bad.txt"),
+        (["bearings", "{bad}"], "bad.txt"),
+        (["nonsense"], "invalid choice"),
+        (["evaluate", "--dataset", "nope", "{bad}"], "nope"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_1(room_files, tmp_path, capsys, args, message) -> None:
+    m, b = room_files
+    bad = tmp_path / "bad.txt"
+    bad.write_text("1.0\nabc\n")
+    few = tmp_path / "few.txt"
+    few.write_text("1.0 2.0\n")
+    subst = {"{map}": str(m), "{b}": str(b), "{bad}": str(bad), "{few}": str(few)}
+    argv = [subst.get(a, a) for a in args]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err
+    assert err.startswith("error:") and message in err
+
+
+def test_bearings_and_localize_from_an_image(tmp_path, capsys) -> None:
+    import cv2
+
+    from omniloc.maps import LandmarkMap
+    from omniloc.vision import DEMO_POSE, demo_scene, render_omni_image
+
+    scene = demo_scene()
+    img_path = tmp_path / "omni.png"
+    cv2.imwrite(str(img_path), render_omni_image(scene, DEMO_POSE, rng=1))
+    assert main(["bearings", str(img_path), "--json", "--plot", str(tmp_path / "b.png")]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["detections"]) >= 12 and data["units"] == "radians"
+    assert (tmp_path / "b.png").stat().st_size > 10_000
+    map_path = tmp_path / "scene.csv"
+    LandmarkMap(scene.landmarks_xy).to_csv(map_path)
+    argv = ["localize", "--map", str(map_path), "--image", str(img_path), "--sigma", "0.1"]
+    assert main([*argv, "--json"]) == 0
+    best = json.loads(capsys.readouterr().out)["solutions"][0]
+    assert np.hypot(best["x"] - DEMO_POSE[0], best["y"] - DEMO_POSE[1]) < 0.05
+    assert abs(np.angle(np.exp(1j * (best["theta"] - DEMO_POSE[2])))) < np.deg2rad(0.5)
+
+
+def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
+    assert main(["demo", "--out", str(tmp_path), "--no-vision"]) == 0
+    out = capsys.readouterr().out
+    assert "| 7 | 3991680 |" in out and "| 4 | 11880 |" in out
+    assert out.count("| yes |") == 4
+    for m in (4, 5, 6, 7):
+        assert (tmp_path / f"solutions-{m}-observations.png").stat().st_size > 10_000
+
+
+def test_version(capsys) -> None:
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert "omniloc" in capsys.readouterr().out
