@@ -681,8 +681,7 @@ class _Search:
         if opt.sigma is None:
             ok = np.abs(innov) <= opt.threshold
         else:
-            var = self._predicted_variance(G, par, dx, dy)
-            ok = innov * innov <= opt.gate_chi2 * var
+            ok = self._sigma_gate(G, par, dx, dy, innov)
         self.count.gate += int((~ok).sum())
         if opt.max_range is not None or opt.min_range is not None:
             r2 = dx * dx + dy * dy
@@ -744,25 +743,49 @@ class _Search:
         p, _ = refine_batch(Lm, bm, C.pose, w, max_iter=3)
         return p
 
-    def _predicted_variance(
-        self, G: _Batch, par: IntArray, dx: FloatArray, dy: FloatArray
-    ) -> FloatArray:
-        """Variance of a predicted bearing: g^T Cov(pose) g + sigma^2."""
+    def _sigma_gate(
+        self, G: _Batch, par: IntArray, dx: FloatArray, dy: FloatArray, innov: FloatArray
+    ) -> NDArray[np.bool_]:
+        """Chi-square gate: innov^2 <= chi2 (g^T Cov(pose) g + sigma^2).
+
+        Most candidates are far outside any gate, so they are first tested against an upper
+        bound of the variance (trace(Cov) |g|^2 >= g^T Cov g), and the exact quadratic form
+        is only evaluated for the few that pass it.
+        """
+        sig = self.opt.sigma
+        assert sig is not None
+        chi2 = self.opt.gate_chi2
+        cov = self._pose_cov(G)
+        r2 = dx * dx + dy * dy
+        tr = np.einsum("kii->k", cov)[par]
+        bound = tr * (1.0 / r2 + 1.0) + sig * sig
+        i2 = innov * innov
+        ok = i2 <= chi2 * bound
+        idx = np.flatnonzero(ok)
+        if idx.size:
+            gx, gy = dy[idx] / r2[idx], -dx[idx] / r2[idx]
+            c = cov[par[idx]]
+            v = (
+                gx * gx * c[:, 0, 0]
+                + gy * gy * c[:, 1, 1]
+                + c[:, 2, 2]
+                + 2.0 * (gx * gy * c[:, 0, 1] - gx * c[:, 0, 2] - gy * c[:, 1, 2])
+            )
+            ok[idx] = i2[idx] <= chi2 * (np.maximum(v, 0.0) + sig * sig)
+        return ok
+
+    def _pose_cov(self, G: _Batch) -> FloatArray:
+        """Covariance of each path's pose from its matched pairs, sigma^2 (G^T G)^-1."""
         sig = self.opt.sigma
         assert sig is not None
         Lm, _, w = self._matched(G)
         _, g = _bearing_jacobian(Lm, G.pose)
         gw = g * w[..., None]
         J = np.einsum("kni,knj->kij", gw, gw)  # information times sigma^2
-        # Pseudo-inverse with a floor: a near-singular geometry (robot near the circle through
-        # three landmarks) gives a huge variance, which admits rather than rejects.
+        # A floor on the information: a near-singular geometry (the robot near the circle
+        # through three landmarks) gives a huge variance, which admits rather than rejects.
         J = J + 1e-9 * np.eye(3)
-        cov = np.linalg.inv(J) * sig * sig
-        r2 = dx * dx + dy * dy
-        gc = np.stack([dy / r2, -dx / r2, -np.ones_like(r2)], axis=1)
-        cp = cov[par]
-        v = np.einsum("pi,pij,pj->p", gc, cp, gc)
-        return np.maximum(v, 0.0) + sig * sig
+        return np.asarray(np.linalg.inv(J) * sig * sig)
 
     def _order_ok_candidate(
         self, G: _Batch, par: IntArray, pred: FloatArray, beta: float
