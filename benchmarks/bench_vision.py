@@ -21,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from omniloc.angles import angdiff
+from omniloc.pose import Pose
+from omniloc.search import localize
 from omniloc.vision import (
     OmniCamera,
     calibrate_mirror,
@@ -37,6 +39,7 @@ TARGETS = {
     "recall_pct": 95.0,
     "spurious_pct": 5.0,
     "median_time_ms": 100.0,
+    "image_to_pose_median_ms": 100.0,
 }
 
 
@@ -48,6 +51,8 @@ def run(n_scenes: int, seed: int) -> dict[str, float]:
     t_full: list[float] = []
     t_cal: list[float] = []
     t_known: list[float] = []
+    t_pose: list[float] = []
+    pose_ok = 0
     n_true = n_found = n_det = n_spur = n_kind_ok = 0
     for i in range(n_scenes):
         scene, pose = random_scene(rng)
@@ -73,6 +78,22 @@ def run(n_scenes: int, seed: int) -> dict[str, float]:
         t0 = time.perf_counter()
         extract_bearings(img, calibration=cal, forward=cam.forward, mirrored=cam.mirrored)
         t_known.append(time.perf_counter() - t0)
+
+        # The whole chain: image -> bearings -> pose (one detection may be spurious).
+        t0 = time.perf_counter()
+        det2 = extract_bearings(img, forward=cam.forward, mirrored=cam.mirrored)
+        spur = 1 if len(det2) >= 5 else 0
+        res = localize(
+            scene.landmarks_xy,
+            det2.bearings,
+            sigma=np.deg2rad(0.1),
+            max_spurious=spur,
+            timeout_s=5.0,
+        )
+        t_pose.append(time.perf_counter() - t0)
+        if res.best is not None:
+            dxy, dth = res.best.pose.distance_to(Pose(*pose))
+            pose_ok += bool(dxy < 0.1 and dth < np.deg2rad(1.0))
 
         c = det.calibration
         center_err.append(float(np.hypot(*np.subtract(c.center, cam.center))))
@@ -105,6 +126,9 @@ def run(n_scenes: int, seed: int) -> dict[str, float]:
         "median_time_ms": 1000 * float(np.median(t_full)),
         "median_time_calibration_ms": 1000 * float(np.median(t_cal)),
         "median_time_known_calibration_ms": 1000 * float(np.median(t_known)),
+        "image_to_pose_median_ms": 1000 * float(np.median(t_pose)),
+        "image_to_pose_p95_ms": 1000 * float(np.percentile(t_pose, 95)),
+        "image_to_pose_success_pct": 100.0 * pose_ok / n_scenes,
     }
 
 

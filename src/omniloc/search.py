@@ -409,6 +409,11 @@ class _Counter:
         self.bound = 0
 
 
+def _wrap_fast(a: FloatArray) -> FloatArray:
+    """Wrap to [-pi, pi) for arrays on the hot path (no scalar handling)."""
+    return np.remainder(a + np.pi, TWO_PI) - np.pi
+
+
 def _projector(a: NDArray[np.complex128], b: NDArray[np.complex128]) -> tuple[FloatArray, ...]:
     """Entries of P = a a^T / a^T a - I (eq. 3) and of P b, for complex a and b."""
     ar, ai = a.real, a.imag
@@ -665,8 +670,7 @@ class _Search:
         C.S, C.T, C.pose = S[keep], T[keep], pose[keep]
         C.nmatch = C.nmatch + 1
         C.level = G.level + 1
-        if self.opt.sigma is not None:
-            C.pose = self._refine(C)
+        # Three pairs fit exactly: this pose is already the maximum-likelihood one.
         return self._visible_path(C)
 
     # ---- rule (ii): depth > 3 ------------------------------------------------------------------
@@ -677,7 +681,7 @@ class _Search:
         dx = Lc[:, 0] - P[:, 0]
         dy = Lc[:, 1] - P[:, 1]
         pred = np.arctan2(dy, dx) - P[:, 2]
-        innov = np.asarray(wrap(pred - beta))
+        innov = _wrap_fast(pred - beta)
         if opt.sigma is None:
             ok = np.abs(innov) <= opt.threshold
         else:
@@ -738,9 +742,62 @@ class _Search:
         return Lm, np.ascontiguousarray(bm), w
 
     def _refine(self, C: _Batch) -> FloatArray:
-        """A few Gauss-Newton steps from the linear pose (sigma mode): the ML pose."""
+        """Two Gauss-Newton steps from the linear pose (sigma mode), towards the ML pose.
+
+        The linear estimate minimises an algebraic error; the gate's covariance describes the
+        maximum-likelihood estimate, so the path's pose is moved to it before it predicts. A
+        step is kept only where it lowers the squared bearing error.
+        """
         Lm, bm, w = self._matched(C)
-        p, _ = refine_batch(Lm, bm, C.pose, w, max_iter=3)
+        p = C.pose.copy()
+        lx, ly = Lm[..., 0], Lm[..., 1]
+        sse_prev: FloatArray | None = None
+        for _ in range(2):
+            dx = lx - p[:, None, 0]
+            dy = ly - p[:, None, 1]
+            r2 = dx * dx + dy * dy
+            res = _wrap_fast(np.arctan2(dy, dx) - p[:, None, 2] - bm) * w
+            sse = (res * res).sum(axis=1)
+            if sse_prev is not None:
+                worse = sse > sse_prev
+                if worse.any():
+                    p[worse] = p_prev[worse]
+                    sse[worse] = sse_prev[worse]
+            gx, gy = dy / r2 * w, -dx / r2 * w
+            gt = -w
+            # Normal equations H d = -g^T res, solved by Cramer's rule for every path at once.
+            h00, h01, h02 = (gx * gx).sum(1), (gx * gy).sum(1), (gx * gt).sum(1)
+            h11, h12, h22 = (gy * gy).sum(1), (gy * gt).sum(1), (gt * gt).sum(1)
+            b0, b1, b2 = -(gx * res).sum(1), -(gy * res).sum(1), -(gt * res).sum(1)
+            c00 = h11 * h22 - h12 * h12
+            c01 = h02 * h12 - h01 * h22
+            c02 = h01 * h12 - h02 * h11
+            det = h00 * c00 + h01 * c01 + h02 * c02
+            ok = np.abs(det) > 1e-12 * np.maximum(h00 * h11 * h22, 1e-300)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                inv = np.where(ok, 1.0 / det, 0.0)
+                c11 = h00 * h22 - h02 * h02
+                c12 = h01 * h02 - h00 * h12
+                c22 = h00 * h11 - h01 * h01
+                step = np.stack(
+                    [
+                        (c00 * b0 + c01 * b1 + c02 * b2) * inv,
+                        (c01 * b0 + c11 * b1 + c12 * b2) * inv,
+                        (c02 * b0 + c12 * b1 + c22 * b2) * inv,
+                    ],
+                    axis=1,
+                )
+            step[~np.isfinite(step).all(axis=1)] = 0.0
+            p_prev, sse_prev = p.copy(), sse
+            p = p + step
+        # Keep the last step only where it helped.
+        dx = lx - p[:, None, 0]
+        dy = ly - p[:, None, 1]
+        res = _wrap_fast(np.arctan2(dy, dx) - p[:, None, 2] - bm) * w
+        assert sse_prev is not None
+        worse = (res * res).sum(axis=1) > sse_prev
+        p[worse] = p_prev[worse]
+        p[:, 2] = _wrap_fast(p[:, 2])
         return p
 
     def _sigma_gate(
