@@ -752,6 +752,7 @@ class _Search:
         p = C.pose.copy()
         lx, ly = Lm[..., 0], Lm[..., 1]
         sse_prev: FloatArray | None = None
+        p_prev = p.copy()
         for _ in range(2):
             dx = lx - p[:, None, 0]
             dy = ly - p[:, None, 1]
