@@ -570,13 +570,19 @@ class _Search:
         if opt.max_range is not None and k >= 1 and N > 64:
             par, lmk = self._range_candidates(G, k)
         else:
-            par = np.repeat(np.arange(K), N)
-            lmk = np.tile(np.arange(N), K)
-        # Distinct landmarks along a path.
-        used = (G.assign[par] == lmk[:, None]).any(axis=1)
-        if used.any():
-            keep = ~used
-            par, lmk = par[keep], lmk[keep]
+            # Every landmark not yet on the path: mark the used ones in a (K, N) table.
+            free = np.ones((K, N), dtype=bool)
+            A = G.assign[:, : G.level]
+            rows, cols = np.nonzero(A >= 0)
+            free[rows, A[rows, cols]] = False
+            par, lmk = np.nonzero(free)
+            par, lmk = par.astype(np.int64), lmk.astype(np.int64)
+        if opt.max_range is not None and k >= 1 and N > 64:
+            # Distinct landmarks along a path.
+            used = (G.assign[par] == lmk[:, None]).any(axis=1)
+            if used.any():
+                keep = ~used
+                par, lmk = par[keep], lmk[keep]
         if opt.max_range is not None and 1 <= k <= 2:
             # Two landmarks seen from one point within max_range are at most 2 max_range apart.
             lim = (2.0 * opt.max_range) ** 2
