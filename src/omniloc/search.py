@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import ndtri
+from scipy.special import chdtri, ndtri
 
 from .angles import TWO_PI, wrap
 from .errors import InputError
@@ -58,6 +58,9 @@ BATCH_PAIRS = 1 << 16
 #: With wildcards, solutions matching up to this many fewer bearings than the best are kept
 #: (and searched for); paths that cannot reach that are cut (branch and bound).
 MATCH_SLACK = 1
+
+#: At most this many complete paths are refined and returned (the best by matches and fit).
+MAX_LEAVES = 2000
 
 
 class Method(str, enum.Enum):
@@ -208,6 +211,7 @@ class _Options:
     threshold: float
     sigma: float | None
     gate_chi2: float
+    joint_chi2: FloatArray  # by number of matched pairs: chi-square quantile with n - 3 dof
     max_wild: int
     min_match: int
     ordering: bool
@@ -305,10 +309,14 @@ def _make_options(
                 "use method='robust'"
             )
     gate = float(ndtri(0.5 + 0.5 * float(confidence)) ** 2)
+    dof = np.arange(m + 1) - 3.0
+    with np.errstate(invalid="ignore"):
+        joint = np.where(dof > 0, chdtri(np.maximum(dof, 1.0), 1.0 - float(confidence)), np.inf)
     return _Options(
         threshold=thr,
         sigma=sig,
         gate_chi2=gate,
+        joint_chi2=joint,
         max_wild=k,
         min_match=m - k,
         ordering=bool(ordering),
@@ -485,7 +493,7 @@ class _Search:
             batch = stack.pop()
             if batch.level == self.m:
                 self.leaves.append(batch)
-                self.best_match = max(self.best_match, int(batch.nmatch.max()))
+                self.best_match = max(self.best_match, self._compatible_matches(batch))
                 continue
             per = max(1, BATCH_PAIRS // (self.N + 1))
             if len(batch) > per:
@@ -495,6 +503,27 @@ class _Search:
             children = self._expand(batch)
             if children is not None and len(children):
                 stack.append(children)
+
+    def leaf_sse(self, B: _Batch) -> FloatArray:
+        """Squared bearing error of complete paths at their current poses."""
+        Lm, bm, w = self._matched(B)
+        P = B.pose
+        pred = np.arctan2(Lm[..., 1] - P[:, None, 1], Lm[..., 0] - P[:, None, 0]) - P[:, None, 2]
+        res = _wrap_fast(pred - bm) * w
+        return np.asarray((res * res).sum(axis=1))
+
+    def _compatible_matches(self, B: _Batch) -> int:
+        """Most matches among complete paths that pass the joint test (sigma mode).
+
+        Only such paths may tighten the branch-and-bound; a path that squeezed through every
+        individual gate but fits no single pose must not cut the true interpretation. The test
+        here uses the path's own pose, which fits no better than the refined one, so it only
+        ever errs towards a weaker bound.
+        """
+        if self.opt.sigma is None:
+            return int(B.nmatch.max())
+        ok = self.leaf_sse(B) / self.opt.sigma**2 <= self.opt.joint_chi2[B.nmatch]
+        return int(B.nmatch[ok].max()) if ok.any() else 0
 
     # ---- one level -------------------------------------------------------------------------
     def _expand(self, B: _Batch) -> _Batch | None:
@@ -718,14 +747,16 @@ class _Search:
         p00, p01, p11, pb0, pb1 = _projector(a, b)
         S = G.S[par] + np.stack([p00, p01, p11], axis=1)
         T = G.T[par] + np.stack([pb0, pb1], axis=1)
-        fx, fy, _ = _solve_f(S, T)
-        pose, _ = _pose_from_f(fx, fy, self.L[G.anchor[par]], G.anchor_b[par])
+        fx, fy, det = _solve_f(S, T)
+        pose, f2 = _pose_from_f(fx, fy, self.L[G.anchor[par]], G.anchor_b[par])
         C = G.take(par)
         C.assign = C.assign.copy()
         C.assign[:, G.level] = lmk
         C.S, C.T = S, T
-        bad = np.asarray(~np.isfinite(pose).all(axis=1))
-        C.pose = np.where(bad[:, None], G.pose[par], pose)
+        # Where the re-estimate is not a valid pose by eqs. 1-6 (a singular sum, a distance
+        # ratio <= 0, a robot at infinity), the path keeps its previous pose.
+        valid = self._valid_estimate(C, fx, fy, det, f2, S)
+        C.pose = np.where(valid[:, None], pose, G.pose[par])
         C.nmatch = C.nmatch + 1
         C.level = G.level + 1
         if opt.sigma is not None:
@@ -736,6 +767,32 @@ class _Search:
             if not good.all():
                 C = C.take(np.flatnonzero(good))
         return C
+
+    def _valid_estimate(
+        self,
+        C: _Batch,
+        fx: FloatArray,
+        fy: FloatArray,
+        det: FloatArray,
+        f2: FloatArray,
+        S: FloatArray,
+    ) -> NDArray[np.bool_]:
+        """Whether eq. 4 over a path's pairs gives a pose, by the tests of estimate_pose."""
+        smax = np.maximum(1.0, np.abs(S).max(axis=1))
+        ok = np.abs(det) > SINGULAR_RTOL * smax * smax
+        ok &= np.isfinite(f2) & (f2 > (1e-12 / self.scale) ** 2)
+        Lm, bm, w = self._matched(C)
+        L0 = self.L[C.anchor]
+        z = (Lm[..., 0] - L0[:, None, 0]) + 1j * (Lm[..., 1] - L0[:, None, 1])
+        pair = (w > 0) & (C.assign[:, : C.level] != C.anchor[:, None])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            b = 1.0 / z
+            a = np.exp(1j * (bm - C.anchor_b[:, None])) * b
+            r = (a.real * (fx[:, None] + b.real) + a.imag * (fy[:, None] + b.imag)) / (
+                a.real * a.real + a.imag * a.imag
+            )
+        ok &= ((r > 0) | ~pair).all(axis=1)
+        return np.asarray(ok)
 
     # ---- helpers for the robust rules -----------------------------------------------------------
     def _matched(self, C: _Batch) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -946,9 +1003,14 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     leaves = _concat(s.m, s.leaves) if len(s.leaves) > 1 else s.leaves[0]
     # The bound may have let a few weaker paths through before the best was known: drop them,
     # so the answer does not depend on the order of the walk.
-    strong = leaves.nmatch >= int(leaves.nmatch.max()) - MATCH_SLACK
+    strong = leaves.nmatch >= s.best_match - MATCH_SLACK
     if not strong.all():
         leaves = leaves.take(np.flatnonzero(strong))
+    if len(leaves) > MAX_LEAVES:
+        # Pathological inputs (huge gates, tiny maps) can leave very many paths; only the best
+        # MAX_LEAVES by matches and fit are refined, merged and returned.
+        sse0 = s.leaf_sse(leaves)
+        leaves = leaves.take(np.lexsort((sse0, -leaves.nmatch))[:MAX_LEAVES])
     m = s.m
     # Back from level order to observation order.
     assign = np.full((len(leaves), m), -1, dtype=np.int64)
@@ -958,6 +1020,22 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     bm = np.broadcast_to(bearings, assign.shape)
     poses, sse = refine_batch(Lm, np.ascontiguousarray(bm), leaves.pose, w)
     nmatch = w.sum(axis=1).astype(np.int64)
+    if opt.sigma is not None:
+        # Joint compatibility (JCBB): each pairing passed its own gate, but all of them
+        # together must also fit one pose: sse / sigma^2 ~ chi-square with n - 3 dof.
+        joint = sse / opt.sigma**2 <= opt.joint_chi2[nmatch]
+        if not joint.any():
+            return [], False
+        if not joint.all():
+            keep_j = np.flatnonzero(joint)
+            assign, w, Lm, poses, sse, nmatch = (
+                assign[keep_j],
+                w[keep_j],
+                Lm[keep_j],
+                poses[keep_j],
+                sse[keep_j],
+                nmatch[keep_j],
+            )
     rms = np.sqrt(sse / nmatch)
     sig = opt.sigma_eff
     # Covariance at the refined pose: sigma^2 (G^T G)^-1 over the matched pairs.

@@ -1,0 +1,151 @@
+"""The benchmark scenes: which maps, which poses, which observations, which localize options.
+
+(a) the demo room (12 landmarks), the paper's pose and its 4-7 visible landmarks in random
+    order, noise-free (like the paper) and with sigma = 0.2 deg;
+(b) 30 random landmarks in a 20 m square, 7 true bearings + 3 spurious, sigma = 0.5 deg;
+(c) 10,000 landmarks uniform at 0.01 / m^2 (1 km square, 1 m apart at least), every landmark
+    within 20 m observed plus 2 spurious bearings, sigma = 0.3 deg;
+(d) the same as (c) with 100,000 landmarks (3.16 km square).
+
+Every trial draws its own observation (and for (b) its own map and pose) from a seed that
+depends only on the scene and the trial number, so runs are repeatable.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from omniloc.maps import LandmarkMap
+from omniloc.pose import Pose
+from omniloc.simulate import DEMO_POSE, DEMO_VISIBLE, Scene, demo_room, observe, random_map
+
+__all__ = ["CASES", "GROUPS", "Case", "build_map", "make_trial"]
+
+DEG = float(np.deg2rad(1.0))
+
+
+@dataclass(frozen=True)
+class Case:
+    """One row of the benchmark.
+
+    Attributes
+    ----------
+    name : str
+        Row key, e.g. ``"a7"`` (demo room, 7 bearings, noise-free) or ``"a7n"`` (sigma 0.2 deg).
+    group : str
+        Scene letter ``a``-``d``.
+    label : str
+        Human description for the table.
+    kwargs : dict
+        Options for :func:`omniloc.search.localize` (besides the map and bearings).
+    sigma : float
+        Bearing noise of the simulation, radians.
+    m : int or None
+        Number of bearings when fixed (scene a), else None.
+    """
+
+    name: str
+    group: str
+    label: str
+    kwargs: dict[str, Any] = field(default_factory=dict)
+    sigma: float = 0.0
+    m: int | None = None
+
+
+def _a_cases() -> list[Case]:
+    out = []
+    for noisy in (False, True):
+        for m in (4, 5, 6, 7):
+            sig = 0.2 * DEG if noisy else 0.0
+            out.append(
+                Case(
+                    name=f"a{m}{'n' if noisy else ''}",
+                    group="a",
+                    label=f"demo room, {m} obs, " + ("sigma 0.2 deg" if noisy else "noise-free"),
+                    kwargs={"sigma": sig} if noisy else {},
+                    sigma=sig,
+                    m=m,
+                )
+            )
+    return out
+
+
+CASES: dict[str, Case] = {c.name: c for c in _a_cases()}
+CASES["b"] = Case(
+    "b",
+    "b",
+    "30 random landmarks, 7 + 3 spurious obs, sigma 0.5 deg",
+    {"sigma": 0.5 * DEG, "max_spurious": 3},
+    0.5 * DEG,
+)
+CASES["c"] = Case(
+    "c",
+    "c",
+    "10,000 landmarks at 0.01/m^2, all within 20 m + 2 spurious, sigma 0.3 deg",
+    {"sigma": 0.3 * DEG, "max_spurious": 2, "max_range": 20.0},
+    0.3 * DEG,
+)
+CASES["d"] = Case(
+    "d",
+    "d",
+    "100,000 landmarks at 0.01/m^2, all within 20 m + 2 spurious, sigma 0.3 deg",
+    {"sigma": 0.3 * DEG, "max_spurious": 2, "max_range": 20.0},
+    0.3 * DEG,
+)
+GROUPS: dict[str, list[str]] = {
+    g: [c.name for c in CASES.values() if c.group == g] for g in ("a", "b", "c", "d")
+}
+
+#: Landmark counts and seeds of the large maps.
+LARGE = {"c": (10_000, 10), "d": (100_000, 11)}
+MAX_RANGE = 20.0
+MIN_SEPARATION = 1.0
+
+
+def build_map(group: str) -> LandmarkMap | None:
+    """The fixed map of a group (None for (b), whose map changes with every trial)."""
+    if group == "a":
+        return demo_room()
+    if group in LARGE:
+        n, seed = LARGE[group]
+        return random_map(n, density=0.01, min_separation=MIN_SEPARATION, rng=seed)
+    return None
+
+
+def _interior_pose(lm: LandmarkMap, gen: np.random.Generator) -> Pose:
+    """A pose at least MAX_RANGE from the map's border and 0.5 m from every landmark."""
+    x0, y0, x1, y1 = lm.bounds
+    for _ in range(1000):
+        p = gen.uniform((x0 + MAX_RANGE, y0 + MAX_RANGE), (x1 - MAX_RANGE, y1 - MAX_RANGE))
+        if lm.kdtree.query(p)[0] >= 0.5:
+            return Pose(float(p[0]), float(p[1]), float(gen.uniform(-np.pi, np.pi)))
+    raise RuntimeError("no free pose")
+
+
+def make_trial(case: Case, trial: int, lm: LandmarkMap | None) -> tuple[LandmarkMap, Scene]:
+    """The map and the simulated observation of one trial of a case."""
+    gen = np.random.default_rng([ord(c) for c in case.name] + [trial])
+    if case.group == "a":
+        assert lm is not None and case.m is not None
+        sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=case.m, sigma=case.sigma, rng=gen)
+        return lm, sc
+    if case.group == "b":
+        lm_b = random_map(30, size=20.0, rng=gen)
+        for _ in range(100):
+            x0, y0, x1, y1 = lm_b.bounds
+            p = gen.uniform((x0, y0), (x1, y1))
+            if np.hypot(*(lm_b.xy - p).T).min() >= 0.5:
+                break
+        pose = Pose(float(p[0]), float(p[1]), float(gen.uniform(-np.pi, np.pi)))
+        sc = observe(lm_b, pose, n_obs=7, n_spurious=3, sigma=case.sigma, rng=gen)
+        return lm_b, sc
+    assert lm is not None
+    for _ in range(100):
+        pose = _interior_pose(lm, gen)
+        sc = observe(lm, pose, max_range=MAX_RANGE, n_spurious=2, sigma=case.sigma, rng=gen)
+        if sc.bearings.size - sc.n_spurious >= 4:
+            return lm, sc
+    raise RuntimeError("no pose sees 4 landmarks")
