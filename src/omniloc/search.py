@@ -473,6 +473,9 @@ class _Search:
         self.best_match = 0
         self.complete = True
         self.t0 = time.perf_counter()
+        # Bearings closer than this may come in either order (twice the gate half-width).
+        gate = opt.threshold if opt.sigma is None else math.sqrt(opt.gate_chi2) * opt.sigma
+        self.order_tol = 2.0 * gate
         # Scale for "robot at infinity" tests.
         self.scale = float(np.ptp(self.L, axis=0).max()) or 1.0
 
@@ -925,14 +928,17 @@ class _Search:
         rows = np.arange(len(G))
         p_next = predm[rows, nxt][par]
         p_prev = predm[rows, prv][par]
-        # The candidate must lie in the counter-clockwise arc from prev to next.
+        # The candidate must lie in the counter-clockwise arc from prev to next, give or take
+        # the noise: bearings closer than that may be measured in either order.
+        tol = self.order_tol
         span = np.mod(p_next - p_prev, TWO_PI)
-        pos = np.mod(pred - p_prev, TWO_PI)
-        return np.asarray(pos <= span + 1e-12)
+        pos = np.mod(pred - p_prev + tol, TWO_PI) - tol
+        return np.asarray(pos <= span + tol)
 
     def _order_ok_path(self, C: _Batch) -> NDArray[np.bool_]:
         """Ordering over a whole path at its re-estimated pose: the matched landmarks go round
-        the pose in the measured cyclic order (one turn exactly)."""
+        the pose in the measured cyclic order (one turn exactly), where a step back smaller
+        than the noise tolerance counts as no step (such bearings may swap under noise)."""
         Lm, bm, w = self._matched(C)
         P = C.pose
         predm = np.arctan2(Lm[..., 1] - P[:, None, 1], Lm[..., 0] - P[:, None, 0]) - P[:, None, 2]
@@ -946,6 +952,7 @@ class _Search:
             rows = np.flatnonzero(n == k)
             seq = ps[rows, :k]
             steps = np.mod(np.diff(np.concatenate([seq, seq[:, :1]], axis=1), axis=1), TWO_PI)
+            steps = np.where(steps > TWO_PI - self.order_tol, steps - TWO_PI, steps)
             turns[rows] = steps.sum(axis=1)
         return np.asarray(np.abs(turns - TWO_PI) < 1e-6)
 
