@@ -55,10 +55,6 @@ IntArray = NDArray[np.int64]
 #: Upper bound on candidate (path, landmark) pairs evaluated in one numpy batch.
 BATCH_PAIRS = 1 << 16
 
-#: With wildcards, solutions matching up to this many fewer bearings than the best are kept
-#: (and searched for); paths that cannot reach that are cut (branch and bound).
-MATCH_SLACK = 1
-
 #: At most this many complete paths are refined and returned (the best by matches and fit).
 MAX_LEAVES = 2000
 
@@ -470,7 +466,6 @@ class _Search:
         self.opt = opt
         self.count = _Counter()
         self.leaves: list[_Batch] = []
-        self.best_match = 0
         self.complete = True
         self.t0 = time.perf_counter()
         # Bearings closer than this may come in either order (twice the gate half-width).
@@ -496,7 +491,6 @@ class _Search:
             batch = stack.pop()
             if batch.level == self.m:
                 self.leaves.append(batch)
-                self.best_match = max(self.best_match, self._compatible_matches(batch))
                 continue
             per = max(1, BATCH_PAIRS // (self.N + 1))
             if len(batch) > per:
@@ -515,19 +509,6 @@ class _Search:
         res = _wrap_fast(pred - bm) * w
         return np.asarray((res * res).sum(axis=1))
 
-    def _compatible_matches(self, B: _Batch) -> int:
-        """Most matches among complete paths that pass the joint test (sigma mode).
-
-        Only such paths may tighten the branch-and-bound; a path that squeezed through every
-        individual gate but fits no single pose must not cut the true interpretation. The test
-        here uses the path's own pose, which fits no better than the refined one, so it only
-        ever errs towards a weaker bound.
-        """
-        if self.opt.sigma is None:
-            return int(B.nmatch.max())
-        ok = self.leaf_sse(B) / self.opt.sigma**2 <= self.opt.joint_chi2[B.nmatch]
-        return int(B.nmatch[ok].max()) if ok.any() else 0
-
     # ---- one level -------------------------------------------------------------------------
     def _expand(self, B: _Batch) -> _Batch | None:
         lev = B.level
@@ -537,23 +518,15 @@ class _Search:
         opt = self.opt
         parts: list[_Batch] = []
 
-        # Branch and bound on the number of matches (JCBB): a path that can no longer reach
-        # the best complete path found so far, less the slack, is cut with all its children.
-        need = max(opt.min_match, self.best_match - MATCH_SLACK)
-        alive = B.nmatch + (self.m - lev) >= need
-        if not alive.all():
-            self.count.bound += int((~alive).sum())
-            B = B.take(np.flatnonzero(alive))
-            if len(B) == 0:
-                return None
-
         # Wildcard children ("this bearing is not on the map"), explored after the matches.
+        # Bound: a wildcard is only taken while the path can still reach the required number
+        # of matched bearings, m - max_spurious; every other wildcard branch is cut.
         wild: _Batch | None = None
         if opt.max_wild > 0:
-            ok = (B.nwild < opt.max_wild) & (B.nmatch + remaining >= need)
+            ok = B.nmatch + remaining >= opt.min_match
             n_wild = int(ok.sum())
             self.count.nodes += n_wild
-            self.count.bound += int((B.nwild < opt.max_wild).sum()) - n_wild
+            self.count.bound += len(B) - n_wild
             if depth > 3:
                 self.count.examined += n_wild
             if n_wild:
@@ -1008,11 +981,6 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     if not s.leaves:
         return [], False
     leaves = _concat(s.m, s.leaves) if len(s.leaves) > 1 else s.leaves[0]
-    # The bound may have let a few weaker paths through before the best was known: drop them,
-    # so the answer does not depend on the order of the walk.
-    strong = leaves.nmatch >= s.best_match - MATCH_SLACK
-    if not strong.all():
-        leaves = leaves.take(np.flatnonzero(strong))
     if len(leaves) > MAX_LEAVES:
         # Pathological inputs (huge gates, tiny maps) can leave very many paths; only the best
         # MAX_LEAVES by matches and fit are refined, merged and returned.
@@ -1087,8 +1055,11 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     return sols, bool(rivals)
 
 
-#: Chi-square, 3 degrees of freedom, 99.9 %: two poses closer than this are the same.
-SAME_POSE_CHI2 = 16.27
+#: Two solutions are "the same pose" when each lies within one standard deviation (Mahalanobis
+#: distance 1) of the other: equivalent assignments (a spurious bearing that also matches a
+#: landmark, two landmarks on one ray) land far closer than that, while distinct nearby poses
+#: (tubes of one cluster swapped) stay apart so that the true one is not hidden behind another.
+SAME_POSE_CHI2 = 1.0
 
 
 def _inv_cov(cov: FloatArray) -> FloatArray:
@@ -1123,7 +1094,7 @@ def _merge(rank: IntArray, poses: FloatArray, cov: FloatArray) -> list[int]:
 
 
 def _same_pose(p: FloatArray, cp: FloatArray, q: FloatArray, cq: FloatArray) -> bool:
-    """Two poses indistinguishable at the uncertainty of each (chi-square, 3 dof, 99.9 %).
+    """Two poses indistinguishable at the uncertainty of each (see SAME_POSE_CHI2).
 
     Both must lie inside the other's confidence ellipsoid: a vague solution cannot swallow a
     precise one that happens to fall inside its own wide ellipsoid.
