@@ -115,6 +115,7 @@ def _build_parser() -> argparse.ArgumentParser:
     )
     e.add_argument("--max-samples", type=int, help="use at most this many dataset samples")
     e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--workers", type=int, default=1, help="processes for a sweep (default 1)")
     e.add_argument("--out", type=Path, default=Path("evaluation"), help="folder for results")
     return parser
 
@@ -379,7 +380,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
             if args.trials < 1:
                 raise InputError(f"--trials must be >= 1, got {args.trials}")
             config = config.with_trials(args.trials)
-        res = ev.run_sweep(config, rng=args.seed, progress=progress)
+        if args.workers < 1:
+            raise InputError(f"--workers must be >= 1, got {args.workers}")
+        res = ev.run_sweep(config, rng=args.seed, progress=progress, workers=args.workers)
     print(res.summary())
     written = ev.save_report(res, args.out)
     print(f"written: {', '.join(str(p) for p in written)}")

@@ -1,0 +1,180 @@
+"""Tests of the Monte Carlo sweep, its records and files, and the dataset evaluation."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from omniloc.errors import InputError
+from omniloc.evaluate import (
+    DatasetResult,
+    SweepConfig,
+    SweepResult,
+    evaluate_dataset,
+    run_sweep,
+    save_report,
+)
+
+DATA = Path("/work/shared/data")
+needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="shared datasets not present")
+
+
+@pytest.fixture(scope="module")
+def quick() -> SweepResult:
+    return run_sweep(SweepConfig.quick(), rng=0, progress=False)
+
+
+def _numbers(r: SweepResult) -> list[tuple[object, ...]]:
+    return [
+        (t.seed, t.success, t.n_solutions, t.pos_err_m, t.refined_pos_err_m, t.crlb_pos_m)
+        for t in r.trials
+    ]
+
+
+def test_quick_sweep_is_reproducible_and_seed_dependent(quick: SweepResult) -> None:
+    again = run_sweep(SweepConfig.quick(), rng=0, progress=False)
+    other = run_sweep(SweepConfig.quick(), rng=1, progress=False)
+    a, b, c = _numbers(quick), _numbers(again), _numbers(other)
+    assert len(a) == len(quick.config.conditions()) * quick.config.trials == 20
+    np.testing.assert_equal(np.array(a, dtype=float), np.array(b, dtype=float))
+    assert a != c
+    assert [t.seed for t in quick.trials] != [t.seed for t in other.trials]
+
+
+def test_zero_noise_no_spurious_always_succeeds_on_demo_room(quick: SweepResult) -> None:
+    row = next(r for r in quick.rows if r.sigma_deg == 0.0 and r.spurious_rate == 0.0)
+    assert row.map_kind == "room"
+    assert row.n_trials == 5
+    assert row.success_rate == 1.0
+    assert row.in_solutions_rate == 1.0
+    assert row.pos_rmse_m < 1e-6
+    assert row.refined_pos_rmse_m < 1e-6
+
+
+def test_spurious_counts_follow_the_rate(quick: SweepResult) -> None:
+    for t in quick.trials:
+        assert t.n_spurious == round(t.spurious_rate * t.n_obs)
+        assert t.n_true + t.n_spurious == t.n_obs
+
+
+def test_refined_rmse_is_near_the_crlb() -> None:
+    cfg = SweepConfig(
+        name="crlb-check",
+        sigmas_deg=(1.0,),
+        n_obs=(8,),
+        map_sizes=(12,),
+        map_kinds=("random",),
+        trials=100,
+    )
+    r = run_sweep(cfg, rng=3, progress=False)
+    row = r.rows[0]
+    assert row.n_trials == 100
+    # An efficient estimator sits at the bound; allow generous slack for 100 trials.
+    assert 0.7 * row.crlb_pos_m <= row.refined_pos_rmse_m <= 1.6 * row.crlb_pos_m
+    assert 0.7 * row.crlb_heading_deg <= row.refined_heading_rmse_deg <= 1.6 * row.crlb_heading_deg
+    # The linear estimate is not better than the ML refinement on average.
+    assert row.linear_pos_rmse_m >= 0.95 * row.refined_pos_rmse_m
+    # sigma 1 deg in a 20 m map: ~0.19 m RMS position error, so about half within 0.1 m.
+    assert 0.3 <= row.success_rate <= row.in_solutions_rate
+
+
+def test_csv_and_json_round_trip(quick: SweepResult, tmp_path: Path) -> None:
+    quick.to_csv(tmp_path / "rows.csv", trials_path=tmp_path / "trials.csv")
+    quick.to_json(tmp_path / "r.json")
+    with (tmp_path / "rows.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == len(quick.rows) == 4
+    for col in (
+        "sigma_deg",
+        "success_rate",
+        "in_solutions_rate",
+        "refined_pos_rmse_m",
+        "linear_pos_rmse_m",
+        "crlb_pos_m",
+        "time_median_s",
+        "time_p95_s",
+        "n_trials",
+    ):
+        assert col in rows[0]
+    assert float(rows[0]["success_rate"]) == quick.rows[0].success_rate
+    with (tmp_path / "trials.csv").open() as fh:
+        trials = list(csv.DictReader(fh))
+    assert len(trials) == 20
+    assert {"success", "pos_err_m", "crlb_heading_deg", "time_s", "complete"} <= set(trials[0])
+    data = json.loads((tmp_path / "r.json").read_text())
+    assert data["config"]["name"] == "quick"
+    assert len(data["trials"]) == 20
+    assert data["rows"][0]["success_rate"] == quick.rows[0].success_rate
+
+
+def test_summary_is_a_table(quick: SweepResult) -> None:
+    text = quick.summary()
+    lines = text.splitlines()
+    assert len(lines) == 2 + len(quick.rows)
+    assert "success" in lines[1] and "crlb_pos" in lines[1]
+
+
+def test_save_report_writes_pngs(quick: SweepResult, tmp_path: Path) -> None:
+    paths = save_report(quick, tmp_path)
+    assert {p.suffix for p in paths} == {".csv", ".json", ".png"}
+    for p in paths:
+        assert p.is_file() and p.stat().st_size > 0
+    png = [p for p in paths if p.suffix == ".png"]
+    assert len(png) == 2
+    assert all(p.read_bytes()[:4] == b"\x89PNG" for p in png)
+
+
+def test_bad_config_is_refused() -> None:
+    with pytest.raises(InputError, match="trials"):
+        SweepConfig(trials=0)
+    with pytest.raises(InputError, match="map kind"):
+        SweepConfig(map_kinds=("moon",))
+    with pytest.raises(InputError, match="rates"):
+        SweepConfig(spurious_rates=(1.0,))
+
+
+def test_presets_describe_the_targets() -> None:
+    s = SweepConfig.targets_spurious()
+    assert len(s.conditions()) * s.trials == 1000
+    assert all(c.n_obs == 8 and round(c.spurious_rate * 8) == 2 for c in s.conditions())
+    assert {c.map_size for c in s.conditions()} == {12, 18, 24, 30}
+    c = SweepConfig.targets_crlb(trials=10)
+    assert c.trials == 10 and c.sigmas_deg == (1.0,) and c.spurious_rates == (0.0,)
+    d = SweepConfig.default()
+    assert max(d.sigmas_deg) == 3.0 and max(d.spurious_rates) == 0.5
+    assert set(d.map_kinds) == {"random", "room", "symmetric"}
+
+
+@needs_data
+def test_evaluate_roh_slice() -> None:
+    r = evaluate_dataset("roh", DATA / "roh", max_samples=20, progress=False)
+    assert isinstance(r, DatasetResult)
+    assert r.n == 20
+    assert r.in_solutions_rate >= 0.9
+    # A square of 4 beacons: the solver must say the pose is ambiguous.
+    assert r.ambiguous_rate >= 0.9
+    assert r.as_dict()["n"] == 20
+
+
+@needs_data
+def test_evaluate_mrclam_slice(tmp_path: Path) -> None:
+    r = evaluate_dataset(
+        "mrclam", DATA / "mrclam-ds6", max_samples=20, progress=False, include_robots=False
+    )
+    assert r.n == 20
+    assert r.oracle_in_solutions_rate >= 0.5
+    assert r.in_solutions_rate >= 0.3
+    assert all(math.isfinite(t.oracle_pos_err_m) for t in r.trials)
+    paths = save_report(r, tmp_path)
+    assert [p.name for p in paths] == ["mrclam.csv", "mrclam.json", "mrclam_errors.png"]
+    assert json.loads(paths[1].read_text())["n"] == 20
+
+
+def test_evaluate_dataset_rejects_unknown_kind() -> None:
+    with pytest.raises(InputError, match="roh"):
+        evaluate_dataset("kitti", "/nowhere", progress=False)
