@@ -399,7 +399,7 @@ def crlb(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: float) -> Float
     >>> L = [[0, 0], [10, 0], [10, 10], [0, 10]]
     >>> C = crlb(L, Pose(5.0, 5.0, 0.0), np.deg2rad(1.0))
     >>> round(float(np.sqrt(C[0, 0] + C[1, 1])), 4)
-    0.0873
+    0.1234
     """
     J = fisher_information(landmarks_xy, pose, sigma)
     if np.linalg.cond(J) > 1e12:
