@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import chdtri, ndtri
 
+from . import _compiled
 from .angles import TWO_PI, wrap
 from .errors import InputError
 from .io import check_bearings
@@ -466,6 +467,7 @@ class _Search:
         self.opt = opt
         self.count = _Counter()
         self.leaves: list[_Batch] = []
+        self.use_compiled = True
         self.complete = True
         self.t0 = time.perf_counter()
         # Bearings closer than this may come in either order (twice the gate half-width).
@@ -482,7 +484,60 @@ class _Search:
         return o.timeout_s is not None and time.perf_counter() - self.t0 > o.timeout_s
 
     # ---- driver ----------------------------------------------------------------------------
+    def _compiled_ok(self) -> bool:
+        """Whether the compiled walk of the paper's rules covers this search."""
+        o = self.opt
+        return (
+            _compiled.AVAILABLE
+            and self.use_compiled
+            and o.sigma is None
+            and o.max_wild == 0
+            and not o.ordering
+            and o.max_range is None
+            and o.min_range is None
+            and o.max_nodes is None
+            and o.timeout_s is None
+        )
+
+    def _run_compiled(self) -> None:
+        capacity = 4 * MAX_LEAVES
+        while True:
+            assign, pose, counts = _compiled.paper_tree(
+                np.ascontiguousarray(self.L),
+                np.ascontiguousarray(self.beta),
+                float(self.opt.threshold),
+                self.scale,
+                SINGULAR_RTOL,
+                0,
+                capacity,
+            )
+            if counts[5] <= capacity:
+                break
+            capacity = int(counts[5])
+        c = self.count
+        c.nodes, c.examined, c.triples, c.existence, c.gate = (int(v) for v in counts[:5])
+        k = len(assign)
+        if k:
+            self.leaves.append(
+                _Batch(
+                    self.m,
+                    assign,
+                    np.full(k, self.m, dtype=np.int64),
+                    np.zeros(k, dtype=np.int64),
+                    assign[:, 0].copy(),
+                    np.full(k, float(self.beta[0])),
+                    np.zeros((k, 3)),
+                    np.zeros((k, 2)),
+                    np.zeros(k, dtype=np.complex128),
+                    np.zeros(k, dtype=np.complex128),
+                    pose,
+                )
+            )
+
     def run(self) -> None:
+        if self._compiled_ok():
+            self._run_compiled()
+            return
         stack: list[_Batch] = [_root(self.m)]
         while stack:
             if self._over_budget():
@@ -962,9 +1017,8 @@ def _robust_order(bearings: FloatArray) -> IntArray:
     triples = _TRIPLES[min(m, 12)]
     s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
     gaps = np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1)
-    best = triples[int(np.argmax(gaps.min(axis=1)))]  # first of the widest, deterministic
-    rest = np.setdiff1d(np.arange(m), best)
-    return np.concatenate([best, rest]).astype(np.int64)
+    best = [int(i) for i in triples[int(np.argmax(gaps.min(axis=1)))]]  # first of the widest
+    return np.array(best + [o for o in range(m) if o not in best], dtype=np.int64)
 
 
 _TRIPLES = {
