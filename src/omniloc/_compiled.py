@@ -232,3 +232,71 @@ def paper_tree(
     )
     k = min(n_leaves, capacity)
     return out_a[:k].copy(), out_p[:k].copy(), counts
+
+
+@njit(cache=True)
+def gauss_newton(
+    Lm: NDArray[np.float64],
+    bm: NDArray[np.float64],
+    w: NDArray[np.float64],
+    start: NDArray[np.float64],
+    iters: int,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Gauss-Newton on wrapped bearing residuals, path by path (see search._gauss_newton)."""
+    K, n = bm.shape
+    out = start.copy()
+    sse_out = np.zeros(K)
+    for k in range(K):
+        x, y, t = out[k, 0], out[k, 1], out[k, 2]
+        sse = 0.0
+        for i in range(n):
+            if w[k, i] > 0:
+                r = _wrap(np.arctan2(Lm[k, i, 1] - y, Lm[k, i, 0] - x) - t - bm[k, i])
+                sse += r * r
+        for _ in range(iters):
+            h00 = h01 = h02 = h11 = h12 = h22 = 0.0
+            g0 = g1 = g2 = 0.0
+            for i in range(n):
+                if w[k, i] > 0:
+                    dx = Lm[k, i, 0] - x
+                    dy = Lm[k, i, 1] - y
+                    r2 = dx * dx + dy * dy
+                    r = _wrap(np.arctan2(dy, dx) - t - bm[k, i])
+                    gx, gy, gt = dy / r2, -dx / r2, -1.0
+                    h00 += gx * gx
+                    h01 += gx * gy
+                    h02 += gx * gt
+                    h11 += gy * gy
+                    h12 += gy * gt
+                    h22 += gt * gt
+                    g0 -= gx * r
+                    g1 -= gy * r
+                    g2 -= gt * r
+            c00 = h11 * h22 - h12 * h12
+            c01 = h02 * h12 - h01 * h22
+            c02 = h01 * h12 - h02 * h11
+            det = h00 * c00 + h01 * c01 + h02 * c02
+            if not abs(det) > 1e-12 * max(h00 * h11 * h22, 1e-300):
+                break
+            c11 = h00 * h22 - h02 * h02
+            c12 = h01 * h02 - h00 * h12
+            c22 = h00 * h11 - h01 * h01
+            s0 = (c00 * g0 + c01 * g1 + c02 * g2) / det
+            s1 = (c01 * g0 + c11 * g1 + c12 * g2) / det
+            s2 = (c02 * g0 + c12 * g1 + c22 * g2) / det
+            if not (np.isfinite(s0) and np.isfinite(s1) and np.isfinite(s2)):
+                break
+            nx, ny, nt = x + s0, y + s1, t + s2
+            nsse = 0.0
+            for i in range(n):
+                if w[k, i] > 0:
+                    r = _wrap(np.arctan2(Lm[k, i, 1] - ny, Lm[k, i, 0] - nx) - nt - bm[k, i])
+                    nsse += r * r
+            if not nsse < sse:
+                break
+            x, y, t, sse = nx, ny, nt, nsse
+            if max(abs(s0), abs(s1), abs(s2)) < 1e-13:
+                break
+        out[k, 0], out[k, 1], out[k, 2] = x, y, _wrap(t)
+        sse_out[k] = sse
+    return out, sse_out

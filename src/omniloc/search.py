@@ -40,7 +40,7 @@ from .angles import TWO_PI, wrap
 from .errors import InputError
 from .io import check_bearings
 from .maps import LandmarkMap, as_landmark_map
-from .pose import SINGULAR_RTOL, Pose, _bearing_jacobian, refine_batch
+from .pose import SINGULAR_RTOL, Pose, _bearing_jacobian
 
 __all__ = [
     "LocalizationResult",
@@ -419,6 +419,73 @@ def _wrap_fast(a: FloatArray) -> FloatArray:
     return np.remainder(a + np.pi, TWO_PI) - np.pi
 
 
+def _gauss_newton(
+    Lm: FloatArray, bm: FloatArray, w: FloatArray, start: FloatArray, *, iters: int
+) -> tuple[FloatArray, FloatArray]:
+    """Gauss-Newton on wrapped bearing residuals for K paths at once.
+
+    ``Lm`` (K, n, 2) landmarks, ``bm`` (K, n) bearings, ``w`` (K, n) weights (0 for padding),
+    ``start`` (K, 3) poses. The 3x3 normal equations are solved by Cramer's rule; a step is
+    kept only where it lowers the squared error, so the result is never worse than ``start``.
+    Returns the poses and their weighted squared errors.
+    """
+    if _compiled.AVAILABLE:
+        return _compiled.gauss_newton(
+            np.ascontiguousarray(Lm, dtype=np.float64),
+            np.ascontiguousarray(bm, dtype=np.float64),
+            np.ascontiguousarray(w, dtype=np.float64),
+            np.ascontiguousarray(start, dtype=np.float64),
+            iters,
+        )
+    p = start.copy()
+    lx, ly = Lm[..., 0], Lm[..., 1]
+
+    def residuals(q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        dx = lx - q[:, None, 0]
+        dy = ly - q[:, None, 1]
+        res = _wrap_fast(np.arctan2(dy, dx) - q[:, None, 2] - bm) * w
+        return dx, dy, res, (res * res).sum(axis=1)
+
+    dx, dy, res, sse = residuals(p)
+    for _ in range(iters):
+        r2 = dx * dx + dy * dy
+        gx, gy = dy / r2 * w, -dx / r2 * w
+        gt = -w
+        h00, h01, h02 = (gx * gx).sum(1), (gx * gy).sum(1), (gx * gt).sum(1)
+        h11, h12, h22 = (gy * gy).sum(1), (gy * gt).sum(1), (gt * gt).sum(1)
+        b0, b1, b2 = -(gx * res).sum(1), -(gy * res).sum(1), -(gt * res).sum(1)
+        c00 = h11 * h22 - h12 * h12
+        c01 = h02 * h12 - h01 * h22
+        c02 = h01 * h12 - h02 * h11
+        det = h00 * c00 + h01 * c01 + h02 * c02
+        ok = np.abs(det) > 1e-12 * np.maximum(h00 * h11 * h22, 1e-300)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = np.where(ok, 1.0 / det, 0.0)
+            c11 = h00 * h22 - h02 * h02
+            c12 = h01 * h02 - h00 * h12
+            c22 = h00 * h11 - h01 * h01
+            step = np.stack(
+                [
+                    (c00 * b0 + c01 * b1 + c02 * b2) * inv,
+                    (c01 * b0 + c11 * b1 + c12 * b2) * inv,
+                    (c02 * b0 + c12 * b1 + c22 * b2) * inv,
+                ],
+                axis=1,
+            )
+        step[~np.isfinite(step).all(axis=1)] = 0.0
+        cand = p + step
+        cdx, cdy, cres, csse = residuals(cand)
+        better = csse < sse
+        if not better.any():
+            break
+        p[better], sse[better] = cand[better], csse[better]
+        dx[better], dy[better], res[better] = cdx[better], cdy[better], cres[better]
+        if np.abs(step[better]).max() < 1e-13:
+            break
+    p[:, 2] = _wrap_fast(p[:, 2])
+    return p, sse
+
+
 def _projector(a: NDArray[np.complex128], b: NDArray[np.complex128]) -> tuple[FloatArray, ...]:
     """Entries of P = a a^T / a^T a - I (eq. 3) and of P b, for complex a and b."""
     ar, ai = a.real, a.imag
@@ -500,7 +567,7 @@ class _Search:
         )
 
     def _run_compiled(self) -> None:
-        capacity = 4 * MAX_LEAVES
+        capacity = 64  # grown and run again in the rare case of more complete paths
         while True:
             assign, pose, counts = _compiled.paper_tree(
                 np.ascontiguousarray(self.L),
@@ -839,61 +906,10 @@ class _Search:
         """Two Gauss-Newton steps from the linear pose (sigma mode), towards the ML pose.
 
         The linear estimate minimises an algebraic error; the gate's covariance describes the
-        maximum-likelihood estimate, so the path's pose is moved to it before it predicts. A
-        step is kept only where it lowers the squared bearing error.
+        maximum-likelihood estimate, so the path's pose is moved to it before it predicts.
         """
         Lm, bm, w = self._matched(C)
-        p = C.pose.copy()
-        lx, ly = Lm[..., 0], Lm[..., 1]
-        sse_prev: FloatArray | None = None
-        p_prev = p.copy()
-        for _ in range(2):
-            dx = lx - p[:, None, 0]
-            dy = ly - p[:, None, 1]
-            r2 = dx * dx + dy * dy
-            res = _wrap_fast(np.arctan2(dy, dx) - p[:, None, 2] - bm) * w
-            sse = (res * res).sum(axis=1)
-            if sse_prev is not None:
-                worse = sse > sse_prev
-                if worse.any():
-                    p[worse] = p_prev[worse]
-                    sse[worse] = sse_prev[worse]
-            gx, gy = dy / r2 * w, -dx / r2 * w
-            gt = -w
-            # Normal equations H d = -g^T res, solved by Cramer's rule for every path at once.
-            h00, h01, h02 = (gx * gx).sum(1), (gx * gy).sum(1), (gx * gt).sum(1)
-            h11, h12, h22 = (gy * gy).sum(1), (gy * gt).sum(1), (gt * gt).sum(1)
-            b0, b1, b2 = -(gx * res).sum(1), -(gy * res).sum(1), -(gt * res).sum(1)
-            c00 = h11 * h22 - h12 * h12
-            c01 = h02 * h12 - h01 * h22
-            c02 = h01 * h12 - h02 * h11
-            det = h00 * c00 + h01 * c01 + h02 * c02
-            ok = np.abs(det) > 1e-12 * np.maximum(h00 * h11 * h22, 1e-300)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                inv = np.where(ok, 1.0 / det, 0.0)
-                c11 = h00 * h22 - h02 * h02
-                c12 = h01 * h02 - h00 * h12
-                c22 = h00 * h11 - h01 * h01
-                step = np.stack(
-                    [
-                        (c00 * b0 + c01 * b1 + c02 * b2) * inv,
-                        (c01 * b0 + c11 * b1 + c12 * b2) * inv,
-                        (c02 * b0 + c12 * b1 + c22 * b2) * inv,
-                    ],
-                    axis=1,
-                )
-            step[~np.isfinite(step).all(axis=1)] = 0.0
-            p_prev, sse_prev = p.copy(), sse
-            p = p + step
-        # Keep the last step only where it helped.
-        dx = lx - p[:, None, 0]
-        dy = ly - p[:, None, 1]
-        res = _wrap_fast(np.arctan2(dy, dx) - p[:, None, 2] - bm) * w
-        assert sse_prev is not None
-        worse = (res * res).sum(axis=1) > sse_prev
-        p[worse] = p_prev[worse]
-        p[:, 2] = _wrap_fast(p[:, 2])
-        return p
+        return _gauss_newton(Lm, bm, w, C.pose, iters=2)[0]
 
     def _sigma_gate(
         self, G: _Batch, par: IntArray, dx: FloatArray, dy: FloatArray, innov: FloatArray
@@ -1047,7 +1063,7 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     w = (assign >= 0).astype(np.float64)
     Lm = s.L[np.maximum(assign, 0)]
     bm = np.broadcast_to(bearings, assign.shape)
-    poses, sse = refine_batch(Lm, np.ascontiguousarray(bm), leaves.pose, w)
+    poses, sse = _gauss_newton(Lm, np.ascontiguousarray(bm), w, leaves.pose, iters=10)
     nmatch = w.sum(axis=1).astype(np.int64)
     if opt.sigma is not None:
         # Joint compatibility (JCBB): each pairing passed its own gate, but all of them
