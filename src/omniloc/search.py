@@ -56,6 +56,9 @@ IntArray = NDArray[np.int64]
 #: Upper bound on candidate (path, landmark) pairs evaluated in one numpy batch.
 BATCH_PAIRS = 1 << 16
 
+#: The compiled walk enforces ``timeout_s`` as a budget of this many nodes per second.
+COMPILED_NODES_PER_SECOND = 2_000_000
+
 #: At most this many complete paths are refined and returned (the best by matches and fit).
 MAX_LEAVES = 2000
 
@@ -562,12 +565,18 @@ class _Search:
             and not o.ordering
             and o.max_range is None
             and o.min_range is None
-            and o.max_nodes is None
-            and o.timeout_s is None
         )
 
     def _run_compiled(self) -> None:
         capacity = 64  # grown and run again in the rare case of more complete paths
+        # The compiled loop cannot read the clock: a time budget becomes a node budget at a
+        # rate it comfortably exceeds (it visits about ten million nodes a second).
+        cap = 0
+        if self.opt.max_nodes is not None:
+            cap = self.opt.max_nodes
+        if self.opt.timeout_s is not None:
+            by_time = max(1, int(self.opt.timeout_s * COMPILED_NODES_PER_SECOND))
+            cap = by_time if cap == 0 else min(cap, by_time)
         while True:
             assign, pose, counts = _compiled.paper_tree(
                 np.ascontiguousarray(self.L),
@@ -575,7 +584,7 @@ class _Search:
                 float(self.opt.threshold),
                 self.scale,
                 SINGULAR_RTOL,
-                0,
+                cap,
                 capacity,
             )
             if counts[5] <= capacity:
@@ -583,6 +592,8 @@ class _Search:
             capacity = int(counts[5])
         c = self.count
         c.nodes, c.examined, c.triples, c.existence, c.gate = (int(v) for v in counts[:5])
+        if counts[6]:
+            self.complete = False
         k = len(assign)
         if k:
             self.leaves.append(
@@ -1265,7 +1276,8 @@ def localize(
         landmark costs a solution ``-log(p_miss)`` (negative evidence).
     max_nodes, timeout_s : optional
         Budget. Past it the search stops and returns what it has; ``result.complete`` is then
-        False.
+        False. Where the compiled walk runs (fixed threshold, no robust option), ``timeout_s``
+        is enforced as a budget of :data:`COMPILED_NODES_PER_SECOND` nodes per second.
 
     Returns
     -------
