@@ -435,12 +435,11 @@ def _gauss_newton(
     if _compiled.AVAILABLE:
         # Writable C arrays always: numba compiles (and caches) one version per array type,
         # and a read-only view would be a second type.
-        req = ("C", "W")
         return _compiled.gauss_newton(
-            np.require(Lm, np.float64, req),
-            np.require(bm, np.float64, req),
-            np.require(w, np.float64, req),
-            np.require(start, np.float64, req),
+            np.require(Lm, np.float64, ["C", "W"]),
+            np.require(bm, np.float64, ["C", "W"]),
+            np.require(w, np.float64, ["C", "W"]),
+            np.require(start, np.float64, ["C", "W"]),
             iters,
         )
     p = start.copy()
@@ -582,8 +581,8 @@ class _Search:
             cap = by_time if cap == 0 else min(cap, by_time)
         while True:
             assign, pose, counts = _compiled.paper_tree(
-                np.require(self.L, np.float64, ("C", "W")),
-                np.require(self.beta, np.float64, ("C", "W")),
+                np.require(self.L, np.float64, ["C", "W"]),
+                np.require(self.beta, np.float64, ["C", "W"]),
                 float(self.opt.threshold),
                 self.scale,
                 SINGULAR_RTOL,
