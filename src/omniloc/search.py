@@ -782,6 +782,18 @@ class _Search:
         C.level = G.level + 1
         return C
 
+    def _sums_with_pair(
+        self, G: _Batch, par: IntArray, lmk: IntArray, beta: float
+    ) -> tuple[NDArray[np.complex128], NDArray[np.complex128], FloatArray, FloatArray]:
+        """a and b of a new pair (eqs. 1-2) and the sums of eq. 4 with its P added."""
+        z = self._z(lmk, G.anchor[par])
+        a = np.exp(1j * (beta - G.anchor_b[par])) / z
+        b = 1.0 / z
+        p00, p01, p11, pb0, pb1 = _projector(a, b)
+        S = G.S[par] + np.stack([p00, p01, p11], axis=1)
+        T = G.T[par] + np.stack([pb0, pb1], axis=1)
+        return a, b, S, T
+
     def _z(self, lmk: IntArray, anchor: IntArray) -> NDArray[np.complex128]:
         d = self.L[lmk] - self.L[anchor]
         return d[:, 0] + 1j * d[:, 1]
@@ -790,12 +802,7 @@ class _Search:
     def _add_third(self, G: _Batch, par: IntArray, lmk: IntArray, beta: float) -> _Batch | None:
         self.count.triples += int(par.size)
         anchor = G.anchor[par]
-        z = self._z(lmk, anchor)
-        a = np.exp(1j * (beta - G.anchor_b[par])) / z
-        b = 1.0 / z
-        p00, p01, p11, pb0, pb1 = _projector(a, b)
-        S = G.S[par] + np.stack([p00, p01, p11], axis=1)
-        T = G.T[par] + np.stack([pb0, pb1], axis=1)
+        a, b, S, T = self._sums_with_pair(G, par, lmk, beta)
         fx, fy, det = _solve_f(S, T)
         # Rule (i): the pose exists -- S invertible, both distance ratios positive, f finite.
         a1, b1 = G.a1[par], G.b1[par]
@@ -852,12 +859,7 @@ class _Search:
             return None
         par, lmk = par[keep], lmk[keep]
         # A validated node re-estimates the pose from all its pairs (eq. 4 over the path).
-        z = self._z(lmk, G.anchor[par])
-        a = np.exp(1j * (beta - G.anchor_b[par])) / z
-        b = 1.0 / z
-        p00, p01, p11, pb0, pb1 = _projector(a, b)
-        S = G.S[par] + np.stack([p00, p01, p11], axis=1)
-        T = G.T[par] + np.stack([pb0, pb1], axis=1)
+        _, _, S, T = self._sums_with_pair(G, par, lmk, beta)
         fx, fy, det = _solve_f(S, T)
         pose, f2 = _pose_from_f(fx, fy, self.L[G.anchor[par]], G.anchor_b[par])
         C = G.take(par)
