@@ -49,12 +49,15 @@ def _wrap(a: float) -> float:
 
 @njit(cache=True)
 def _pair(
-    L: NDArray[np.float64], j: int, anchor: int, beta: float, b0: float
+    L: NDArray[np.float64], j: int, anchor: int, rot: complex
 ) -> tuple[complex, complex, float, float, float, float, float]:
-    """a, b (eqs. 1-2) and the entries of P (eq. 3) and P b for one pair."""
+    """a, b (eqs. 1-2) and the entries of P (eq. 3) and P b for one pair.
+
+    ``rot`` is exp(j (theta_i - theta_0)).
+    """
     z = complex(L[j, 0] - L[anchor, 0], L[j, 1] - L[anchor, 1])
-    a = np.exp(1j * (beta - b0)) / z
     b = 1.0 / z
+    a = rot * b
     ar, ai = a.real, a.imag
     aa = ar * ar + ai * ai
     p00 = ar * ar / aa - 1.0
@@ -105,6 +108,7 @@ def paper_tree(
     S = np.zeros((m + 1, 3))
     T = np.zeros((m + 1, 2))
     P = np.zeros((m + 1, 3))
+    U = np.zeros((m + 1, 2))  # direction of the next bearing in the world, from P
     out_a = np.empty((capacity, m), dtype=np.int64)
     out_p = np.empty((capacity, 3))
     nodes = examined = triples = existence = gate = n_leaves = 0
@@ -113,6 +117,14 @@ def paper_tree(
     b0 = beta[0]
     a1 = 0j
     b1 = 0j
+    # exp(j (theta_l - theta_0)) of eq. 1 depends on the level only: once per search.
+    rot = np.empty(m, dtype=np.complex128)
+    for k in range(m):
+        rot[k] = np.exp(1j * (beta[k] - b0))
+    # Rule (ii) without an arctangent: with u the measured direction from the pose,
+    # |wrap(pred - meas)| <= threshold  <=>  dot > 0 and |cross| <= tan(threshold) dot.
+    use_tan = threshold < 0.5 * np.pi
+    tan_thr = np.tan(threshold) if use_tan else 0.0
     level = 0
     while level >= 0:
         if nxt[level] >= N or stopped:
@@ -135,7 +147,7 @@ def paper_tree(
             T[1, :] = 0.0
             ok = True
         elif level == 1:
-            a, b, p00, p01, p11, pb0, pb1 = _pair(L, j, anchor, beta[1], b0)
+            a, b, p00, p01, p11, pb0, pb1 = _pair(L, j, anchor, rot[1])
             S[2, 0], S[2, 1], S[2, 2] = p00, p01, p11
             T[2, 0], T[2, 1] = pb0, pb1
             a1, b1 = a, b
@@ -143,7 +155,7 @@ def paper_tree(
         elif level == 2:
             # Rule (i): three pairs must give a pose.
             triples += 1
-            a, b, p00, p01, p11, pb0, pb1 = _pair(L, j, anchor, beta[2], b0)
+            a, b, p00, p01, p11, pb0, pb1 = _pair(L, j, anchor, rot[2])
             s00, s01, s11 = S[2, 0] + p00, S[2, 1] + p01, S[2, 2] + p11
             t0, t1 = T[2, 0] + pb0, T[2, 1] + pb1
             fx, fy, det, f2, rx, ry, th = _pose(
@@ -170,16 +182,24 @@ def paper_tree(
                 S[3, 0], S[3, 1], S[3, 2] = s00, s01, s11
                 T[3, 0], T[3, 1] = t0, t1
                 P[3, 0], P[3, 1], P[3, 2] = rx, ry, th
+                if m > 3:
+                    U[3, 0], U[3, 1] = np.cos(th + beta[3]), np.sin(th + beta[3])
             else:
                 existence += 1
         else:
             # Rule (ii): the bearing predicted from the path's pose must match.
             px, py, pt = P[level, 0], P[level, 1], P[level, 2]
-            pred = np.arctan2(L[j, 1] - py, L[j, 0] - px) - pt
-            innov = (pred - beta[level] + np.pi) % TWO_PI - np.pi
-            if abs(innov) <= threshold:
+            if use_tan:
+                ux, uy = U[level, 0], U[level, 1]
+                dxj, dyj = L[j, 0] - px, L[j, 1] - py
+                dot = dxj * ux + dyj * uy
+                passes = dot > 0 and abs(dxj * uy - dyj * ux) <= tan_thr * dot
+            else:
+                pred = np.arctan2(L[j, 1] - py, L[j, 0] - px) - pt
+                passes = abs((pred - beta[level] + np.pi) % TWO_PI - np.pi) <= threshold
+            if passes:
                 ok = True
-                a, b, p00, p01, p11, pb0, pb1 = _pair(L, j, anchor, beta[level], b0)
+                a, b, p00, p01, p11, pb0, pb1 = _pair(L, j, anchor, rot[level])
                 s00 = S[level, 0] + p00
                 s01 = S[level, 1] + p01
                 s11 = S[level, 2] + p11
@@ -198,7 +218,7 @@ def paper_tree(
                         lk = assign[k] if k < level else j
                         z = complex(L[lk, 0] - L[anchor, 0], L[lk, 1] - L[anchor, 1])
                         bk = 1.0 / z
-                        ak = np.exp(1j * (beta[k] - b0)) * bk
+                        ak = rot[k] * bk
                         rk = (ak.real * (fx + bk.real) + ak.imag * (fy + bk.imag)) / (
                             ak.real * ak.real + ak.imag * ak.imag
                         )
@@ -209,6 +229,9 @@ def paper_tree(
                     P[level + 1, 0], P[level + 1, 1], P[level + 1, 2] = rx, ry, th
                 else:
                     P[level + 1, 0], P[level + 1, 1], P[level + 1, 2] = px, py, pt
+                if level + 1 < m:
+                    tn = P[level + 1, 2] + beta[level + 1]
+                    U[level + 1, 0], U[level + 1, 1] = np.cos(tn), np.sin(tn)
             else:
                 gate += 1
         if max_nodes > 0 and nodes >= max_nodes:

@@ -25,6 +25,7 @@ statistics are the same; memory stays bounded by the batch size times the depth.
 from __future__ import annotations
 
 import enum
+import functools
 import itertools
 import math
 import time
@@ -241,6 +242,17 @@ def _positive(name: str, value: float | None, *, allow_zero: bool = False) -> fl
     return v
 
 
+@functools.lru_cache(maxsize=64)
+def _chi2_gates(confidence: float, m: int) -> tuple[float, FloatArray]:
+    """The 1-dof gate and, by number of matched pairs, the joint gate with n - 3 dof."""
+    gate = float(ndtri(0.5 + 0.5 * confidence) ** 2)
+    dof = np.arange(m + 1) - 3.0
+    with np.errstate(invalid="ignore"):
+        joint = np.where(dof > 0, chdtri(np.maximum(dof, 1.0), 1.0 - confidence), np.inf)
+    joint.setflags(write=False)
+    return gate, joint
+
+
 def _make_options(
     m: int,
     *,
@@ -308,10 +320,7 @@ def _make_options(
                 f"method='paper' is the published algorithm and takes no {', '.join(used)}; "
                 "use method='robust'"
             )
-    gate = float(ndtri(0.5 + 0.5 * float(confidence)) ** 2)
-    dof = np.arange(m + 1) - 3.0
-    with np.errstate(invalid="ignore"):
-        joint = np.where(dof > 0, chdtri(np.maximum(dof, 1.0), 1.0 - float(confidence)), np.inf)
+    gate, joint = _chi2_gates(float(confidence), m)
     return _Options(
         threshold=thr,
         sigma=sig,
@@ -1163,6 +1172,8 @@ def _pose_gaps(p: FloatArray, q: FloatArray) -> FloatArray:
 def _merge(rank: IntArray, poses: FloatArray, cov: FloatArray) -> list[int]:
     """Greedy merge in rank order: a solution indistinguishable from a better one (inside
     the confidence ellipsoid of each, or within a micrometre) is dropped."""
+    if len(rank) == 1:
+        return [int(rank[0])]
     inv = _inv_cov(cov)
     keep: list[int] = []
     for i in rank:
