@@ -136,3 +136,15 @@ def test_version(capsys) -> None:
         main(["--version"])
     assert exc.value.code == 0
     assert "omniloc" in capsys.readouterr().out
+
+
+def test_human_output_lists_at_most_twenty_solutions(tmp_path, capsys) -> None:
+    m = tmp_path / "sq.csv"
+    m.write_text("id,x,y\n" + "".join(f"{i},{i % 6},{i // 6}\n" for i in range(36)))
+    b = tmp_path / "b.txt"
+    b.write_text("0\n90\n180\n")
+    assert main(["localize", "--map", str(m), "--bearings", str(b), "--degrees"]) == 0
+    out = capsys.readouterr().out
+    lines = [ln for ln in out.splitlines() if ln.startswith("  #")]
+    assert len(lines) == 20
+    assert "more (all of them with --json)" in out

@@ -328,3 +328,36 @@ def test_compiled_walk_equals_batched_search(seed: int, monkeypatch: pytest.Monk
         for s in fast.solutions:
             t = next(t for t in ref.solutions if t.assignment == s.assignment)
             assert np.allclose(s.pose.as_array(), t.pose.as_array(), atol=1e-9)
+
+
+def test_large_map_without_range_or_budget_warns(
+    caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import omniloc.search as search_module
+
+    monkeypatch.setattr(search_module, "LARGE_MAP", 40)
+    lm = random_map(50, size=40.0, rng=0)
+    z = predict_bearings(lm.xy[:4], Pose(20.0, 20.0, 0.0))
+    with caplog.at_level("WARNING", logger="omniloc.search"):
+        localize(lm, z, max_nodes=10)
+        localize(lm.xy[:30], z)
+    assert not caplog.records  # a budget, or a small map: nothing to warn about
+    with caplog.at_level("WARNING", logger="omniloc.search"):
+        localize(lm, z)
+    assert any("max_range" in r.getMessage() for r in caplog.records)
+
+
+def test_too_many_complete_paths_are_capped(
+    caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import omniloc.search as search_module
+
+    monkeypatch.setattr(search_module, "MAX_COMPILED_LEAVES", 100)
+    lm = random_map(20, rng=0)
+    z = np.deg2rad([0.0, 120.0, 240.0])  # three bearings: thousands of consistent triples
+    with caplog.at_level("WARNING", logger="omniloc.search"):
+        res = localize(lm, z, method="paper")
+    assert not res.complete
+    assert len(res) <= 100
+    if search_module._compiled.AVAILABLE:
+        assert any("kept the first 100" in r.getMessage() for r in caplog.records)

@@ -6,6 +6,9 @@ depth-first walk that visits exactly the nodes of the batched numpy search in
 with the sums of eq. 4 kept incrementally), without numpy's per-call overhead. The batched
 search remains the reference and handles every other option.
 
+Kernels use numba's numpy error model: a division by zero gives inf or nan (caught by the
+tests that follow it) instead of raising, exactly as in the numpy search.
+
 numba is optional at run time: without it (or with ``OMNILOC_NO_NUMBA=1``) :data:`AVAILABLE`
 is False and the batched search runs instead.
 """
@@ -39,7 +42,7 @@ __all__ = ["AVAILABLE", "paper_tree"]
 TWO_PI = 2.0 * np.pi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _wrap(a: float) -> float:
     t = (a + np.pi) % TWO_PI - np.pi
     if t >= np.pi:
@@ -47,7 +50,7 @@ def _wrap(a: float) -> float:
     return t
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _pair(
     L: NDArray[np.float64], j: int, anchor: int, rot: complex
 ) -> tuple[complex, complex, float, float, float, float, float]:
@@ -67,7 +70,7 @@ def _pair(
     return a, b, p00, p01, p11, p00 * br + p01 * bi, p01 * br + p11 * bi
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _pose(
     s00: float, s01: float, s11: float, t0: float, t1: float, l0x: float, l0y: float, b0: float
 ) -> tuple[float, float, float, float, float, float, float]:
@@ -82,7 +85,7 @@ def _pose(
     return fx, fy, det, f2, rx, ry, th
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def paper_tree(
     L: NDArray[np.float64],
     beta: NDArray[np.float64],
@@ -257,7 +260,7 @@ def paper_tree(
     return out_a[:k].copy(), out_p[:k].copy(), counts
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def gauss_newton(
     Lm: NDArray[np.float64],
     bm: NDArray[np.float64],

@@ -24,6 +24,9 @@ from .pose import Pose
 
 log = logging.getLogger("omniloc")
 
+#: Human output lists at most this many solutions.
+MAX_PRINTED = 20
+
 
 class _Parser(argparse.ArgumentParser):
     """argparse that reports a usage error as one line and exit status 1."""
@@ -214,7 +217,8 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         + (" -- AMBIGUOUS: several poses fit" if result.ambiguous else "")
         + ("" if st.complete else " -- INCOMPLETE: stopped by the budget")
     )
-    for k, s in enumerate(result.solutions, 1):
+    shown = result.solutions[:MAX_PRINTED]
+    for k, s in enumerate(shown, 1):
         ids = ["-" if i is None else str(i) for i in result.assignment_ids(s)]
         print(
             f"  #{k}: x = {s.pose.x:.3f} m, y = {s.pose.y:.3f} m, "
@@ -222,6 +226,8 @@ def _cmd_localize(args: argparse.Namespace) -> int:
             f"landmarks [{', '.join(ids)}]; residual rms {_fmt_angle(s.residual_rms, deg)}; "
             f"confidence {s.confidence:.2f}"
         )
+    if len(result) > len(shown):
+        print(f"  ... and {len(result) - len(shown)} more (all of them with --json)")
     return 0
 
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 import enum
 import functools
 import itertools
+import logging
 import math
 import time
 from dataclasses import dataclass, field
@@ -54,11 +55,20 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
+log = logging.getLogger(__name__)
+
 #: Upper bound on candidate (path, landmark) pairs evaluated in one numpy batch.
 BATCH_PAIRS = 1 << 16
 
 #: The compiled walk enforces ``timeout_s`` as a budget of this many nodes per second.
 COMPILED_NODES_PER_SECOND = 2_000_000
+
+#: Maps larger than this, searched without max_range or a budget, get a warning in the log.
+LARGE_MAP = 1000
+
+#: The compiled walk keeps at most this many complete paths (the first ones found); more mark
+#: the result incomplete. (A few bearings against a big map can leave millions.)
+MAX_COMPILED_LEAVES = 200_000
 
 #: At most this many complete paths are refined and returned (the best by matches and fit).
 MAX_LEAVES = 2000
@@ -598,13 +608,19 @@ class _Search:
                 cap,
                 capacity,
             )
-            if counts[5] <= capacity:
+            if counts[5] <= capacity or capacity >= MAX_COMPILED_LEAVES:
                 break
-            capacity = int(counts[5])
+            capacity = min(int(counts[5]), MAX_COMPILED_LEAVES)
         c = self.count
         c.nodes, c.examined, c.triples, c.existence, c.gate = (int(v) for v in counts[:5])
-        if counts[6]:
+        if counts[6] or counts[5] > capacity:
             self.complete = False
+        if counts[5] > capacity:
+            log.warning(
+                "localize: %d complete paths; kept the first %d (result marked incomplete)",
+                int(counts[5]),
+                capacity,
+            )
         k = len(assign)
         if k:
             self.leaves.append(
@@ -1348,6 +1364,15 @@ def localize(
         raise InputError(
             f"{m} bearings but the map has only {lm.n} landmarks"
             + (f" (with max_spurious={opt.max_wild})" if opt.max_wild else "")
+        )
+    unbounded = opt.max_range is None and opt.max_nodes is None and opt.timeout_s is None
+    if lm.n > LARGE_MAP and unbounded:
+        log.warning(
+            "localize: %d landmarks without max_range or a budget: the tree holds about %.1e "
+            "landmark triples per seed and may run for a very long time; pass max_range, "
+            "timeout_s or max_nodes",
+            lm.n,
+            float(lm.n) ** 3,
         )
     order = np.arange(m) if meth is Method.PAPER else _robust_order(b)
     s = _Search(lm, b, order, opt)
