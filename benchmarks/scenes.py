@@ -2,7 +2,11 @@
 
 (a) the demo room (12 landmarks), the paper's pose and its 4-7 visible landmarks in random
     order, noise-free (like the paper) and with sigma = 0.2 deg;
-(b) 30 random landmarks in a 20 m square, 7 true bearings + 3 spurious, sigma = 0.5 deg;
+(b) 30 random landmarks in a 40 m square, a robot whose range of 12 m takes in exactly 7 of
+    them, + 3 spurious bearings, sigma = 0.5 deg; localize knows the range (and p_miss);
+(b360) the same numbers without a range: 30 landmarks in a 20 m square, all in view, 7 of them
+    reported + 3 spurious. Bearings alone cannot tell this apart -- some 1,500 poses explain 7
+    of the 10 bearings as well as the truth does -- so it is timed, not scored;
 (c) 10,000 landmarks uniform at 0.01 / m^2 (1 km square, 1 m apart at least), every landmark
     within 20 m observed plus 2 spurious bearings, sigma = 0.3 deg;
 (d) the same as (c) with 100,000 landmarks (3.16 km square).
@@ -77,22 +81,41 @@ CASES: dict[str, Case] = {c.name: c for c in _a_cases()}
 CASES["b"] = Case(
     "b",
     "b",
-    "30 random landmarks, 7 + 3 spurious obs, sigma 0.5 deg",
+    "30 random landmarks, 7 in 12 m range + 3 spurious obs, sigma 0.5 deg",
+    {"sigma": 0.5 * DEG, "max_spurious": 3, "max_range": 12.0, "p_miss": 0.05},
+    0.5 * DEG,
+)
+CASES["b360"] = Case(
+    "b360",
+    "b",
+    "30 random landmarks all in view, 7 reported + 3 spurious, sigma 0.5 deg (ambiguous)",
     {"sigma": 0.5 * DEG, "max_spurious": 3},
     0.5 * DEG,
 )
+#: Large maps: the first interpretation that explains all but two bearings and leaves no
+#: plainly visible landmark unexplained (beyond what p_miss allows) ends the search
+#: (exhaustive=False); gates at 0.9999, since with max_spurious equal to the true count a
+#: single real bearing outside its gate would sink the answer.
+LARGE_KWARGS: dict[str, Any] = {
+    "sigma": 0.3 * DEG,
+    "max_spurious": 2,
+    "max_range": 20.0,
+    "p_miss": 0.01,
+    "confidence": 0.9999,
+    "exhaustive": False,
+}
 CASES["c"] = Case(
     "c",
     "c",
     "10,000 landmarks at 0.01/m^2, all within 20 m + 2 spurious, sigma 0.3 deg",
-    {"sigma": 0.3 * DEG, "max_spurious": 2, "max_range": 20.0},
+    LARGE_KWARGS,
     0.3 * DEG,
 )
 CASES["d"] = Case(
     "d",
     "d",
     "100,000 landmarks at 0.01/m^2, all within 20 m + 2 spurious, sigma 0.3 deg",
-    {"sigma": 0.3 * DEG, "max_spurious": 2, "max_range": 20.0},
+    LARGE_KWARGS,
     0.3 * DEG,
 )
 GROUPS: dict[str, list[str]] = {
@@ -102,6 +125,9 @@ GROUPS: dict[str, list[str]] = {
 #: Landmark counts and seeds of the large maps.
 LARGE = {"c": (10_000, 10), "d": (100_000, 11)}
 MAX_RANGE = 20.0
+#: Scene (b): map side and sensor range, metres.
+B_SIZE = 40.0
+B_RANGE = 12.0
 MIN_SEPARATION = 1.0
 
 
@@ -132,6 +158,18 @@ def make_trial(case: Case, trial: int, lm: LandmarkMap | None) -> tuple[Landmark
         assert lm is not None and case.m is not None
         sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=case.m, sigma=case.sigma, rng=gen)
         return lm, sc
+    if case.name == "b":
+        lm_b = random_map(30, size=B_SIZE, rng=gen)
+        for _ in range(10_000):
+            p = gen.uniform((0.0, 0.0), (B_SIZE, B_SIZE))
+            r = np.hypot(*(lm_b.xy - p).T)
+            if r.min() >= 0.5 and int((r <= B_RANGE).sum()) == 7:
+                break
+        else:
+            raise RuntimeError("no pose sees exactly 7 landmarks")
+        pose = Pose(float(p[0]), float(p[1]), float(gen.uniform(-np.pi, np.pi)))
+        sc = observe(lm_b, pose, max_range=B_RANGE, n_spurious=3, sigma=case.sigma, rng=gen)
+        return lm_b, sc
     if case.group == "b":
         lm_b = random_map(30, size=20.0, rng=gen)
         for _ in range(100):

@@ -190,11 +190,15 @@ def test_ordering_prunes_at_wide_gates() -> None:
     pose = random_pose(lm, rng=rng)
     sig = 2.0 * DEG
     scene = observe(lm, pose, n_obs=7, sigma=sig, rng=rng)
-    loose = localize(lm, scene.bearings, sigma=sig)
-    strict = localize(lm, scene.bearings, sigma=sig, ordering=True)
+    loose = localize(lm, scene.bearings, sigma=sig, strategy="tree")
+    strict = localize(lm, scene.bearings, sigma=sig, ordering=True, strategy="tree")
     assert strict.stats.pruned_ordering > 0
     assert strict.stats.nodes < loose.stats.nodes
     assert len(strict.solutions) <= len(loose.solutions)
+    # The hypotheses strategy checks the order on complete interpretations only: it drops
+    # the same out-of-order ones, and never the truth.
+    hyp = localize(lm, scene.bearings, sigma=sig, ordering=True, strategy="hypotheses")
+    assert any(s.pose.distance_to(pose)[0] < 0.5 for s in hyp.solutions)
 
 
 def test_visibility_prunes_and_negative_evidence_ranks() -> None:

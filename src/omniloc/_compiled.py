@@ -37,7 +37,7 @@ except ImportError:  # pragma: no cover
         return wrap
 
 
-__all__ = ["AVAILABLE", "paper_tree"]
+__all__ = ["AVAILABLE", "gauss_newton", "hypotheses", "paper_tree"]
 
 TWO_PI = 2.0 * np.pi
 
@@ -58,7 +58,15 @@ def _pair(
 
     ``rot`` is exp(j (theta_i - theta_0)).
     """
-    z = complex(L[j, 0] - L[anchor, 0], L[j, 1] - L[anchor, 1])
+    return _pair_z(L[j, 0] - L[anchor, 0], L[j, 1] - L[anchor, 1], rot)
+
+
+@njit(cache=True, error_model="numpy")
+def _pair_z(
+    zx: float, zy: float, rot: complex
+) -> tuple[complex, complex, float, float, float, float, float]:
+    """:func:`_pair` from the landmark's offset (zx, zy) from the anchor."""
+    z = complex(zx, zy)
     b = 1.0 / z
     a = rot * b
     ar, ai = a.real, a.imag
@@ -273,56 +281,678 @@ def gauss_newton(
     out = start.copy()
     sse_out = np.zeros(K)
     for k in range(K):
-        x, y, t = out[k, 0], out[k, 1], out[k, 2]
-        sse = 0.0
-        for i in range(n):
-            if w[k, i] > 0:
-                r = _wrap(np.arctan2(Lm[k, i, 1] - y, Lm[k, i, 0] - x) - t - bm[k, i])
-                sse += r * r
-        for _ in range(iters):
-            h00 = h01 = h02 = h11 = h12 = h22 = 0.0
-            g0 = g1 = g2 = 0.0
-            for i in range(n):
-                if w[k, i] > 0:
-                    dx = Lm[k, i, 0] - x
-                    dy = Lm[k, i, 1] - y
-                    r2 = dx * dx + dy * dy
-                    r = _wrap(np.arctan2(dy, dx) - t - bm[k, i])
-                    gx, gy, gt = dy / r2, -dx / r2, -1.0
-                    h00 += gx * gx
-                    h01 += gx * gy
-                    h02 += gx * gt
-                    h11 += gy * gy
-                    h12 += gy * gt
-                    h22 += gt * gt
-                    g0 -= gx * r
-                    g1 -= gy * r
-                    g2 -= gt * r
-            c00 = h11 * h22 - h12 * h12
-            c01 = h02 * h12 - h01 * h22
-            c02 = h01 * h12 - h02 * h11
-            det = h00 * c00 + h01 * c01 + h02 * c02
-            if not abs(det) > 1e-12 * max(h00 * h11 * h22, 1e-300):
-                break
-            c11 = h00 * h22 - h02 * h02
-            c12 = h01 * h02 - h00 * h12
-            c22 = h00 * h11 - h01 * h01
-            s0 = (c00 * g0 + c01 * g1 + c02 * g2) / det
-            s1 = (c01 * g0 + c11 * g1 + c12 * g2) / det
-            s2 = (c02 * g0 + c12 * g1 + c22 * g2) / det
-            if not (np.isfinite(s0) and np.isfinite(s1) and np.isfinite(s2)):
-                break
-            nx, ny, nt = x + s0, y + s1, t + s2
-            nsse = 0.0
-            for i in range(n):
-                if w[k, i] > 0:
-                    r = _wrap(np.arctan2(Lm[k, i, 1] - ny, Lm[k, i, 0] - nx) - nt - bm[k, i])
-                    nsse += r * r
-            if not nsse < sse:
-                break
-            x, y, t, sse = nx, ny, nt, nsse
-            if max(abs(s0), abs(s1), abs(s2)) < 1e-13:
-                break
-        out[k, 0], out[k, 1], out[k, 2] = x, y, _wrap(t)
+        x, y, t, sse = _gn_core(
+            Lm[k, :, 0], Lm[k, :, 1], bm[k], w[k], n, out[k, 0], out[k, 1], out[k, 2], iters
+        )
+        out[k, 0], out[k, 1], out[k, 2] = x, y, t
         sse_out[k] = sse
     return out, sse_out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _gn_core(
+    lx: NDArray[np.float64],
+    ly: NDArray[np.float64],
+    bm: NDArray[np.float64],
+    w: NDArray[np.float64],
+    n: int,
+    x: float,
+    y: float,
+    t: float,
+    iters: int,
+) -> tuple[float, float, float, float]:
+    """Gauss-Newton from (x, y, t) on the pairs ``i < n`` with ``w[i] > 0``: landmark
+    (lx[i], ly[i]), bearing bm[i]. A step is kept only if it lowers the squared error.
+    Returns the pose (heading wrapped) and its squared error."""
+    sse = 0.0
+    for i in range(n):
+        if w[i] > 0:
+            r = _wrap(np.arctan2(ly[i] - y, lx[i] - x) - t - bm[i])
+            sse += r * r
+    for _ in range(iters):
+        h00 = h01 = h02 = h11 = h12 = h22 = 0.0
+        g0 = g1 = g2 = 0.0
+        for i in range(n):
+            if w[i] > 0:
+                dx = lx[i] - x
+                dy = ly[i] - y
+                r2 = dx * dx + dy * dy
+                r = _wrap(np.arctan2(dy, dx) - t - bm[i])
+                gx, gy, gt = dy / r2, -dx / r2, -1.0
+                h00 += gx * gx
+                h01 += gx * gy
+                h02 += gx * gt
+                h11 += gy * gy
+                h12 += gy * gt
+                h22 += gt * gt
+                g0 -= gx * r
+                g1 -= gy * r
+                g2 -= gt * r
+        c00 = h11 * h22 - h12 * h12
+        c01 = h02 * h12 - h01 * h22
+        c02 = h01 * h12 - h02 * h11
+        det = h00 * c00 + h01 * c01 + h02 * c02
+        if not abs(det) > 1e-12 * max(h00 * h11 * h22, 1e-300):
+            break
+        c11 = h00 * h22 - h02 * h02
+        c12 = h01 * h02 - h00 * h12
+        c22 = h00 * h11 - h01 * h01
+        s0 = (c00 * g0 + c01 * g1 + c02 * g2) / det
+        s1 = (c01 * g0 + c11 * g1 + c12 * g2) / det
+        s2 = (c02 * g0 + c12 * g1 + c22 * g2) / det
+        if not (np.isfinite(s0) and np.isfinite(s1) and np.isfinite(s2)):
+            break
+        nx, ny, nt = x + s0, y + s1, t + s2
+        nsse = 0.0
+        for i in range(n):
+            if w[i] > 0:
+                r = _wrap(np.arctan2(ly[i] - ny, lx[i] - nx) - nt - bm[i])
+                nsse += r * r
+        if not nsse < sse:
+            break
+        x, y, t, sse = nx, ny, nt, nsse
+        if max(abs(s0), abs(s1), abs(s2)) < 1e-13:
+            break
+    return x, y, _wrap(t), sse
+
+
+@njit(cache=True, error_model="numpy")
+def _info(
+    lx: NDArray[np.float64], ly: NDArray[np.float64], n: int, x: float, y: float
+) -> tuple[float, float, float, float, float, float]:
+    """Upper triangle of sum g g^T over the first n matched landmarks (lx, ly) at (x, y)."""
+    h00 = h01 = h02 = h11 = h12 = h22 = 0.0
+    for i in range(n):
+        dx = lx[i] - x
+        dy = ly[i] - y
+        r2 = dx * dx + dy * dy
+        gx, gy = dy / r2, -dx / r2
+        h00 += gx * gx
+        h01 += gx * gy
+        h02 -= gx
+        h11 += gy * gy
+        h12 -= gy
+        h22 += 1.0
+    return h00, h01, h02, h11, h12, h22
+
+
+@njit(cache=True, error_model="numpy")
+def _inv3(
+    h00: float, h01: float, h02: float, h11: float, h12: float, h22: float, scale: float
+) -> tuple[float, float, float, float, float, float, float]:
+    """scale * H^-1 of a symmetric 3x3 (upper triangle), and its trace; H gets a 1e-9 floor
+    as in the numpy search, so a near-singular geometry admits rather than rejects."""
+    h00 += 1e-9
+    h11 += 1e-9
+    h22 += 1e-9
+    c00 = h11 * h22 - h12 * h12
+    c01 = h02 * h12 - h01 * h22
+    c02 = h01 * h12 - h02 * h11
+    c11 = h00 * h22 - h02 * h02
+    c12 = h01 * h02 - h00 * h12
+    c22 = h00 * h11 - h01 * h01
+    det = h00 * c00 + h01 * c01 + h02 * c02
+    f = scale / det
+    return c00 * f, c01 * f, c02 * f, c11 * f, c12 * f, c22 * f, (c00 + c11 + c22) * f
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _gather(
+    lo: int,
+    hi: int,
+    nb_idx: NDArray[np.int64],
+    nb_xy: NDArray[np.float64],
+    i: int,
+    lix: float,
+    liy: float,
+    px: float,
+    py: float,
+    near2: float,
+    near_q: NDArray[np.int64],
+    near_x: NDArray[np.float64],
+    near_y: NDArray[np.float64],
+) -> int:
+    """Copy the neighbours of anchor ``i`` within sqrt(near2) of (px, py), and the anchor
+    itself, to ``near_*``; return how many. Branch-free: every candidate is written, and the
+    count advances past the near ones."""
+    nn = 0
+    for qq in range(lo, hi):
+        qx, qy = nb_xy[qq, 0], nb_xy[qq, 1]
+        near_q[nn], near_x[nn], near_y[nn] = nb_idx[qq], qx, qy
+        ex, ey = qx - px, qy - py
+        nn += ex * ex + ey * ey <= near2
+    near_q[nn], near_x[nn], near_y[nn] = i, lix, liy
+    return nn + 1
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _gated(
+    nn: int,
+    near_q: NDArray[np.int64],
+    near_x: NDArray[np.float64],
+    near_y: NDArray[np.float64],
+    stamp: NDArray[np.int64],
+    hyp: int,
+    px: float,
+    py: float,
+    ux: float,
+    uy: float,
+    c00: float,
+    c01: float,
+    c02: float,
+    c11: float,
+    c12: float,
+    c22: float,
+    tr: float,
+    sig2: float,
+    rmax2: float,
+    rmin2: float,
+    use_sigma: bool,
+    gate_chi2: float,
+    threshold: float,
+    bound_k: float,
+    cq: NDArray[np.int64],
+    cin: NDArray[np.float64],
+    cgx: NDArray[np.float64],
+    cgy: NDArray[np.float64],
+    cv: NDArray[np.float64],
+) -> int:
+    """The unused near landmarks inside the gate for the measured world direction (ux, uy)
+    from (px, py), best (smallest normalised innovation) first: landmark, innovation
+    (predicted - measured), bearing gradient and innovation variance, written to ``c*``;
+    returns how many."""
+    nc = 0
+    for t in range(nn):
+        dx, dy = near_x[t] - px, near_y[t] - py
+        rr = dx * dx + dy * dy
+        dot = dx * ux + dy * uy
+        cr = ux * dy - uy * dx  # r sin(innovation)
+        # One branch for the common case: |sin(innov)| <= |innov| and g^T Cov g <= trace(Cov)
+        # |g|^2 with |g|^2 = 1 / r^2 + 1, so most candidates fail this bound, which needs no
+        # division or arctangent; the conditions are combined without short-circuits.
+        ok = (
+            (cr * cr <= bound_k * (tr * (1.0 + rr) + sig2 * rr))
+            & (dot > 0)
+            & (rr <= rmax2)
+            & (rr >= rmin2)
+        )
+        if not ok:
+            continue
+        q = near_q[t]
+        if stamp[q] == hyp:
+            continue
+        gx, gy = dy / rr, -dx / rr
+        v = gx * gx * c00 + gy * gy * c11 + c22 + 2.0 * (gx * gy * c01 - gx * c02 - gy * c12)
+        v = max(v, 0.0) + sig2
+        if use_sigma:
+            if cr * cr > gate_chi2 * v * rr:
+                continue
+            innov = np.arctan2(cr, dot)
+            score = innov * innov / v
+            if score > gate_chi2:
+                continue
+        else:
+            if cr * cr > threshold * threshold * rr:
+                continue
+            innov = np.arctan2(cr, dot)
+            score = innov * innov
+            if abs(innov) > threshold:
+                continue
+        # Insert in order of score (a handful of candidates at most).
+        at = nc
+        while at > 0 and cin[at - 1] * cin[at - 1] / cv[at - 1] > innov * innov / v:
+            cq[at], cin[at], cgx[at], cgy[at], cv[at] = (
+                cq[at - 1],
+                cin[at - 1],
+                cgx[at - 1],
+                cgy[at - 1],
+                cv[at - 1],
+            )
+            at -= 1
+        cq[at], cin[at], cgx[at], cgy[at], cv[at] = q, innov, gx, gy, v
+        nc += 1
+    return nc
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _verify(
+    L: NDArray[np.float64],
+    beta: NDArray[np.float64],
+    cb: NDArray[np.float64],
+    sb: NDArray[np.float64],
+    rest: NDArray[np.int64],
+    nr: int,
+    lm: NDArray[np.int64],
+    mx: NDArray[np.float64],
+    my: NDArray[np.float64],
+    ones: NDArray[np.float64],
+    bm: NDArray[np.float64],
+    om: NDArray[np.int64],
+    stamp: NDArray[np.int64],
+    hyp: int,
+    near_q: NDArray[np.int64],
+    near_x: NDArray[np.float64],
+    near_y: NDArray[np.float64],
+    nn: int,
+    sp: NDArray[np.float64],
+    scov: NDArray[np.float64],
+    sn: NDArray[np.int64],
+    sw: NDArray[np.int64],
+    chosen: NDArray[np.int64],
+    pos: NDArray[np.int64],
+    ncand: NDArray[np.int64],
+    cq: NDArray[np.int64],
+    cin: NDArray[np.float64],
+    cgx: NDArray[np.float64],
+    cgy: NDArray[np.float64],
+    cv: NDArray[np.float64],
+    sig2: float,
+    use_sigma: bool,
+    gate_chi2: float,
+    threshold: float,
+    bound_k: float,
+    rmax2: float,
+    rmin2: float,
+    max_wild: int,
+    min_match: int,
+    joint_chi2: NDArray[np.float64],
+    vis_hi: float,
+    vis_lo: float,
+    half_fov: float,
+    margin: float,
+    out_a: NDArray[np.int64],
+    out_p: NDArray[np.float64],
+    out_miss: NDArray[np.int64],
+    n_out: int,
+    stop_first: bool,
+    miss_allow: int,
+    node_budget: int,
+    cnt: NDArray[np.int64],
+) -> tuple[int, int]:
+    """Verify one hypothesis: a depth-first walk over the other bearings (``rest``), each
+    matched in turn to every landmark inside its gate, best first, or -- when none is -- left
+    unmatched while at most ``max_wild`` are. The state of a path (pose, covariance, matches)
+    takes each match in with one Kalman update and is restored on the way back. Complete
+    paths with at least ``min_match`` matches are refined, tested for joint compatibility
+    (with sigma) and written out with their count of missed landmarks.
+
+    The hypothesis's three seed pairs are ``lm/mx/my/bm/om[:3]``, its pose and covariance
+    ``sp[0]``/``scov[0]``. Adds [nodes, examined, gate, bound] to ``cnt``; returns the new
+    output count and 2 when ``stop_first`` found its fit (1 when ``node_budget`` ran out).
+    """
+    m = beta.shape[0]
+    capacity = out_a.shape[0]
+    n = 3
+    wild = 0
+    px, py, pt, tr = sp[0, 0], sp[0, 1], sp[0, 2], sp[0, 3]
+    c00, c01, c02, c11, c12, c22 = (
+        scov[0, 0],
+        scov[0, 1],
+        scov[0, 2],
+        scov[0, 3],
+        scov[0, 4],
+        scov[0, 5],
+    )
+    level = 0
+    enter = True
+    while level >= 0:
+        if enter:
+            enter = False
+            sp[level, 0], sp[level, 1], sp[level, 2], sp[level, 3] = px, py, pt, tr
+            scov[level, 0], scov[level, 1], scov[level, 2] = c00, c01, c02
+            scov[level, 3], scov[level, 4], scov[level, 5] = c11, c12, c22
+            sn[level], sw[level], chosen[level], pos[level] = n, wild, -1, 0
+            if level == nr:
+                if n >= min_match:
+                    qx, qy, qt, sse = _gn_core(mx, my, bm, ones, n, px, py, pt, 10)
+                    if not use_sigma or sse / sig2 <= joint_chi2[n]:
+                        missed = _missed_count(
+                            near_q, near_x, near_y, nn, stamp, hyp, qx, qy, qt, beta,
+                            vis_hi, vis_lo, half_fov, margin,
+                        )  # fmt: skip
+                        if n_out < capacity:
+                            for o in range(m):
+                                out_a[n_out, o] = -1
+                            for q in range(n):
+                                out_a[n_out, om[q]] = lm[q]
+                            out_p[n_out, 0], out_p[n_out, 1], out_p[n_out, 2] = qx, qy, qt
+                            out_miss[n_out] = missed
+                        n_out += 1
+                        if stop_first and missed <= miss_allow:
+                            return n_out, 2
+                level -= 1
+                continue
+            o = rest[level]
+            cnt[0] += 1
+            cnt[1] += 1
+            if node_budget > 0 and cnt[0] >= node_budget:
+                return n_out, 1
+            ct, st = np.cos(pt), np.sin(pt)
+            ux = ct * cb[o] - st * sb[o]  # measured direction in the world
+            uy = st * cb[o] + ct * sb[o]
+            ncand[level] = _gated(
+                nn, near_q, near_x, near_y, stamp, hyp, px, py, ux, uy,
+                c00, c01, c02, c11, c12, c22, tr, sig2, rmax2, rmin2,
+                use_sigma, gate_chi2, threshold, bound_k,
+                cq[level], cin[level], cgx[level], cgy[level], cv[level],
+            )  # fmt: skip
+            if ncand[level] == 0:
+                cnt[2] += 1
+        # Next option at this level, from the state on entering it.
+        px, py, pt, tr = sp[level, 0], sp[level, 1], sp[level, 2], sp[level, 3]
+        c00, c01, c02 = scov[level, 0], scov[level, 1], scov[level, 2]
+        c11, c12, c22 = scov[level, 3], scov[level, 4], scov[level, 5]
+        n, wild = sn[level], sw[level]
+        if chosen[level] >= 0:
+            stamp[chosen[level]] = 0
+            chosen[level] = -1
+        p = pos[level]
+        pos[level] = p + 1
+        o = rest[level]
+        if p < ncand[level]:
+            q = cq[level, p]
+            lm[n], bm[n], om[n] = q, beta[o], o
+            mx[n], my[n] = L[q, 0], L[q, 1]
+            stamp[q] = hyp
+            chosen[level] = q
+            n += 1
+            # Kalman update with the matched bearing: h = g^T, innovation (predicted -
+            # measured) b_in, its variance b_v.
+            b_in, b_gx, b_gy, b_v = cin[level, p], cgx[level, p], cgy[level, p], cv[level, p]
+            k0 = (c00 * b_gx + c01 * b_gy - c02) / b_v
+            k1 = (c01 * b_gx + c11 * b_gy - c12) / b_v
+            k2 = (c02 * b_gx + c12 * b_gy - c22) / b_v
+            px -= k0 * b_in
+            py -= k1 * b_in
+            pt -= k2 * b_in
+            c00 -= k0 * k0 * b_v
+            c01 -= k0 * k1 * b_v
+            c02 -= k0 * k2 * b_v
+            c11 -= k1 * k1 * b_v
+            c12 -= k1 * k2 * b_v
+            c22 -= k2 * k2 * b_v
+            tr = c00 + c11 + c22
+            level += 1
+            enter = True
+        elif p == 0 and ncand[level] == 0:
+            # No landmark fits: a wildcard, while the path can still reach min_match.
+            if wild < max_wild:
+                wild += 1
+                level += 1
+                enter = True
+            else:
+                cnt[3] += 1
+                level -= 1
+        else:
+            level -= 1
+    return n_out, 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _missed_count(
+    near_q: NDArray[np.int64],
+    near_x: NDArray[np.float64],
+    near_y: NDArray[np.float64],
+    nn: int,
+    stamp: NDArray[np.int64],
+    hyp: int,
+    px: float,
+    py: float,
+    pt: float,
+    beta: NDArray[np.float64],
+    vis_hi: float,
+    vis_lo: float,
+    half_fov: float,
+    margin: float,
+) -> int:
+    """Near landmarks plainly visible from (px, py, pt) -- inside 0.95 max_range, beyond
+    1.05 min_range, inside the field of view, away from every measured bearing -- that the
+    path did not match (negative evidence)."""
+    missed = 0
+    for t in range(nn):
+        if stamp[near_q[t]] == hyp:
+            continue
+        dx, dy = near_x[t] - px, near_y[t] - py
+        rr = dx * dx + dy * dy
+        if rr > vis_hi or rr < vis_lo:
+            continue
+        pred = np.arctan2(dy, dx) - pt
+        if abs(_wrap(pred)) > half_fov - margin:
+            continue
+        alone = True
+        for o in range(beta.shape[0]):
+            if abs(_wrap(pred - beta[o])) <= 2.0 * margin:
+                alone = False
+                break
+        if alone:
+            missed += 1
+    return missed
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def hypotheses(
+    L: NDArray[np.float64],
+    beta: NDArray[np.float64],
+    seeds: NDArray[np.int64],
+    i0: int,
+    i1: int,
+    nb_lo: NDArray[np.int64],
+    nb_hi: NDArray[np.int64],
+    nb_idx: NDArray[np.int64],
+    nb_xy: NDArray[np.float64],
+    pair_d2: NDArray[np.float64],
+    sigma: float,
+    gate_chi2: float,
+    threshold: float,
+    joint_chi2: NDArray[np.float64],
+    min_match: int,
+    rmax2: float,
+    rmin2: float,
+    half_fov: float,
+    miss_allow: int,
+    scale: float,
+    singular_rtol: float,
+    max_nodes: int,
+    stop_first: bool,
+    capacity: int,
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
+    """Every interpretation that a seed triple of bearings starts, verified bearing by bearing.
+
+    For each seed (three observation indices) and each triple of distinct landmarks that can
+    be seen together -- the first landmark ``i`` in ``[i0, i1)``, the others among its
+    neighbours ``nb_idx[nb_lo[i]:nb_hi[i]]`` (coordinates ``nb_xy``; the anchor itself is
+    not among them; without a range, every other landmark), their distances within
+    ``pair_d2`` (squared largest distance between the landmarks of two bearings) -- the pose
+    of the triple (eqs. 1-6, rule i, range limits) predicts every other bearing. Each is
+    matched to the unused landmark with the smallest normalised innovation inside the gate
+    (``sigma > 0``: chi-square on innovation^2 / (g^T Cov g + sigma^2) with the covariance
+    of the pose so far; else ``|innovation| <= threshold``), and the pose and its covariance
+    take the bearing in with one Kalman update; or the bearing is left unmatched (a
+    wildcard). A hypothesis is dropped as soon as it can no longer reach ``min_match``
+    matches. One that does is refined by Gauss-Newton over its pairs and, with sigma, kept
+    only if ``sse / sigma^2 <= joint_chi2[n]`` (joint compatibility).
+
+    ``missed`` counts the landmarks a kept hypothesis should plainly see (inside 0.95
+    max_range, 1.05 min_range and the field of view, away from every measured bearing) but
+    matched to no bearing. ``stop_first`` ends the search at the first kept hypothesis with
+    at most ``miss_allow`` of them.
+
+    Returns assignments (K, m) in observation order (-1 unmatched), poses (K, 3), missed (K,)
+    and the counters ``[nodes, examined, triples, existence, gate, n_out, stopped,
+    visibility, bound]``; ``stopped`` is 1 when ``max_nodes`` ran out, 2 when ``stop_first``
+    ended the search.
+    """
+    N = L.shape[0]
+    m = beta.shape[0]
+    eps_f2 = (1e-12 / scale) ** 2
+    max_wild = m - min_match
+    use_sigma = sigma > 0
+    # The Kalman updates need a bearing variance in threshold mode too.
+    sig_eff = sigma if use_sigma else threshold / 3.0
+    sig2 = sig_eff * sig_eff
+    cb = np.cos(beta)
+    sb = np.sin(beta)
+    margin = 3.0 * sig_eff
+    # The gate in the bound below: chi-square with sigma, else threshold^2 against sigma_eff^2
+    # (whatever the variance, |innovation| <= threshold rejects no more than this).
+    bound_k = gate_chi2 if use_sigma else threshold * threshold / sig2
+    out_a = np.empty((capacity, m), dtype=np.int64)
+    out_p = np.empty((capacity, 3))
+    out_miss = np.empty(capacity, dtype=np.int64)
+    stamp = np.zeros(N, dtype=np.int64)
+    lm = np.empty(m, dtype=np.int64)  # matched landmarks, in match order
+    mx = np.empty(m)  # and their coordinates
+    my = np.empty(m)
+    ones = np.ones(m)
+    bm = np.empty(m)  # their bearings
+    om = np.empty(m, dtype=np.int64)  # their observations
+    rest = np.empty(m, dtype=np.int64)
+    # The landmarks a hypothesis can see (within max_range, with a margin for the updates
+    # of its pose), gathered once per hypothesis.
+    width = 1
+    for i in range(i0, i1):
+        width = max(width, nb_hi[i] - nb_lo[i])
+    near_q = np.empty(width + 1, dtype=np.int64)
+    near_x = np.empty(width + 1)
+    near_y = np.empty(width + 1)
+    near2 = rmax2 * 1.05**2
+    # The verification's depth-first walk: state on entering each level, chosen landmark,
+    # next option, and each level's gated candidates.
+    sp = np.empty((m + 1, 4))
+    scov = np.empty((m + 1, 6))
+    sn = np.empty(m + 1, dtype=np.int64)
+    sw = np.empty(m + 1, dtype=np.int64)
+    chosen = np.empty(m + 1, dtype=np.int64)
+    pos = np.empty(m + 1, dtype=np.int64)
+    ncand = np.empty(m + 1, dtype=np.int64)
+    cq = np.empty((m, width + 1), dtype=np.int64)
+    cin = np.empty((m, width + 1))
+    cgx = np.empty((m, width + 1))
+    cgy = np.empty((m, width + 1))
+    cv = np.empty((m, width + 1))
+    cnt = np.zeros(4, dtype=np.int64)
+    vis_hi = 0.95**2 * rmax2
+    vis_lo = 1.05**2 * rmin2
+    nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
+    hyp = 0
+    for s in range(seeds.shape[0]):
+        if stopped:
+            break
+        oa, ob, oc = seeds[s, 0], seeds[s, 1], seeds[s, 2]
+        nr = 0
+        for o in range(m):
+            if o != oa and o != ob and o != oc:
+                rest[nr] = o
+                nr += 1
+        rot_b = np.exp(1j * (beta[ob] - beta[oa]))
+        rot_c = np.exp(1j * (beta[oc] - beta[oa]))
+        d_ab, d_ac, d_bc = pair_d2[oa, ob], pair_d2[oa, oc], pair_d2[ob, oc]
+        for i in range(i0, i1):
+            if stopped:
+                break
+            lo, hi = nb_lo[i], nb_hi[i]
+            lix, liy = L[i, 0], L[i, 1]
+            for jj in range(lo, hi):
+                if stopped:
+                    break
+                j, ljx, ljy = nb_idx[jj], nb_xy[jj, 0], nb_xy[jj, 1]
+                if j == i:
+                    continue
+                ejx, ejy = ljx - lix, ljy - liy
+                if ejx * ejx + ejy * ejy > d_ab:
+                    vis += 1
+                    continue
+                a1, b1, p00, p01, p11, pb0, pb1 = _pair_z(ejx, ejy, rot_b)
+                for kk in range(lo, hi):
+                    k, lkx, lky = nb_idx[kk], nb_xy[kk, 0], nb_xy[kk, 1]
+                    if k == i or k == j:
+                        continue
+                    ekx, eky = lkx - lix, lky - liy
+                    ex, ey = lkx - ljx, lky - ljy
+                    if ekx * ekx + eky * eky > d_ac or ex * ex + ey * ey > d_bc:
+                        vis += 1
+                        continue
+                    nodes += 1
+                    triples += 1
+                    a2, b2, q00, q01, q11, qb0, qb1 = _pair_z(ekx, eky, rot_c)
+                    s00, s01, s11 = p00 + q00, p01 + q01, p11 + q11
+                    t0, t1 = pb0 + qb0, pb1 + qb1
+                    # Eq. 4 then eq. 5; the heading (eq. 6) waits until the position passes.
+                    det = s00 * s11 - s01 * s01
+                    fx = -(s11 * t0 - s01 * t1) / det
+                    fy = -(-s01 * t0 + s00 * t1) / det
+                    f2 = fx * fx + fy * fy
+                    smax = max(1.0, abs(s00), abs(s01), abs(s11))
+                    r1 = (a1.real * (fx + b1.real) + a1.imag * (fy + b1.imag)) / (
+                        a1.real * a1.real + a1.imag * a1.imag
+                    )
+                    r2 = (a2.real * (fx + b2.real) + a2.imag * (fy + b2.imag)) / (
+                        a2.real * a2.real + a2.imag * a2.imag
+                    )
+                    if not (
+                        abs(det) > singular_rtol * smax * smax
+                        and r1 > 0
+                        and r2 > 0
+                        and np.isfinite(f2)
+                        and f2 > eps_f2
+                    ):
+                        existence += 1
+                        continue
+                    px = lix - fx / f2
+                    py = liy + fy / f2
+                    if not (np.isfinite(px) and np.isfinite(py)):
+                        existence += 1
+                        continue
+                    # The pose must see its three landmarks within the range limits.
+                    ex, ey = lix - px, liy - py
+                    d2a = ex * ex + ey * ey
+                    ex, ey = ljx - px, ljy - py
+                    d2b = ex * ex + ey * ey
+                    ex, ey = lkx - px, lky - py
+                    d2c = ex * ex + ey * ey
+                    if max(d2a, d2b, d2c) > rmax2 or min(d2a, d2b, d2c) < rmin2:
+                        vis += 1
+                        continue
+                    pt = _wrap(np.arctan2(liy - py, lix - px) - beta[oa])
+                    if not np.isfinite(pt):
+                        existence += 1
+                        continue
+                    nn = _gather(
+                        lo, hi, nb_idx, nb_xy, i, lix, liy, px, py, near2, near_q, near_x, near_y
+                    )
+                    hyp += 1
+                    lm[0], lm[1], lm[2] = i, j, k
+                    mx[0], mx[1], mx[2] = lix, ljx, lkx
+                    my[0], my[1], my[2] = liy, ljy, lky
+                    bm[0], bm[1], bm[2] = beta[oa], beta[ob], beta[oc]
+                    om[0], om[1], om[2] = oa, ob, oc
+                    stamp[i] = stamp[j] = stamp[k] = hyp
+                    h00, h01, h02, h11, h12, h22 = _info(mx, my, 3, px, py)
+                    c00, c01, c02, c11, c12, c22, tr = _inv3(h00, h01, h02, h11, h12, h22, sig2)
+                    sp[0, 0], sp[0, 1], sp[0, 2], sp[0, 3] = px, py, pt, tr
+                    scov[0, 0], scov[0, 1], scov[0, 2] = c00, c01, c02
+                    scov[0, 3], scov[0, 4], scov[0, 5] = c11, c12, c22
+                    cnt[:] = 0
+                    left = max_nodes - nodes if max_nodes > 0 else 0
+                    n_out, stop = _verify(
+                        L, beta, cb, sb, rest, nr, lm, mx, my, ones, bm, om, stamp, hyp,
+                        near_q, near_x, near_y, nn, sp, scov, sn, sw, chosen, pos, ncand,
+                        cq, cin, cgx, cgy, cv, sig2, use_sigma, gate_chi2, threshold, bound_k,
+                        rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
+                        half_fov, margin, out_a, out_p, out_miss, n_out, stop_first,
+                        miss_allow, left, cnt,
+                    )  # fmt: skip
+                    nodes += cnt[0]
+                    examined += cnt[1]
+                    gate += cnt[2]
+                    bound += cnt[3]
+                    if stop:
+                        stopped = stop
+                        break
+                if max_nodes > 0 and nodes >= max_nodes:
+                    stopped = 1
+    counts = np.array(
+        [nodes, examined, triples, existence, gate, n_out, stopped, vis, bound], dtype=np.int64
+    )
+    k = min(n_out, capacity)
+    return out_a[:k].copy(), out_p[:k].copy(), out_miss[:k].copy(), counts

@@ -88,6 +88,18 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--p-miss", type=_deg, help="probability of missing a visible landmark")
     p.add_argument("--max-nodes", type=int, help="node budget")
     p.add_argument("--timeout", type=_deg, help="time budget, s")
+    p.add_argument(
+        "--strategy",
+        choices=["auto", "tree", "hypotheses"],
+        default="auto",
+        help="search strategy (default auto: compiled where numba is installed)",
+    )
+    p.add_argument(
+        "--first-fit",
+        action="store_true",
+        help="stop at the first interpretation that explains all but --max-spurious bearings "
+        "(large maps; rivals are not sought)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument("--plot", type=Path, metavar="OUT.png", help="save a figure of the solutions")
     _add_image_options(p)
@@ -172,6 +184,8 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         p_miss=args.p_miss,
         max_nodes=args.max_nodes,
         timeout_s=args.timeout,
+        strategy=args.strategy,
+        exhaustive=not args.first_fit,
     )
     if args.plot is not None:
         from .plot import plot_localization
@@ -216,6 +230,7 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         f"{st.elapsed_s * 1e3:.1f} ms)"
         + (" -- AMBIGUOUS: several poses fit" if result.ambiguous else "")
         + ("" if st.complete else " -- INCOMPLETE: stopped by the budget")
+        + ("" if st.exhaustive else " -- first fit: rivals not sought")
     )
     shown = result.solutions[:MAX_PRINTED]
     for k, s in enumerate(shown, 1):

@@ -334,6 +334,48 @@ class LandmarkMap:
         """``scipy.spatial.cKDTree`` over :attr:`xy`, built once."""
         return cKDTree(self.xy)
 
+    def neighbours(self, radius: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """Landmarks within ``radius`` of each landmark (itself excluded), as CSR lists.
+
+        Returns ``(ptr, idx)``: the neighbours of landmark ``i`` are
+        ``idx[ptr[i]:ptr[i + 1]]``, in increasing order. Built once per radius from the
+        k-d tree (the last few radii are kept), in memory proportional to the number of
+        neighbouring pairs.
+
+        Examples
+        --------
+        >>> lm = LandmarkMap([[0, 0], [1, 0], [5, 0]])
+        >>> ptr, idx = lm.neighbours(2.0)
+        >>> idx[ptr[0]:ptr[1]].tolist(), idx[ptr[2]:ptr[3]].tolist()
+        ([1], [])
+        """
+        cache: dict[float, tuple[NDArray[np.int64], NDArray[np.int64]]]
+        cache = self.__dict__.setdefault("_neighbour_lists", {})
+        key = float(radius)
+        if key not in cache:
+            pairs = self.kdtree.query_pairs(key, output_type="ndarray").astype(np.int64)
+            src = np.concatenate([pairs[:, 0], pairs[:, 1]])
+            dst = np.concatenate([pairs[:, 1], pairs[:, 0]])
+            del pairs
+            order = np.lexsort((dst, src))
+            ptr = np.zeros(self.n + 1, dtype=np.int64)
+            np.cumsum(np.bincount(src, minlength=self.n), out=ptr[1:])
+            if len(cache) >= 4:
+                cache.pop(next(iter(cache)))
+            cache[key] = (ptr, dst[order])
+        return cache[key]
+
+    def neighbour_xy(self, radius: float) -> NDArray[np.float64]:
+        """Coordinates of :meth:`neighbours`' ``idx``, contiguous (for sequential reads)."""
+        cache: dict[float, NDArray[np.float64]]
+        cache = self.__dict__.setdefault("_neighbour_xy", {})
+        key = float(radius)
+        if key not in cache:
+            if len(cache) >= 4:
+                cache.pop(next(iter(cache)))
+            cache[key] = np.ascontiguousarray(self.xy[self.neighbours(radius)[1]])
+        return cache[key]
+
     # ----------------------------------------------------------------------------------------
     # Files
     # ----------------------------------------------------------------------------------------

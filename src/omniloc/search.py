@@ -29,15 +29,18 @@ import functools
 import itertools
 import logging
 import math
+import os
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import chdtri, ndtri
+from scipy.stats import binom
 
-from . import _compiled
+from . import _compiled, _seeds
 from .angles import TWO_PI, wrap
 from .errors import InputError
 from .io import check_bearings
@@ -56,6 +59,16 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 log = logging.getLogger(__name__)
+
+#: Relative slack of the range limits in the search (see _Options.reach_max).
+RANGE_SLACK = 0.05
+
+#: Rate at which a time budget becomes a node budget in the hypothesise-and-verify kernel.
+HYPOTHESIS_NODES_PER_SECOND = 5_000_000
+
+#: First landmarks per chunk of a large map's hypothesis search, and threads that run chunks.
+CHUNK_ANCHORS = 256
+THREADS = 2
 
 #: Upper bound on candidate (path, landmark) pairs evaluated in one numpy batch.
 BATCH_PAIRS = 1 << 16
@@ -115,6 +128,9 @@ class SearchStats:
         view, and paths cut by the match-count bound (wildcards).
     complete : bool
         False when a budget (``max_nodes``, ``timeout_s``) stopped the search early.
+    exhaustive : bool
+        False when the search stopped at a first fit (``exhaustive=False``) and so did not
+        look for rival interpretations.
     """
 
     total_paths: int
@@ -128,6 +144,7 @@ class SearchStats:
     pruned_visibility: int = 0
     pruned_bound: int = 0
     complete: bool = True
+    exhaustive: bool = True
 
     def as_dict(self) -> dict[str, int | float | bool]:
         """Plain-JSON dictionary of the statistics."""
@@ -233,6 +250,10 @@ class _Options:
     max_nodes: int | None
     timeout_s: float | None
     merge: bool
+    # Range limits as the search applies them: RANGE_SLACK wider, since a hypothesis's pose is
+    # an estimate (a landmark at 19.9 m must not fall out of a 20 m range by 0.2 m of error).
+    reach_max: float | None = None
+    reach_min: float | None = None
 
     @property
     def sigma_eff(self) -> float:
@@ -346,6 +367,8 @@ def _make_options(
         max_nodes=None if max_nodes is None else int(max_nodes),
         timeout_s=tmo,
         merge=method is Method.ROBUST,
+        reach_max=None if rmax is None else rmax * (1.0 + RANGE_SLACK),
+        reach_min=None if rmin is None else rmin / (1.0 + RANGE_SLACK),
     )
 
 
@@ -547,8 +570,14 @@ class _Search:
     """One run of the tree: the map, the bearings in level order, options and counters."""
 
     def __init__(
-        self, lm: LandmarkMap, bearings: FloatArray, order: IntArray, opt: _Options
+        self,
+        lm: LandmarkMap,
+        bearings: FloatArray,
+        order: IntArray,
+        opt: _Options,
+        strategy: str = "tree",
     ) -> None:
+        self.strategy = strategy
         self.L = lm.xy
         self.lm = lm
         self.N = lm.n
@@ -560,6 +589,7 @@ class _Search:
         self.leaves: list[_Batch] = []
         self.use_compiled = True
         self.complete = True
+        self.exhaustive = True
         self.t0 = time.perf_counter()
         # Bearings closer than this may come in either order (twice the gate half-width).
         gate = opt.threshold if opt.sigma is None else math.sqrt(opt.gate_chi2) * opt.sigma
@@ -621,25 +651,224 @@ class _Search:
                 int(counts[5]),
                 capacity,
             )
+        if len(assign):
+            self.leaves.append(self._leaf_batch(assign, pose))
+
+    def _leaf_batch(self, assign: IntArray, pose: FloatArray) -> _Batch:
+        """Complete paths found by a compiled kernel, as a batch for :func:`_finish`."""
         k = len(assign)
-        if k:
-            self.leaves.append(
-                _Batch(
-                    self.m,
-                    assign,
-                    np.full(k, self.m, dtype=np.int64),
-                    np.zeros(k, dtype=np.int64),
-                    assign[:, 0].copy(),
-                    np.full(k, float(self.beta[0])),
-                    np.zeros((k, 3)),
-                    np.zeros((k, 2)),
-                    np.zeros(k, dtype=np.complex128),
-                    np.zeros(k, dtype=np.complex128),
-                    pose,
+        nmatch = (assign >= 0).sum(axis=1).astype(np.int64)
+        return _Batch(
+            self.m,
+            assign,
+            nmatch,
+            self.m - nmatch,
+            assign.max(axis=1),
+            np.full(k, float(self.beta[0])),
+            np.zeros((k, 3)),
+            np.zeros((k, 2)),
+            np.zeros(k, dtype=np.complex128),
+            np.zeros(k, dtype=np.complex128),
+            pose,
+        )
+
+    def _run_hypotheses(self, stop_first: bool) -> None:
+        """Hypothesise and verify (see :func:`omniloc._compiled.hypotheses`): every landmark
+        triple that can be seen together, for each seed triple of bearings, predicts the other
+        bearings; the seeds cover every choice of up to ``max_spurious`` spurious bearings.
+
+        Large maps are cut into chunks of first landmarks, run on two threads (the kernel
+        releases the GIL); ``stop_first`` stops handing out chunks once one has an answer.
+        """
+        o = self.opt
+        gate = o.threshold if o.sigma is None else math.sqrt(o.gate_chi2) * o.sigma
+        limits = _seeds.pair_limits(self.beta, o.reach_max, o.reach_min, 2.0 * gate)
+        seeds = _seeds.seed_triples(self.beta, o.max_wild, limits)
+        use_nb = o.max_range is not None and self.N > 64
+        if use_nb:
+            assert o.reach_max is not None
+            # The pose lies within range of the first landmark, so every landmark it sees
+            # lies within twice that of it.
+            ptr, idx = self.lm.neighbours(2.0 * o.reach_max)
+            nb_xy = self.lm.neighbour_xy(2.0 * o.reach_max)
+            lo, hi = ptr[:-1], ptr[1:]
+        else:
+            # Every other landmark: in the list 0..N-1 written twice, the N - 1 entries after
+            # position i are all landmarks but i.
+            N = self.N
+            idx = np.tile(np.arange(N, dtype=np.int64), 2)
+            nb_xy = np.ascontiguousarray(self.L[idx])
+            lo = np.arange(1, N + 1, dtype=np.int64)
+            hi = lo + (N - 1)
+        budget = 0
+        if o.max_nodes is not None:
+            budget = o.max_nodes
+        if o.timeout_s is not None:
+            by_time = max(1, int(o.timeout_s * HYPOTHESIS_NODES_PER_SECOND))
+            budget = by_time if budget == 0 else min(budget, by_time)
+        miss_allow = self.m + self.N
+        if stop_first and o.p_miss is not None:
+            # A first fit must not leave more plainly visible landmarks unseen than misses
+            # explain: the 99.9 % quantile of Binomial(m, p_miss).
+            miss_allow = int(binom.ppf(0.999, self.m, o.p_miss))
+        L = np.require(self.L, np.float64, ["C"])
+        beta = np.require(self.beta, np.float64, ["C"])
+        joint = np.require(o.joint_chi2, np.float64, ["C"])
+
+        def call(seed_rows: IntArray, i0: int, i1: int, cap: int) -> tuple[Any, ...]:
+            capacity = 2048
+            while True:
+                out = _compiled.hypotheses(
+                    L,
+                    beta,
+                    seed_rows,
+                    i0,
+                    i1,
+                    lo,
+                    hi,
+                    idx,
+                    nb_xy,
+                    limits,
+                    -1.0 if o.sigma is None else float(o.sigma),
+                    float(o.gate_chi2),
+                    float(o.threshold),
+                    joint,
+                    int(o.min_match),
+                    np.inf if o.reach_max is None else o.reach_max**2,
+                    0.0 if o.reach_min is None else o.reach_min**2,
+                    np.inf if o.half_fov is None else float(o.half_fov),
+                    miss_allow,
+                    self.scale,
+                    SINGULAR_RTOL,
+                    cap,
+                    stop_first,
+                    capacity,
                 )
+                n_out = int(out[3][5])
+                if n_out <= capacity or capacity >= MAX_COMPILED_LEAVES:
+                    return out
+                capacity = min(n_out, MAX_COMPILED_LEAVES)
+
+        if self.N <= 4 * CHUNK_ANCHORS:
+            results = [call(seeds, 0, self.N, budget)]
+        else:
+            chunks = [
+                (seeds[r : r + 1], i0, min(i0 + CHUNK_ANCHORS, self.N))
+                for r in range(len(seeds))
+                for i0 in range(0, self.N, CHUNK_ANCHORS)
+            ]
+            results = self._run_chunks(call, chunks, budget)
+        counts = np.sum([r[3] for r in results], axis=0)
+        stopped = max(int(r[3][6]) for r in results)
+        c = self.count
+        c.nodes, c.examined, c.triples, c.existence, c.gate = (int(v) for v in counts[:5])
+        c.visibility, c.bound = int(counts[7]), int(counts[8])
+        overflow = any(int(r[3][5]) > len(r[0]) for r in results)
+        if stopped == 1 or any(int(r[3][6]) == 1 for r in results) or overflow:
+            self.complete = False
+        if stopped == 2:
+            self.exhaustive = False
+        if overflow:
+            log.warning(
+                "localize: more than %d interpretations; kept the first ones "
+                "(result marked incomplete)",
+                MAX_COMPILED_LEAVES,
             )
+        assign = np.concatenate([r[0] for r in results])
+        if len(assign) == 0:
+            return
+        pose = np.concatenate([r[1] for r in results])
+        if stopped == 2:
+            # A first fit: what the other chunks in flight found counts only if it, too, is
+            # an acceptable fit (the rest would rank below it on negative evidence anyway).
+            fits = np.concatenate([r[2] for r in results]) <= miss_allow
+            assign, pose = assign[fits], pose[fits]
+        # One interpretation is often reached from several seeds.
+        assign, first = np.unique(assign, axis=0, return_index=True)
+        pose = pose[first]
+        if stop_first:
+            assign, pose = self._polish(assign, pose)
+        C = self._leaf_batch(assign, pose)
+        if o.ordering:
+            good = self._order_ok_path(C)
+            c.ordering += int((~good).sum())
+            C = C.take(np.flatnonzero(good))
+        if len(C):
+            self.leaves.append(C)
+
+    def _polish(self, assign: IntArray, pose: FloatArray) -> tuple[IntArray, FloatArray]:
+        """Move a landmark to an unmatched bearing where that fits better (first fit).
+
+        Verification takes bearings in a fixed order and gives each the best landmark in its
+        gate, so a spurious bearing next to a true one can take the true one's landmark when
+        the true one is checked first and falls just outside its gate. The exhaustive search
+        also reaches the other interpretation (from another seed) and the ranking settles it;
+        a first fit instead tries every such swap on the interpretation it stops at.
+        """
+        reach = 3.0 * math.sqrt(self.opt.gate_chi2) * self.opt.sigma_eff
+        assign, pose = assign.copy(), pose.copy()
+        for r in range(len(assign)):
+            a = assign[r]
+            _, sse = _gauss_newton(
+                self.L[np.maximum(a, 0)][None], self.beta[None], (a >= 0)[None] * 1.0,
+                pose[r][None], iters=0,
+            )  # fmt: skip
+            best = (float(sse[0]), a, pose[r])
+            for u in np.flatnonzero(a < 0):
+                for o in np.flatnonzero(a >= 0):
+                    if abs(float(wrap(self.beta[u] - self.beta[o]))) > reach:
+                        continue
+                    alt = a.copy()
+                    alt[u], alt[o] = a[o], -1
+                    w = (alt >= 0) * 1.0
+                    p2, sse2 = _gauss_newton(
+                        self.L[np.maximum(alt, 0)][None], self.beta[None], w[None],
+                        pose[r][None], iters=10,
+                    )  # fmt: skip
+                    if float(sse2[0]) < best[0]:
+                        best = (float(sse2[0]), alt, p2[0])
+            assign[r], pose[r] = best[1], best[2]
+        return assign, pose
+
+    def _run_chunks(
+        self,
+        call: Any,
+        chunks: list[tuple[IntArray, int, int]],
+        budget: int,
+    ) -> list[tuple[Any, ...]]:
+        """Run chunks on a small thread pool, in order; stop early on an answer (first fit)
+        or when the node budget is spent."""
+        results: list[tuple[Any, ...]] = []
+        spent = 0
+        workers = max(1, min(THREADS, os.cpu_count() or 1))
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            pending: list[Future[tuple[Any, ...]]] = []
+            it = iter(chunks)
+            done = False
+            while True:
+                while not done and len(pending) < workers:
+                    nxt = next(it, None)
+                    if nxt is None:
+                        done = True
+                        break
+                    left = 0 if budget == 0 else max(1, budget - spent)
+                    pending.append(pool.submit(call, nxt[0], nxt[1], nxt[2], left))
+                if not pending:
+                    break
+                r = pending.pop(0).result()
+                results.append(r)
+                spent += int(r[3][0])
+                if int(r[3][6]) or (budget and spent >= budget):
+                    done = True
+        return results
 
     def run(self) -> None:
+        if self.strategy == "hypotheses":
+            self._run_hypotheses(stop_first=False)
+            return
+        if self.strategy == "first":
+            self._run_hypotheses(stop_first=True)
+            return
         if self._compiled_ok():
             self._run_compiled()
             return
@@ -748,9 +977,9 @@ class _Search:
             if used.any():
                 keep = ~used
                 par, lmk = par[keep], lmk[keep]
-        if opt.max_range is not None and 1 <= k <= 2:
+        if opt.reach_max is not None and 1 <= k <= 2:
             # Two landmarks seen from one point within max_range are at most 2 max_range apart.
-            lim = (2.0 * opt.max_range) ** 2
+            lim = (2.0 * opt.reach_max) ** 2
             d = self.L[lmk] - self.L[G.anchor[par]]
             far = (d * d).sum(axis=1) > lim
             if k == 2:  # the second landmark is L_0 + 1 / b_1 (eq. 2)
@@ -765,12 +994,13 @@ class _Search:
 
     def _range_candidates(self, G: _Batch, k: int) -> tuple[IntArray, IntArray]:
         """Candidate landmarks from the spatial index: near the anchor, or near the pose."""
-        assert self.opt.max_range is not None
+        reach = self.opt.reach_max
+        assert reach is not None
         tree = self.lm.kdtree
         if k >= 3:
-            centres, radius = G.pose[:, :2], self.opt.max_range
+            centres, radius = G.pose[:, :2], reach
         else:
-            centres, radius = self.L[G.anchor], 2.0 * self.opt.max_range
+            centres, radius = self.L[G.anchor], 2.0 * reach
         lists = tree.query_ball_point(centres, radius, return_sorted=False)
         lens = np.fromiter((len(x) for x in lists), dtype=np.int64, count=len(lists))
         par = np.repeat(np.arange(len(G)), lens)
@@ -868,10 +1098,10 @@ class _Search:
         if opt.max_range is not None or opt.min_range is not None:
             r2 = dx * dx + dy * dy
             vis = np.ones_like(ok)
-            if opt.max_range is not None:
-                vis &= r2 <= opt.max_range**2
-            if opt.min_range is not None:
-                vis &= r2 >= opt.min_range**2
+            if opt.reach_max is not None:
+                vis &= r2 <= opt.reach_max**2
+            if opt.reach_min is not None:
+                vis &= r2 >= opt.reach_min**2
             self.count.visibility += int((ok & ~vis).sum())
             ok &= vis
         if opt.ordering and ok.any():
@@ -1048,10 +1278,10 @@ class _Search:
         Lm, _, w = self._matched(C)
         d2 = ((Lm - C.pose[:, None, :2]) ** 2).sum(axis=2)
         ok = np.ones(len(C), dtype=bool)
-        if opt.max_range is not None:
-            ok &= ((d2 <= opt.max_range**2) | (w == 0)).all(axis=1)
-        if opt.min_range is not None:
-            ok &= ((d2 >= opt.min_range**2) | (w == 0)).all(axis=1)
+        if opt.reach_max is not None:
+            ok &= ((d2 <= opt.reach_max**2) | (w == 0)).all(axis=1)
+        if opt.reach_min is not None:
+            ok &= ((d2 >= opt.reach_min**2) | (w == 0)).all(axis=1)
         self.count.visibility += int((~ok).sum())
         return C.take(np.flatnonzero(ok)) if not ok.all() else C
 
@@ -1136,7 +1366,13 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     if opt.p_miss is not None:
         missed = _missed(s, poses, assign, bearings, opt)
         cost = cost + missed * -math.log(opt.p_miss) + nmatch * -math.log1p(-opt.p_miss)
-    rank = np.lexsort((cost, -nmatch))
+    if opt.p_miss is None:
+        rank = np.lexsort((cost, -nmatch))
+    else:
+        # With negative evidence a match is no longer worth more than any number of landmarks
+        # left unseen: the whole cost ranks (a pose that explains one more bearing but should
+        # have seen eight more landmarks is worse than one that explains all it should see).
+        rank = np.lexsort((-nmatch, cost))
     keep = _merge(rank, poses, cov) if opt.merge else [int(i) for i in rank]
     c = cost[keep]
     lik = np.exp(-(c - c.min()))
@@ -1158,7 +1394,7 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     rivals = [
         t
         for t in sols[1:]
-        if t.matched == top.matched
+        if (t.matched == top.matched or opt.p_miss is not None)
         and t.confidence >= 0.01 * top.confidence
         and not _same_pose(t.pose.as_array(), t.covariance, top.pose.as_array(), top.covariance)
     ]
@@ -1254,6 +1490,37 @@ def _missed(
 # --------------------------------------------------------------------------------------------
 
 
+def _choose_strategy(strategy: str, meth: Method, opt: _Options, exhaustive: bool) -> str:
+    """ "tree", "hypotheses" or "first" (hypotheses, stopping at the first fit)."""
+    if strategy not in ("auto", "tree", "hypotheses"):
+        raise InputError(f"strategy must be one of 'auto', 'tree', 'hypotheses', got {strategy!r}")
+    if not isinstance(exhaustive, (bool, np.bool_)):
+        raise InputError(f"exhaustive must be True or False, got {exhaustive!r}")
+    if meth is Method.PAPER:
+        if strategy == "hypotheses" or not exhaustive:
+            raise InputError(
+                "method='paper' walks the paper's tree exhaustively; "
+                "strategy='hypotheses' and exhaustive=False need method='robust'"
+            )
+        return "tree"
+    if strategy == "auto":
+        paper_rules = (
+            opt.sigma is None
+            and opt.max_wild == 0
+            and not opt.ordering
+            and opt.max_range is None
+            and opt.min_range is None
+        )
+        if exhaustive and (paper_rules or not _compiled.AVAILABLE):
+            return "tree"
+        strategy = "hypotheses"
+    if strategy == "tree":
+        if not exhaustive:
+            raise InputError("exhaustive=False needs strategy='hypotheses' (or 'auto')")
+        return "tree"
+    return "hypotheses" if exhaustive else "first"
+
+
 def localize(
     landmarks: LandmarkMap | ArrayLike,
     bearings: ArrayLike,
@@ -1270,6 +1537,8 @@ def localize(
     p_miss: float | None = None,
     max_nodes: int | None = None,
     timeout_s: float | None = None,
+    strategy: str = "auto",
+    exhaustive: bool = True,
 ) -> LocalizationResult:
     """Find where the robot is, and which landmark each bearing is, from bearings alone.
 
@@ -1308,7 +1577,26 @@ def localize(
     max_nodes, timeout_s : optional
         Budget. Past it the search stops and returns what it has; ``result.complete`` is then
         False. Where the compiled walk runs (fixed threshold, no robust option), ``timeout_s``
-        is enforced as a budget of :data:`COMPILED_NODES_PER_SECOND` nodes per second.
+        is enforced as a budget of :data:`COMPILED_NODES_PER_SECOND` nodes per second (of
+        :data:`HYPOTHESIS_NODES_PER_SECOND` with ``strategy="hypotheses"``).
+    strategy : {"auto", "tree", "hypotheses"}
+        How the robust search runs. ``"tree"`` walks the interpretation tree with wildcard
+        branches (the reference). ``"hypotheses"`` (compiled) starts a hypothesis from every
+        landmark triple that can be seen together, for a few seed triples of bearings that
+        together avoid every possible set of ``max_spurious`` spurious bearings, and
+        verifies it on the other bearings (each matched to its best landmark inside the
+        gate); it finds the same interpretations far faster when there are wildcards, a
+        chi-square gate or a large map. ``"auto"`` uses the compiled paper tree where the
+        paper's rules alone apply, ``"hypotheses"`` for the robust options when numba is
+        installed, and the tree otherwise. ``method="paper"`` always walks the tree.
+    exhaustive : bool, default True
+        False stops at the first interpretation that explains ``m - max_spurious`` bearings
+        (and passes the joint test with ``sigma``): much faster on large maps, where a wrong
+        interpretation of that many bearings is practically impossible, but rival
+        interpretations are not sought, so ``ambiguous`` cannot be trusted
+        (``stats.exhaustive`` is then False). With ``p_miss``, a first fit must also leave
+        no more plainly visible landmarks unseen than the 99.9 % quantile of
+        Binomial(m, p_miss). Needs the hypotheses strategy.
 
     Returns
     -------
@@ -1374,8 +1662,12 @@ def localize(
             lm.n,
             float(lm.n) ** 3,
         )
-    order = np.arange(m) if meth is Method.PAPER else _robust_order(b)
-    s = _Search(lm, b, order, opt)
+    strat = _choose_strategy(strategy, meth, opt, exhaustive)
+    if meth is Method.PAPER or strat != "tree":
+        order = np.arange(m)
+    else:
+        order = _robust_order(b)
+    s = _Search(lm, b, order, opt, strat)
     s.run()
     solutions, ambiguous = _finish(s, b, opt)
     c = s.count
@@ -1391,5 +1683,6 @@ def localize(
         pruned_visibility=c.visibility,
         pruned_bound=c.bound,
         complete=s.complete,
+        exhaustive=s.exhaustive,
     )
     return LocalizationResult(solutions, stats, lm, ambiguous)

@@ -1,0 +1,167 @@
+"""Seed triples for hypothesise-and-verify: which three bearings start the hypotheses.
+
+With up to ``k`` spurious bearings among ``m``, a search that starts every hypothesis from
+one fixed triple of bearings could start from a spurious one and miss the truth. It is
+complete when its seed triples *cover* every possible set of spurious bearings: for each
+``k``-subset of the bearings, some seed triple avoids it entirely (a Turan-type covering:
+10 bearings with 3 spurious need 6 triples -- 8 when well-spread triples are preferred --
+where the tree's wildcard levels start from all 20 triples of the first 6 bearings).
+
+Seeds are chosen greedily, most newly covered spurious sets per unit of cost first, where
+the cost of a triple estimates how many landmark triples it makes the search solve.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .angles import TWO_PI
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+__all__ = ["angle_between", "pair_limits", "seed_triples", "triple_cost"]
+
+#: Span of three bearings (radians) below which a seed is thought poorly conditioned.
+WIDE_SPAN = float(np.deg2rad(150.0))
+
+#: Largest (number of triples) x (number of spurious sets) for the exact greedy cover.
+MAX_GREEDY = 3_000_000
+
+
+def angle_between(bearings: FloatArray) -> FloatArray:
+    """(m, m) unsigned angle between each two bearings, in [0, pi]."""
+    d = np.mod(bearings[:, None] - bearings[None, :], TWO_PI)
+    return np.asarray(np.minimum(d, TWO_PI - d))
+
+
+def pair_limits(
+    bearings: FloatArray, max_range: float | None, min_range: float | None, slack: float
+) -> FloatArray:
+    """(m, m) squared largest distance between two landmarks seen at two bearings.
+
+    Both lie between ``min_range`` and ``max_range`` of the robot and subtend the angle
+    between the bearings (widened by ``slack`` for noise), so by the law of cosines their
+    distance is at most ``max(2 R sin(a / 2), sqrt(R^2 + r^2 - 2 R r cos a))``. Without a
+    range every distance is possible (inf).
+    """
+    m = bearings.shape[0]
+    if max_range is None:
+        return np.full((m, m), np.inf)
+    R = float(max_range)
+    r = float(min_range or 0.0)
+    a = np.minimum(angle_between(bearings) + slack, np.pi)
+    d = np.maximum(2.0 * R * np.sin(0.5 * a), np.sqrt(R * R + r * r - 2.0 * R * r * np.cos(a)))
+    return np.asarray((d * (1.0 + 1e-9) + 1e-9) ** 2)
+
+
+def triple_cost(bearings: FloatArray, triples: IntArray, limits: FloatArray) -> FloatArray:
+    """Relative work of starting from each triple of bearings (lower is cheaper).
+
+    With a range, the candidate landmark triples grow with the areas allowed by the pair
+    limits (the second landmark near the first, the third near both). Without one every
+    triple costs the same, and wider triples (better conditioned poses, tighter gates) are
+    preferred by a small margin.
+    """
+    a, b, c = triples[:, 0], triples[:, 1], triples[:, 2]
+    s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
+    gaps = np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1)
+    # Three bearings within a narrow sector fix the pose poorly (the robot is outside the
+    # triangle of their landmarks, often near its circumcircle): a pose metres off would
+    # reject the true matches. Such seeds pay steeply below a span of WIDE_SPAN, and among
+    # the rest the widest-spread are preferred by a small margin.
+    span = TWO_PI - gaps.max(axis=1)
+    short = np.maximum(0.0, (WIDE_SPAN - span) / WIDE_SPAN)
+    quality = 1.0 + 100.0 * short**2 + 0.01 * (1.0 - gaps.min(axis=1) / (TWO_PI / 3.0))
+    if np.isfinite(limits).all():
+        return np.asarray(limits[a, b] * np.minimum(limits[a, c], limits[b, c]) * quality)
+    return np.asarray(quality)
+
+
+def _tightest_pair_first(triples: IntArray, limits: FloatArray) -> IntArray:
+    """Reorder each triple so that its first two bearings have the smallest pair limit (the
+    search takes the second landmark among the first's neighbours within that limit)."""
+    out = triples.copy()
+    for r, (a, b, c) in enumerate(triples.tolist()):
+        pairs = [(limits[a, b], (a, b, c)), (limits[a, c], (a, c, b)), (limits[b, c], (b, c, a))]
+        out[r] = min(pairs, key=lambda p: p[0])[1]
+    return out
+
+
+def seed_triples(bearings: FloatArray, max_wild: int, limits: FloatArray) -> IntArray:
+    """Seed triples that avoid every possible set of ``max_wild`` spurious bearings.
+
+    Parameters
+    ----------
+    bearings : ndarray, shape (m,)
+        Measured bearings, m >= max_wild + 3.
+    max_wild : int
+        Largest number of spurious bearings.
+    limits : ndarray, shape (m, m)
+        Squared pair-distance limits (see :func:`pair_limits`), for the cost.
+
+    Returns
+    -------
+    ndarray, shape (S, 3)
+        Observation indices, cheapest first.
+
+    Examples
+    --------
+    >>> b = np.linspace(-3.0, 3.0, 10)
+    >>> seeds = seed_triples(b, 3, np.full((10, 10), np.inf))
+    >>> len(seeds)
+    8
+    >>> import itertools
+    >>> all(any(not set(t) & set(s) for t in seeds.tolist())
+    ...     for s in itertools.combinations(range(10), 3))
+    True
+    """
+    m = int(bearings.shape[0])
+    k = int(max_wild)
+    triples = np.array(list(itertools.combinations(range(m), 3)), dtype=np.int64)
+    cost = triple_cost(bearings, triples, limits)
+    if k == 0:
+        out = triples[[int(np.argmin(cost))]]
+    elif math.comb(m, k) * len(triples) <= MAX_GREEDY:
+        out = _greedy(m, k, triples, cost)
+    elif m >= 3 * (k + 1):
+        out = _disjoint(m, k, triples, cost)
+    else:
+        # Any k spurious bearings leave three of the first k + 3 clean.
+        out = np.array(list(itertools.combinations(range(k + 3), 3)), dtype=np.int64)
+    return _tightest_pair_first(out, limits)
+
+
+def _greedy(m: int, k: int, triples: IntArray, cost: FloatArray) -> IntArray:
+    """Greedy set cover: most uncovered spurious sets per unit cost, repeatedly."""
+    one = np.int64(1)
+    tmask = (one << triples).sum(axis=1)
+    sets = np.array(list(itertools.combinations(range(m), k)), dtype=np.int64)
+    smask = (one << sets).sum(axis=1)
+    avoid = (tmask[:, None] & smask[None, :]) == 0  # triple t avoids spurious set s
+    open_ = np.ones(len(smask), dtype=bool)
+    chosen: list[int] = []
+    while open_.any():
+        gain = avoid[:, open_].sum(axis=1)
+        t = int(np.argmax(gain / cost))
+        chosen.append(t)
+        open_ &= ~avoid[t]
+    out = triples[chosen]
+    return out[np.argsort(cost[chosen], kind="stable")]
+
+
+def _disjoint(m: int, k: int, triples: IntArray, cost: FloatArray) -> IntArray:
+    """k + 1 disjoint triples, cheapest first: k spurious bearings spoil at most k of them."""
+    free = np.ones(m, dtype=bool)
+    chosen: list[int] = []
+    for t in np.argsort(cost, kind="stable"):
+        if free[triples[t]].all():
+            chosen.append(int(t))
+            free[triples[t]] = False
+            if len(chosen) == k + 1:
+                break
+    return triples[chosen]
