@@ -44,7 +44,7 @@ CONFIG: dict[str, dict[str, Any]] = {
     "a": {"trials": (20, 3), "timeout": 5.0, "cap": (150.0, 30.0)},
     "b": {"trials": (10, 2), "timeout": 10.0, "cap": (300.0, 45.0)},
     "c": {"trials": (20, 2), "timeout": 10.0, "cap": (150.0, 30.0)},
-    "d": {"trials": (5, 1), "timeout": 30.0, "cap": (240.0, 60.0)},
+    "d": {"trials": (4, 1), "timeout": 60.0, "cap": (300.0, 90.0)},
 }
 #: RANSAC iteration ladders searched for the count that matches omniloc's success rate.
 RANSAC_LADDER = {

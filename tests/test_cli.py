@@ -58,6 +58,18 @@ def test_localize_with_robust_options_and_plot(room_files, tmp_path, capsys) -> 
     assert png.stat().st_size > 10_000
 
 
+@pytest.mark.parametrize("strategy", ["tree", "hypotheses"])
+def test_localize_strategy_and_first_fit(room_files, capsys, strategy: str) -> None:
+    m, b = room_files
+    args = ["localize", "--map", str(m), "--bearings", str(b), "--degrees", "--sigma", "0.3"]
+    assert main([*args, "--strategy", strategy]) == 0
+    assert "x = 5.600 m, y = 2.100 m" in capsys.readouterr().out
+    if strategy == "hypotheses":
+        assert main([*args, "--first-fit"]) == 0
+        out = capsys.readouterr().out
+        assert "x = 5.600 m, y = 2.100 m" in out and "first fit: rivals not sought" in out
+
+
 def test_no_solution_is_a_sentence_and_exit_0(tmp_path, capsys) -> None:
     m = tmp_path / "sq.csv"
     m.write_text("id,x,y\n1,0,0\n2,6,0\n3,6,6\n4,0,6\n")

@@ -567,12 +567,14 @@ def _verify(
     stop_first: bool,
     miss_allow: int,
     node_budget: int,
+    relin: int,
     cnt: NDArray[np.int64],
 ) -> tuple[int, int]:
     """Verify one hypothesis: a depth-first walk over the other bearings (``rest``), each
-    matched in turn to every landmark inside its gate, best first, or -- when none is -- left
-    unmatched while at most ``max_wild`` are. The state of a path (pose, covariance, matches)
-    takes each match in with one Kalman update and is restored on the way back. Complete
+    matched in turn to every landmark inside its gate, best first, then left unmatched (a
+    wildcard) while at most ``max_wild`` are, as in the tree. The state of a path (pose,
+    covariance, matches) takes each match in with one Kalman update and is restored on the
+    way back. Complete
     paths with at least ``min_match`` matches are refined, tested for joint compatibility
     (with sigma) and written out with their count of missed landmarks.
 
@@ -672,10 +674,19 @@ def _verify(
             c12 -= k1 * k2 * b_v
             c22 -= k2 * k2 * b_v
             tr = c00 + c11 + c22
+            if n <= relin:
+                # Relinearise while the path has few pairs (its pose is still far from linear):
+                # two Gauss-Newton steps over all its pairs, and the covariance at the new
+                # pose, as the tree re-estimates at every node.
+                px, py, pt, _ = _gn_core(mx, my, bm, ones, n, px, py, pt, 2)
+                h00, h01, h02, h11, h12, h22 = _info(mx, my, n, px, py)
+                c00, c01, c02, c11, c12, c22, tr = _inv3(h00, h01, h02, h11, h12, h22, sig2)
             level += 1
             enter = True
-        elif p == 0 and ncand[level] == 0:
-            # No landmark fits: a wildcard, while the path can still reach min_match.
+        elif p == ncand[level] and (p == 0 or not stop_first):
+            # After every landmark that fits, the wildcard ("not on the map": a spurious bearing
+            # may well fall on a landmark's ray), while the path can still reach min_match. A
+            # first fit, which gives up completeness anyway, takes it only where nothing fits.
             if wild < max_wild:
                 wild += 1
                 level += 1
@@ -755,6 +766,7 @@ def hypotheses(
     max_nodes: int,
     stop_first: bool,
     capacity: int,
+    relin: int = 0,
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Every interpretation that a seed triple of bearings starts, verified bearing by bearing.
 
@@ -940,7 +952,7 @@ def hypotheses(
                         cq, cin, cgx, cgy, cv, sig2, use_sigma, gate_chi2, threshold, bound_k,
                         rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
                         half_fov, margin, out_a, out_p, out_miss, n_out, stop_first,
-                        miss_allow, left, cnt,
+                        miss_allow, left, relin, cnt,
                     )  # fmt: skip
                     nodes += cnt[0]
                     examined += cnt[1]
@@ -956,3 +968,65 @@ def hypotheses(
     )
     k = min(n_out, capacity)
     return out_a[:k].copy(), out_p[:k].copy(), out_miss[:k].copy(), counts
+
+
+@njit(cache=True, error_model="numpy")
+def covariances(
+    Lm: NDArray[np.float64], w: NDArray[np.float64], poses: NDArray[np.float64], scale: float
+) -> NDArray[np.float64]:
+    """``scale * (sum_i w_i g_i g_i^T + 1e-12 I)^-1`` for each path (see search._finish)."""
+    K, n = w.shape
+    out = np.empty((K, 3, 3))
+    for k in range(K):
+        h00 = h01 = h02 = h11 = h12 = h22 = 0.0
+        for i in range(n):
+            if w[k, i] > 0:
+                dx = Lm[k, i, 0] - poses[k, 0]
+                dy = Lm[k, i, 1] - poses[k, 1]
+                r2 = dx * dx + dy * dy
+                gx, gy = dy / r2, -dx / r2
+                h00 += gx * gx
+                h01 += gx * gy
+                h02 -= gx
+                h11 += gy * gy
+                h12 -= gy
+                h22 += 1.0
+        h00 += 1e-12
+        h11 += 1e-12
+        h22 += 1e-12
+        c00 = h11 * h22 - h12 * h12
+        c01 = h02 * h12 - h01 * h22
+        c02 = h01 * h12 - h02 * h11
+        c11 = h00 * h22 - h02 * h02
+        c12 = h01 * h02 - h00 * h12
+        c22 = h00 * h11 - h01 * h01
+        f = scale / (h00 * c00 + h01 * c01 + h02 * c02)
+        out[k, 0, 0], out[k, 0, 1], out[k, 0, 2] = c00 * f, c01 * f, c02 * f
+        out[k, 1, 0], out[k, 1, 1], out[k, 1, 2] = c01 * f, c11 * f, c12 * f
+        out[k, 2, 0], out[k, 2, 1], out[k, 2, 2] = c02 * f, c12 * f, c22 * f
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def widest_triple(bearings: NDArray[np.float64]) -> tuple[int, int, int]:
+    """The first triple (in lexicographic order) whose smallest circular gap is largest."""
+    m = bearings.shape[0]
+    best = -1.0
+    bi = bj = bk = 0
+    for i in range(m):
+        a = bearings[i] % TWO_PI
+        for j in range(i + 1, m):
+            b = bearings[j] % TWO_PI
+            for k in range(j + 1, m):
+                c = bearings[k] % TWO_PI
+                lo, mid, hi = a, b, c
+                if lo > mid:
+                    lo, mid = mid, lo
+                if mid > hi:
+                    mid, hi = hi, mid
+                if lo > mid:
+                    lo, mid = mid, lo
+                gap = min(mid - lo, hi - mid, lo + TWO_PI - hi)
+                if gap > best:
+                    best, bi, bj, bk = gap, i, j, k
+    return bi, bj, bk

@@ -1,0 +1,295 @@
+"""The hypothesise-and-verify strategy: seed covering, pair limits, neighbour lists, agreement
+with the tree, first fits on large maps, budgets and option checks."""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from omniloc import InputError, LandmarkMap, _compiled, _seeds, localize
+from omniloc.search import Method, _choose_strategy, _make_options
+from omniloc.simulate import (
+    DEMO_POSE,
+    DEMO_VISIBLE,
+    demo_room,
+    observe,
+    random_map,
+    random_pose,
+)
+
+DEG = math.pi / 180.0
+
+
+# ---- seeds -----------------------------------------------------------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    m=st.integers(4, 12),
+    k=st.integers(0, 4),
+    seed=st.integers(0, 2**31 - 1),
+    ranged=st.booleans(),
+)
+def test_seeds_avoid_every_set_of_spurious_bearings(
+    m: int, k: int, seed: int, ranged: bool
+) -> None:
+    k = min(k, m - 3)
+    b = np.random.default_rng(seed).uniform(-math.pi, math.pi, m)
+    limits = _seeds.pair_limits(b, 20.0 if ranged else None, None, 0.01)
+    seeds = _seeds.seed_triples(b, k, limits)
+    assert seeds.ndim == 2 and seeds.shape[1] == 3
+    assert all(len(set(t)) == 3 and 0 <= min(t) and max(t) < m for t in seeds.tolist())
+    for spurious in itertools.combinations(range(m), k):
+        assert any(not set(t) & set(spurious) for t in seeds.tolist()), spurious
+
+
+def test_seeds_for_many_bearings_use_disjoint_triples() -> None:
+    # Too many spurious sets for the exact greedy cover: k + 1 disjoint triples do it.
+    b = np.linspace(-3.0, 3.0, 40)
+    seeds = _seeds.seed_triples(b, 5, np.full((40, 40), np.inf))
+    assert len(seeds) == 6
+    assert len(set(seeds.ravel().tolist())) == 18
+
+
+def test_seeds_prefer_well_spread_bearings() -> None:
+    # Three bearings in a narrow sector fix the pose poorly; a spread triple is chosen.
+    b = np.deg2rad([0.0, 10.0, 20.0, 120.0, 240.0])
+    (seed,) = _seeds.seed_triples(b, 0, np.full((5, 5), np.inf))
+    span = np.ptp(np.sort(np.mod(b[seed], 2 * np.pi)))
+    assert np.rad2deg(span) >= 200.0
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    rmax=st.floats(2.0, 50.0),
+    rmin_frac=st.floats(0.0, 0.9),
+)
+def test_pair_limits_bound_every_visible_pair(seed: int, rmax: float, rmin_frac: float) -> None:
+    # Two landmarks seen from one pose within [rmin, rmax] at the angle between their
+    # bearings are never farther apart than the limit.
+    rng = np.random.default_rng(seed)
+    rmin = rmin_frac * rmax
+    r = rng.uniform(rmin, rmax, 2)
+    phi = rng.uniform(-math.pi, math.pi, 2)
+    pts = np.stack([r * np.cos(phi), r * np.sin(phi)], axis=1)
+    lim = _seeds.pair_limits(phi, rmax, rmin or None, 0.0)
+    d2 = float(((pts[0] - pts[1]) ** 2).sum())
+    assert d2 <= lim[0, 1] * (1 + 1e-9) + 1e-9
+
+
+def test_pair_limits_without_range_are_infinite() -> None:
+    assert np.isinf(_seeds.pair_limits(np.zeros(4), None, None, 0.0)).all()
+
+
+# ---- neighbour lists -------------------------------------------------------------------------
+
+
+def test_neighbour_lists_match_brute_force() -> None:
+    lm = random_map(300, size=100.0, rng=3)
+    ptr, idx = lm.neighbours(12.0)
+    xy = lm.neighbour_xy(12.0)
+    d = np.hypot(*(lm.xy[:, None, :] - lm.xy[None, :, :]).transpose(2, 0, 1))
+    for i in range(lm.n):
+        want = np.flatnonzero((d[i] <= 12.0) & (np.arange(lm.n) != i))
+        assert idx[ptr[i] : ptr[i + 1]].tolist() == want.tolist()
+        assert np.array_equal(xy[ptr[i] : ptr[i + 1]], lm.xy[want])
+    assert lm.neighbours(12.0)[1] is idx  # built once per radius
+
+
+# ---- agreement with the tree -----------------------------------------------------------------
+
+
+def _scene(seed: int) -> tuple[LandmarkMap, np.ndarray, dict[str, float]]:
+    rng = np.random.default_rng(seed)
+    if seed % 2:
+        lm = demo_room()
+        sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=5, sigma=0.3 * DEG, rng=rng)
+        return lm, sc.bearings, {"sigma": 0.3 * DEG}
+    lm = random_map(15, rng=rng)
+    sc = observe(lm, random_pose(lm, rng=rng), n_obs=6, sigma=0.5 * DEG, rng=rng)
+    return lm, sc.bearings, {"sigma": 0.5 * DEG}
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_same_best_interpretation_as_the_tree(seed: int) -> None:
+    lm, b, kw = _scene(seed)
+    tree = localize(lm, b, strategy="tree", **kw)
+    hyp = localize(lm, b, strategy="hypotheses", **kw)
+    assert (tree.best is None) == (hyp.best is None)
+    if tree.best is not None and hyp.best is not None:
+        assert hyp.best.assignment == tree.best.assignment
+        assert hyp.best.pose.distance_to(tree.best.pose)[0] < 1e-6
+
+
+def test_finds_the_truth_with_spurious_bearings_and_range() -> None:
+    found = 0
+    for seed in range(8):
+        rng = np.random.default_rng(100 + seed)
+        lm = random_map(40, size=40.0, rng=rng)
+        pose = random_pose(lm, rng=rng)
+        sc = observe(lm, pose, max_range=12.0, n_spurious=2, sigma=0.3 * DEG, rng=rng)
+        if sc.bearings.size - 2 < 4:
+            continue
+        kw = {"sigma": 0.3 * DEG, "max_spurious": 2, "max_range": 12.0, "p_miss": 0.05}
+        res = localize(lm, sc.bearings, strategy="hypotheses", **kw)
+        assert res.stats.exhaustive and res.stats.complete
+        tree = localize(lm, sc.bearings, strategy="tree", **kw)
+        # The hypotheses reach the true interpretation whenever the tree does. (With
+        # max_spurious equal to the true count, one real bearing outside its 99 % gate
+        # leaves no interpretation at all, in both.)
+        truth_in_tree = any(s.assignment == sc.assignment for s in tree.solutions)
+        assert truth_in_tree <= any(s.assignment == sc.assignment for s in res.solutions)
+        assert (res.best is None) == (tree.best is None)
+        found += res.best is not None and res.best.pose.distance_to(pose)[0] < 0.1
+    assert found >= 5
+
+
+# ---- large maps: chunks, threads, first fit --------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def big_map() -> LandmarkMap:
+    return random_map(3000, density=0.01, min_separation=1.0, rng=7)
+
+
+def _big_scene(lm: LandmarkMap, seed: int) -> tuple[np.ndarray, object]:
+    rng = np.random.default_rng(seed)
+    x0, y0, x1, y1 = lm.bounds
+    p = rng.uniform((x0 + 20, y0 + 20), (x1 - 20, y1 - 20))
+    from omniloc.pose import Pose
+
+    pose = Pose(float(p[0]), float(p[1]), float(rng.uniform(-math.pi, math.pi)))
+    sc = observe(lm, pose, max_range=15.0, n_spurious=1, sigma=0.2 * DEG, rng=rng)
+    return sc.bearings, pose
+
+
+def test_first_fit_on_a_large_map(big_map: LandmarkMap) -> None:
+    kw = {"sigma": 0.2 * DEG, "max_spurious": 1, "max_range": 15.0, "p_miss": 0.01}
+    hits = 0
+    for seed in range(3):
+        b, pose = _big_scene(big_map, seed)
+        res = localize(big_map, b, exhaustive=False, confidence=0.9999, **kw)
+        assert res.stats.complete
+        if res.best is not None and res.best.pose.distance_to(pose)[0] < 0.2:
+            hits += 1
+            assert not res.stats.exhaustive
+    assert hits >= 2
+
+
+def test_chunked_search_equals_one_call(big_map: LandmarkMap, monkeypatch) -> None:
+    # The chunks and threads change nothing but the time.
+    import omniloc.search as search
+
+    kw = {"sigma": 0.2 * DEG, "max_spurious": 1, "max_range": 15.0, "confidence": 0.9999}
+    b, _ = _big_scene(big_map, 1)
+    chunked = localize(big_map, b, **kw)
+    monkeypatch.setattr(search, "CHUNK_ANCHORS", 10**6)
+    whole = localize(big_map, b, **kw)
+    assert [s.assignment for s in chunked.solutions] == [s.assignment for s in whole.solutions]
+    assert chunked.stats.triples_solved == whole.stats.triples_solved
+    assert chunked.stats.nodes == whole.stats.nodes
+
+
+def test_node_budget_stops_the_hypotheses(big_map: LandmarkMap) -> None:
+    b, _ = _big_scene(big_map, 2)
+    res = localize(big_map, b, sigma=0.2 * DEG, max_spurious=1, max_range=15.0, max_nodes=20_000)
+    assert not res.stats.complete
+    # Chunks in flight may each finish their own budget, no more.
+    assert res.stats.nodes < 20_000 * 3
+
+
+# ---- options ---------------------------------------------------------------------------------
+
+
+def _opts(**kw: object) -> object:
+    base = dict(
+        method=Method.ROBUST,
+        threshold=DEG,
+        sigma=None,
+        confidence=0.99,
+        max_spurious=0,
+        ordering=False,
+        max_range=None,
+        min_range=None,
+        fov=None,
+        p_miss=None,
+        max_nodes=None,
+        timeout_s=None,
+    )
+    base.update(kw)
+    return _make_options(6, **base)  # type: ignore[arg-type]
+
+
+def test_strategy_choice(monkeypatch) -> None:
+    paper_rules = _opts()
+    robust = _opts(sigma=DEG)
+    assert _choose_strategy("auto", Method.ROBUST, paper_rules, True) == "tree"
+    assert _choose_strategy("tree", Method.ROBUST, robust, True) == "tree"
+    assert _choose_strategy("hypotheses", Method.ROBUST, paper_rules, False) == "first"
+    monkeypatch.setattr(_compiled, "AVAILABLE", True)
+    assert _choose_strategy("auto", Method.ROBUST, robust, True) == "hypotheses"
+    monkeypatch.setattr(_compiled, "AVAILABLE", False)
+    assert _choose_strategy("auto", Method.ROBUST, robust, True) == "tree"
+    assert _choose_strategy("auto", Method.ROBUST, robust, False) == "first"
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"strategy": "fast"}, "strategy must be one of"),
+        ({"strategy": "tree", "exhaustive": False}, "exhaustive=False needs"),
+        ({"method": "paper", "strategy": "hypotheses"}, "method='paper'"),
+        ({"method": "paper", "exhaustive": False}, "method='paper'"),
+        ({"exhaustive": "no"}, "exhaustive must be True or False"),
+    ],
+)
+def test_bad_strategy_options(kwargs: dict[str, object], message: str) -> None:
+    lm = demo_room()
+    sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=5)
+    with pytest.raises(InputError, match=message):
+        localize(lm, sc.bearings, **kwargs)  # type: ignore[arg-type]
+
+
+def test_threshold_mode_with_wildcards_finds_the_truth() -> None:
+    lm = demo_room()
+    sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=6, n_spurious=1, rng=4)
+    res = localize(lm, sc.bearings, max_spurious=1, strategy="hypotheses")
+    assert res.best is not None
+    assert res.best.pose.distance_to(DEMO_POSE)[0] < 1e-6
+    assert res.best.assignment == sc.assignment
+
+
+# ---- small compiled helpers against their numpy references -----------------------------------
+
+
+@settings(max_examples=50, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), m=st.integers(4, 15))
+def test_compiled_widest_triple_matches_numpy(seed: int, m: int) -> None:
+    from omniloc.search import _TRIPLES
+
+    b = np.random.default_rng(seed).uniform(-math.pi, math.pi, m)
+    triples = _TRIPLES[min(m, 12)]
+    s = np.sort(np.mod(b[triples], 2 * math.pi), axis=1)
+    gaps = np.diff(np.concatenate([s, s[:, :1] + 2 * math.pi], axis=1), axis=1)
+    want = triples[int(np.argmax(gaps.min(axis=1)))].tolist()
+    assert list(_compiled.widest_triple(np.ascontiguousarray(b[:12]))) == want
+
+
+def test_compiled_covariances_match_numpy() -> None:
+    from omniloc.pose import _bearing_jacobian
+
+    rng = np.random.default_rng(5)
+    Lm = rng.uniform(0, 20, (6, 8, 2))
+    poses = np.concatenate([rng.uniform(5, 15, (6, 2)), rng.uniform(-3, 3, (6, 1))], axis=1)
+    w = (rng.uniform(size=(6, 8)) > 0.3).astype(float)
+    w[:, :3] = 1.0
+    _, g = _bearing_jacobian(Lm, poses)
+    gw = g * w[..., None]
+    want = np.linalg.inv(np.einsum("kni,knj->kij", gw, gw) + 1e-12 * np.eye(3)) * 0.01
+    assert np.allclose(_compiled.covariances(Lm, w, poses, 0.01), want, rtol=1e-9, atol=0)
