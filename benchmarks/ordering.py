@@ -38,7 +38,9 @@ def run(trials: int, seed: int) -> list[dict[str, object]]:
             pose = random_pose(lm, rng=rng)
             sc = observe(lm, pose, n_obs=m, sigma=np.deg2rad(noise), rng=rng)
             for name, flag in (("plain", False), ("ordering", True)):
-                r = localize(lm, sc.bearings, ordering=flag, **opts)
+                # The tree: it prunes by the ordering at every node (the hypotheses strategy
+                # only checks complete interpretations).
+                r = localize(lm, sc.bearings, ordering=flag, strategy="tree", **opts)
                 truth = any(
                     s.pose.distance_to(pose)[0] < 0.2 and s.pose.distance_to(pose)[1] < 0.05
                     for s in r.solutions

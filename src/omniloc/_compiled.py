@@ -426,95 +426,6 @@ def _gather(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _gated(
-    nn: int,
-    near_q: NDArray[np.int64],
-    near_x: NDArray[np.float64],
-    near_y: NDArray[np.float64],
-    stamp: NDArray[np.int64],
-    hyp: int,
-    px: float,
-    py: float,
-    ux: float,
-    uy: float,
-    c00: float,
-    c01: float,
-    c02: float,
-    c11: float,
-    c12: float,
-    c22: float,
-    tr: float,
-    sig2: float,
-    rmax2: float,
-    rmin2: float,
-    use_sigma: bool,
-    gate_chi2: float,
-    threshold: float,
-    bound_k: float,
-    cq: NDArray[np.int64],
-    cin: NDArray[np.float64],
-    cgx: NDArray[np.float64],
-    cgy: NDArray[np.float64],
-    cv: NDArray[np.float64],
-) -> int:
-    """The unused near landmarks inside the gate for the measured world direction (ux, uy)
-    from (px, py), best (smallest normalised innovation) first: landmark, innovation
-    (predicted - measured), bearing gradient and innovation variance, written to ``c*``;
-    returns how many."""
-    nc = 0
-    for t in range(nn):
-        dx, dy = near_x[t] - px, near_y[t] - py
-        rr = dx * dx + dy * dy
-        dot = dx * ux + dy * uy
-        cr = ux * dy - uy * dx  # r sin(innovation)
-        # One branch for the common case: |sin(innov)| <= |innov| and g^T Cov g <= trace(Cov)
-        # |g|^2 with |g|^2 = 1 / r^2 + 1, so most candidates fail this bound, which needs no
-        # division or arctangent; the conditions are combined without short-circuits.
-        ok = (
-            (cr * cr <= bound_k * (tr * (1.0 + rr) + sig2 * rr))
-            & (dot > 0)
-            & (rr <= rmax2)
-            & (rr >= rmin2)
-        )
-        if not ok:
-            continue
-        q = near_q[t]
-        if stamp[q] == hyp:
-            continue
-        gx, gy = dy / rr, -dx / rr
-        v = gx * gx * c00 + gy * gy * c11 + c22 + 2.0 * (gx * gy * c01 - gx * c02 - gy * c12)
-        v = max(v, 0.0) + sig2
-        if use_sigma:
-            if cr * cr > gate_chi2 * v * rr:
-                continue
-            innov = np.arctan2(cr, dot)
-            score = innov * innov / v
-            if score > gate_chi2:
-                continue
-        else:
-            if cr * cr > threshold * threshold * rr:
-                continue
-            innov = np.arctan2(cr, dot)
-            score = innov * innov
-            if abs(innov) > threshold:
-                continue
-        # Insert in order of score (a handful of candidates at most).
-        at = nc
-        while at > 0 and cin[at - 1] * cin[at - 1] / cv[at - 1] > innov * innov / v:
-            cq[at], cin[at], cgx[at], cgy[at], cv[at] = (
-                cq[at - 1],
-                cin[at - 1],
-                cgx[at - 1],
-                cgy[at - 1],
-                cv[at - 1],
-            )
-            at -= 1
-        cq[at], cin[at], cgx[at], cgy[at], cv[at] = q, innov, gx, gy, v
-        nc += 1
-    return nc
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
 def _verify(
     L: NDArray[np.float64],
     beta: NDArray[np.float64],
@@ -546,6 +457,7 @@ def _verify(
     cgx: NDArray[np.float64],
     cgy: NDArray[np.float64],
     cv: NDArray[np.float64],
+    cs: NDArray[np.float64],
     sig2: float,
     use_sigma: bool,
     gate_chi2: float,
@@ -632,12 +544,55 @@ def _verify(
             ct, st = np.cos(pt), np.sin(pt)
             ux = ct * cb[o] - st * sb[o]  # measured direction in the world
             uy = st * cb[o] + ct * sb[o]
-            ncand[level] = _gated(
-                nn, near_q, near_x, near_y, stamp, hyp, px, py, ux, uy,
-                c00, c01, c02, c11, c12, c22, tr, sig2, rmax2, rmin2,
-                use_sigma, gate_chi2, threshold, bound_k,
-                cq[level], cin[level], cgx[level], cgy[level], cv[level],
-            )  # fmt: skip
+            # The landmarks inside the gate, best (smallest normalised innovation) first.
+            nc = 0
+            for t in range(nn):
+                dx, dy = near_x[t] - px, near_y[t] - py
+                rr = dx * dx + dy * dy
+                dot = dx * ux + dy * uy
+                cr = ux * dy - uy * dx  # r sin(innovation)
+                # One branch for the common case: |sin(innov)| <= |innov| and g^T Cov g <=
+                # trace(Cov) |g|^2 with |g|^2 = 1 / r^2 + 1, so most candidates fail this
+                # bound, which needs no division or arctangent; the conditions are combined
+                # without short-circuits (their outcomes are unpredictable).
+                ok = (
+                    (cr * cr <= bound_k * (tr * (1.0 + rr) + sig2 * rr))
+                    & (dot > 0)
+                    & (rr <= rmax2)
+                    & (rr >= rmin2)
+                )
+                if not ok:
+                    continue
+                q = near_q[t]
+                if stamp[q] == hyp:
+                    continue
+                gx, gy = dy / rr, -dx / rr
+                v = gx * gx * c00 + gy * gy * c11 + c22
+                v = max(v + 2.0 * (gx * gy * c01 - gx * c02 - gy * c12), 0.0) + sig2
+                if use_sigma:
+                    if cr * cr > gate_chi2 * v * rr:
+                        continue
+                    innov = np.arctan2(cr, dot)
+                    score = innov * innov / v
+                    if score > gate_chi2:
+                        continue
+                else:
+                    if cr * cr > threshold * threshold * rr:
+                        continue
+                    innov = np.arctan2(cr, dot)
+                    score = innov * innov / v
+                    if abs(innov) > threshold:
+                        continue
+                at = nc
+                while at > 0 and cs[level, at - 1] > score:
+                    cq[level, at], cin[level, at] = cq[level, at - 1], cin[level, at - 1]
+                    cgx[level, at], cgy[level, at] = cgx[level, at - 1], cgy[level, at - 1]
+                    cv[level, at], cs[level, at] = cv[level, at - 1], cs[level, at - 1]
+                    at -= 1
+                cq[level, at], cin[level, at], cgx[level, at] = q, innov, gx
+                cgy[level, at], cv[level, at], cs[level, at] = gy, v, score
+                nc += 1
+            ncand[level] = nc
             if ncand[level] == 0:
                 cnt[2] += 1
         # Next option at this level, from the state on entering it.
@@ -766,7 +721,7 @@ def hypotheses(
     max_nodes: int,
     stop_first: bool,
     capacity: int,
-    relin: int = 0,
+    relin: NDArray[np.int64],
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Every interpretation that a seed triple of bearings starts, verified bearing by bearing.
 
@@ -775,14 +730,14 @@ def hypotheses(
     neighbours ``nb_idx[nb_lo[i]:nb_hi[i]]`` (coordinates ``nb_xy``; the anchor itself is
     not among them; without a range, every other landmark), their distances within
     ``pair_d2`` (squared largest distance between the landmarks of two bearings) -- the pose
-    of the triple (eqs. 1-6, rule i, range limits) predicts every other bearing. Each is
-    matched to the unused landmark with the smallest normalised innovation inside the gate
-    (``sigma > 0``: chi-square on innovation^2 / (g^T Cov g + sigma^2) with the covariance
-    of the pose so far; else ``|innovation| <= threshold``), and the pose and its covariance
-    take the bearing in with one Kalman update; or the bearing is left unmatched (a
-    wildcard). A hypothesis is dropped as soon as it can no longer reach ``min_match``
-    matches. One that does is refined by Gauss-Newton over its pairs and, with sigma, kept
-    only if ``sse / sigma^2 <= joint_chi2[n]`` (joint compatibility).
+    of the triple (eqs. 1-6, rule i, range limits) predicts every other bearing, and
+    :func:`_verify` walks the assignments of the others depth first: each bearing matched to
+    every unused landmark inside its gate (``sigma > 0``: chi-square on innovation^2 /
+    (g^T Cov g + sigma^2) with the covariance of the pose so far; else ``|innovation| <=
+    threshold``), the pose and covariance taking it in with a Kalman update (relinearised
+    while a path has at most ``relin[s]`` pairs), or left unmatched while the path can still
+    reach ``min_match`` matches. Complete paths are refined by Gauss-Newton over their pairs
+    and, with sigma, kept only if ``sse / sigma^2 <= joint_chi2[n]`` (joint compatibility).
 
     ``missed`` counts the landmarks a kept hypothesis should plainly see (inside 0.95
     max_range, 1.05 min_range and the field of view, away from every measured bearing) but
@@ -842,6 +797,7 @@ def hypotheses(
     cgx = np.empty((m, width + 1))
     cgy = np.empty((m, width + 1))
     cv = np.empty((m, width + 1))
+    cs = np.empty((m, width + 1))
     cnt = np.zeros(4, dtype=np.int64)
     vis_hi = 0.95**2 * rmax2
     vis_lo = 1.05**2 * rmin2
@@ -949,10 +905,10 @@ def hypotheses(
                     n_out, stop = _verify(
                         L, beta, cb, sb, rest, nr, lm, mx, my, ones, bm, om, stamp, hyp,
                         near_q, near_x, near_y, nn, sp, scov, sn, sw, chosen, pos, ncand,
-                        cq, cin, cgx, cgy, cv, sig2, use_sigma, gate_chi2, threshold, bound_k,
+                        cq, cin, cgx, cgy, cv, cs, sig2, use_sigma, gate_chi2, threshold, bound_k,
                         rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
                         half_fov, margin, out_a, out_p, out_miss, n_out, stop_first,
-                        miss_allow, left, relin, cnt,
+                        miss_allow, left, relin[s], cnt,
                     )  # fmt: skip
                     nodes += cnt[0]
                     examined += cnt[1]

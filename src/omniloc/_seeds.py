@@ -24,7 +24,7 @@ from .angles import TWO_PI
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["angle_between", "pair_limits", "seed_triples", "triple_cost"]
+__all__ = ["angle_between", "narrow", "pair_limits", "seed_triples", "triple_cost"]
 
 #: Span of three bearings (radians) below which a seed is thought poorly conditioned.
 WIDE_SPAN = float(np.deg2rad(150.0))
@@ -57,6 +57,18 @@ def pair_limits(
     a = np.minimum(angle_between(bearings) + slack, np.pi)
     d = np.maximum(2.0 * R * np.sin(0.5 * a), np.sqrt(R * R + r * r - 2.0 * R * r * np.cos(a)))
     return np.asarray((d * (1.0 + 1e-9) + 1e-9) ** 2)
+
+
+def spans(bearings: FloatArray, triples: IntArray) -> FloatArray:
+    """Angle each triple of bearings spans: 2 pi minus its largest circular gap."""
+    s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
+    gaps = np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1)
+    return np.asarray(TWO_PI - gaps.max(axis=1))
+
+
+def narrow(bearings: FloatArray, triples: IntArray) -> NDArray[np.bool_]:
+    """Whether each triple spans less than WIDE_SPAN (its pose is poorly conditioned)."""
+    return np.asarray(spans(bearings, triples) < WIDE_SPAN)
 
 
 def triple_cost(bearings: FloatArray, triples: IntArray, limits: FloatArray) -> FloatArray:

@@ -66,10 +66,11 @@ RANGE_SLACK = 0.05
 #: Rate at which a time budget becomes a node budget in the hypothesise-and-verify kernel.
 HYPOTHESIS_NODES_PER_SECOND = 3_000_000
 
-#: The hypotheses' verification relinearises (two Gauss-Newton steps and a fresh covariance,
-#: as the tree does at every node) while a path has at most this many pairs, and uses one
-#: Kalman update per match after that: early poses are the far-from-linear ones (with a
-#: 67-degree field of view, Kalman updates alone lost the true pose in 2 % more MRCLAM frames).
+#: From a narrow seed (three bearings spanning less than _seeds.WIDE_SPAN), the hypotheses'
+#: verification relinearises (two Gauss-Newton steps and a fresh covariance, as the tree does
+#: at every node) while a path has at most this many pairs, and uses one Kalman update per
+#: match after that: such poses are far from linear at first (with a 67-degree field of
+#: view, Kalman updates alone lost the true pose in 2 % more MRCLAM frames).
 RELINEARISE = 4
 
 #: First landmarks per chunk of a large map's hypothesis search, and threads that run chunks.
@@ -721,7 +722,11 @@ class _Search:
         beta = np.require(self.beta, np.float64, ["C"])
         joint = np.require(o.joint_chi2, np.float64, ["C"])
 
-        def call(seed_rows: IntArray, i0: int, i1: int, cap: int) -> tuple[Any, ...]:
+        # Poses from narrow seeds are far from linear: relinearise their first matches.
+        relin = np.where(_seeds.narrow(self.beta, seeds), RELINEARISE, 0).astype(np.int64)
+
+        def call(rows: slice, i0: int, i1: int, cap: int) -> tuple[Any, ...]:
+            seed_rows = seeds[rows]
             capacity = 2048
             while True:
                 out = _compiled.hypotheses(
@@ -749,7 +754,7 @@ class _Search:
                     cap,
                     stop_first,
                     capacity,
-                    RELINEARISE,
+                    relin[rows],
                 )
                 n_out = int(out[3][5])
                 if n_out <= capacity or capacity >= MAX_COMPILED_LEAVES:
@@ -757,10 +762,10 @@ class _Search:
                 capacity = min(n_out, MAX_COMPILED_LEAVES)
 
         if self.N <= 4 * CHUNK_ANCHORS:
-            results = [call(seeds, 0, self.N, budget)]
+            results = [call(slice(None), 0, self.N, budget)]
         else:
             chunks = [
-                (seeds[r : r + 1], i0, min(i0 + CHUNK_ANCHORS, self.N))
+                (slice(r, r + 1), i0, min(i0 + CHUNK_ANCHORS, self.N))
                 for r in range(len(seeds))
                 for i0 in range(0, self.N, CHUNK_ANCHORS)
             ]
@@ -840,7 +845,7 @@ class _Search:
     def _run_chunks(
         self,
         call: Any,
-        chunks: list[tuple[IntArray, int, int]],
+        chunks: list[tuple[slice, int, int]],
         budget: int,
     ) -> list[tuple[Any, ...]]:
         """Run chunks on a small thread pool, in order; stop early on an answer (first fit)
