@@ -716,8 +716,11 @@ class _Search:
         miss_allow = self.m + self.N
         if stop_first and o.p_miss is not None:
             # A first fit must not leave more plainly visible landmarks unseen than misses
-            # explain: the 99.9 % quantile of Binomial(m, p_miss).
-            miss_allow = int(binom.ppf(0.999, self.m, o.p_miss))
+            # typically explain: the median of Binomial(m, p_miss). The true interpretation
+            # with more misses than that does not stop the search early but is still found
+            # (it costs time, not the answer), while a generous allowance would let a wrong
+            # pose that hides a landmark or two stop it (it did on a 100,000-landmark map).
+            miss_allow = int(binom.ppf(0.5, self.m, o.p_miss))
         L = np.require(self.L, np.float64, ["C"])
         beta = np.require(self.beta, np.float64, ["C"])
         joint = np.require(o.joint_chi2, np.float64, ["C"])
@@ -1618,8 +1621,9 @@ def localize(
         interpretation of that many bearings is practically impossible, but rival
         interpretations are not sought, so ``ambiguous`` cannot be trusted
         (``stats.exhaustive`` is then False). With ``p_miss``, a first fit must also leave
-        no more plainly visible landmarks unseen than the 99.9 % quantile of
-        Binomial(m, p_miss). Needs the hypotheses strategy.
+        no more plainly visible landmarks unseen than the median of Binomial(m, p_miss)
+        (a true interpretation with more misses does not stop the search, which then runs
+        on and still finds it). Needs the hypotheses strategy.
 
     Returns
     -------
