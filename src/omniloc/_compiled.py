@@ -715,6 +715,8 @@ def hypotheses(
     rmax2: float,
     rmin2: float,
     half_fov: float,
+    vis_hi: float,
+    vis_lo: float,
     miss_allow: int,
     scale: float,
     singular_rtol: float,
@@ -739,10 +741,10 @@ def hypotheses(
     reach ``min_match`` matches. Complete paths are refined by Gauss-Newton over their pairs
     and, with sigma, kept only if ``sse / sigma^2 <= joint_chi2[n]`` (joint compatibility).
 
-    ``missed`` counts the landmarks a kept hypothesis should plainly see (inside 0.95
-    max_range, 1.05 min_range and the field of view, away from every measured bearing) but
-    matched to no bearing. ``stop_first`` ends the search at the first kept hypothesis with
-    at most ``miss_allow`` of them.
+    ``missed`` counts the landmarks a kept hypothesis should plainly see (at a squared
+    distance between ``vis_lo`` and ``vis_hi``, inside the field of view, away from every
+    measured bearing) but matched to no bearing. ``stop_first`` ends the search at the first
+    kept hypothesis with at most ``miss_allow`` of them.
 
     Returns assignments (K, m) in observation order (-1 unmatched), poses (K, 3), missed (K,)
     and the counters ``[nodes, examined, triples, existence, gate, n_out, stopped,
@@ -799,8 +801,6 @@ def hypotheses(
     cv = np.empty((m, width + 1))
     cs = np.empty((m, width + 1))
     cnt = np.zeros(4, dtype=np.int64)
-    vis_hi = 0.95**2 * rmax2
-    vis_lo = 1.05**2 * rmin2
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
     for s in range(seeds.shape[0]):

@@ -13,6 +13,7 @@ the cost of a triple estimates how many landmark triples it makes the search sol
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -134,7 +135,7 @@ def seed_triples(bearings: FloatArray, max_wild: int, limits: FloatArray) -> Int
     """
     m = int(bearings.shape[0])
     k = int(max_wild)
-    triples = np.array(list(itertools.combinations(range(m), 3)), dtype=np.int64)
+    triples = _triples(m)
     cost = triple_cost(bearings, triples, limits)
     if k == 0:
         out = triples[[int(np.argmin(cost))]]
@@ -148,14 +149,30 @@ def seed_triples(bearings: FloatArray, max_wild: int, limits: FloatArray) -> Int
     return _tightest_pair_first(out, limits)
 
 
+@functools.lru_cache(maxsize=64)
+def _triples(m: int) -> IntArray:
+    """All triples of m bearings, in lexicographic order (read-only, cached)."""
+    out = np.array(list(itertools.combinations(range(m), 3)), dtype=np.int64).reshape(-1, 3)
+    out.setflags(write=False)
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _avoids(m: int, k: int) -> NDArray[np.bool_]:
+    """(triples, k-subsets): whether triple t avoids spurious set s (read-only, cached)."""
+    one = np.int64(1)
+    tmask = (one << _triples(m)).sum(axis=1)
+    sets = np.array(list(itertools.combinations(range(m), k)), dtype=np.int64).reshape(-1, k)
+    smask = (one << sets).sum(axis=1)
+    out = (tmask[:, None] & smask[None, :]) == 0
+    out.setflags(write=False)
+    return out
+
+
 def _greedy(m: int, k: int, triples: IntArray, cost: FloatArray) -> IntArray:
     """Greedy set cover: most uncovered spurious sets per unit cost, repeatedly."""
-    one = np.int64(1)
-    tmask = (one << triples).sum(axis=1)
-    sets = np.array(list(itertools.combinations(range(m), k)), dtype=np.int64)
-    smask = (one << sets).sum(axis=1)
-    avoid = (tmask[:, None] & smask[None, :]) == 0  # triple t avoids spurious set s
-    open_ = np.ones(len(smask), dtype=bool)
+    avoid = _avoids(m, k)
+    open_ = np.ones(avoid.shape[1], dtype=bool)
     chosen: list[int] = []
     while open_.any():
         gain = avoid[:, open_].sum(axis=1)

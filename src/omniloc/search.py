@@ -751,6 +751,9 @@ class _Search:
                     np.inf if o.reach_max is None else o.reach_max**2,
                     0.0 if o.reach_min is None else o.reach_min**2,
                     np.inf if o.half_fov is None else float(o.half_fov),
+                    # Plainly visible, as in _missed: 5 % inside the range limits.
+                    np.inf if o.max_range is None else (0.95 * o.max_range) ** 2,
+                    0.0 if o.min_range is None else (1.05 * o.min_range) ** 2,
                     miss_allow,
                     self.scale,
                     SINGULAR_RTOL,
