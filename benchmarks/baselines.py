@@ -77,7 +77,8 @@ def triple_poses(L: ArrayLike, b: ArrayLike) -> tuple[FloatArray, NDArray[np.boo
         rx = L[:, 0, 0] - fx / f2  # eq. (5)
         ry = L[:, 0, 1] + fy / f2
         theta = np.arctan2(L[:, 0, 1] - ry, L[:, 0, 0] - rx) - b[:, 0]  # eq. (6)
-    poses = np.stack([rx, ry, np.asarray(wrap(theta))], axis=1)
+        # Degenerate triples give nan here; they are masked out by ``ok`` below.
+        poses = np.stack([rx, ry, np.asarray(wrap(theta))], axis=1)
     ok &= np.isfinite(poses).all(axis=1)
     return poses, ok
 

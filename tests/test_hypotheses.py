@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from omniloc import InputError, LandmarkMap, _compiled, _seeds, localize
+from omniloc.pose import Pose
 from omniloc.search import Method, _choose_strategy, _make_options
 from omniloc.simulate import (
     DEMO_POSE,
@@ -158,12 +159,10 @@ def big_map() -> LandmarkMap:
     return random_map(3000, density=0.01, min_separation=1.0, rng=7)
 
 
-def _big_scene(lm: LandmarkMap, seed: int) -> tuple[np.ndarray, object]:
+def _big_scene(lm: LandmarkMap, seed: int) -> tuple[np.ndarray, Pose]:
     rng = np.random.default_rng(seed)
     x0, y0, x1, y1 = lm.bounds
     p = rng.uniform((x0 + 20, y0 + 20), (x1 - 20, y1 - 20))
-    from omniloc.pose import Pose
-
     pose = Pose(float(p[0]), float(p[1]), float(rng.uniform(-math.pi, math.pi)))
     sc = observe(lm, pose, max_range=15.0, n_spurious=1, sigma=0.2 * DEG, rng=rng)
     return sc.bearings, pose
@@ -293,3 +292,40 @@ def test_compiled_covariances_match_numpy() -> None:
     gw = g * w[..., None]
     want = np.linalg.inv(np.einsum("kni,knj->kij", gw, gw) + 1e-12 * np.eye(3)) * 0.01
     assert np.allclose(_compiled.covariances(Lm, w, poses, 0.01), want, rtol=1e-9, atol=0)
+
+
+def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
+    # A spurious bearing just beside a true one took the true one's landmark (the first fit
+    # checks bearings in a fixed order): the polish gives it back.
+    from omniloc.search import _Search
+
+    lm = random_map(400, density=0.01, min_separation=1.0, rng=3)
+    x0, y0, x1, y1 = lm.bounds
+    pose = Pose((x0 + x1) / 2, (y0 + y1) / 2, 0.3)
+    sc = observe(lm, pose, max_range=20.0, rng=1)
+    bearings = np.concatenate([[sc.bearings[-1] + 0.06 * DEG], sc.bearings])
+    truth = np.array([-1, *sc.assignment], dtype=np.int64)
+    swapped = truth.copy()
+    swapped[0], swapped[-1] = truth[-1], -1
+    opt = _make_options(
+        len(bearings),
+        method=Method.ROBUST,
+        threshold=DEG,
+        sigma=0.2 * DEG,
+        confidence=0.99,
+        max_spurious=1,
+        ordering=False,
+        max_range=20.0,
+        min_range=None,
+        fov=None,
+        p_miss=None,
+        max_nodes=None,
+        timeout_s=None,
+    )
+    s = _Search(lm, bearings, np.arange(len(bearings)), opt, "first")
+    assign, poses = s._polish(swapped[None], pose.as_array()[None])
+    assert assign[0].tolist() == truth.tolist()
+    assert Pose.from_array(poses[0]).distance_to(pose)[0] < 0.05
+    # A correct interpretation is left alone.
+    assign, _ = s._polish(truth[None], pose.as_array()[None])
+    assert assign[0].tolist() == truth.tolist()

@@ -480,6 +480,7 @@ def _verify(
     miss_allow: int,
     node_budget: int,
     relin: int,
+    contested: NDArray[np.bool_],
     cnt: NDArray[np.int64],
 ) -> tuple[int, int]:
     """Verify one hypothesis: a depth-first walk over the other bearings (``rest``), each
@@ -638,10 +639,13 @@ def _verify(
                 c00, c01, c02, c11, c12, c22, tr = _inv3(h00, h01, h02, h11, h12, h22, sig2)
             level += 1
             enter = True
-        elif p == ncand[level] and (p == 0 or not stop_first):
+        elif p == ncand[level] and (p == 0 or (contested[o] and not stop_first)):
             # After every landmark that fits, the wildcard ("not on the map": a spurious bearing
-            # may well fall on a landmark's ray), while the path can still reach min_match. A
-            # first fit, which gives up completeness anyway, takes it only where nothing fits.
+            # may fall on a landmark's ray and take it from the true one), while the path can
+            # still reach min_match. Where a landmark fits, only for a bearing with another
+            # one close by (``contested``): otherwise the wildcard could only give the same
+            # interpretation with one match fewer, which the merge would drop. A first fit,
+            # which gives up completeness anyway, takes it only where nothing fits.
             if wild < max_wild:
                 wild += 1
                 level += 1
@@ -724,6 +728,7 @@ def hypotheses(
     stop_first: bool,
     capacity: int,
     relin: NDArray[np.int64],
+    contested: NDArray[np.bool_],
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Every interpretation that a seed triple of bearings starts, verified bearing by bearing.
 
@@ -908,7 +913,7 @@ def hypotheses(
                         cq, cin, cgx, cgy, cv, cs, sig2, use_sigma, gate_chi2, threshold, bound_k,
                         rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
                         half_fov, margin, out_a, out_p, out_miss, n_out, stop_first,
-                        miss_allow, left, relin[s], cnt,
+                        miss_allow, left, relin[s], contested, cnt,
                     )  # fmt: skip
                     nodes += cnt[0]
                     examined += cnt[1]

@@ -73,6 +73,10 @@ HYPOTHESIS_NODES_PER_SECOND = 3_000_000
 #: view, Kalman updates alone lost the true pose in 2 % more MRCLAM frames).
 RELINEARISE = 4
 
+#: Bearings closer than this (radians) may compete for one landmark: the hypotheses search
+#: tries each of them as spurious even where a landmark fits (as the tree tries every bearing).
+CONTESTED = float(np.deg2rad(25.0))
+
 #: First landmarks per chunk of a large map's hypothesis search, and threads that run chunks.
 CHUNK_ANCHORS = 256
 THREADS = 2
@@ -727,6 +731,10 @@ class _Search:
 
         # Poses from narrow seeds are far from linear: relinearise their first matches.
         relin = np.where(_seeds.narrow(self.beta, seeds), RELINEARISE, 0).astype(np.int64)
+        # Bearings that another bearing could rob of its landmark (see _compiled._verify).
+        near_pair = _seeds.angle_between(self.beta) <= CONTESTED
+        np.fill_diagonal(near_pair, False)
+        contested = np.ascontiguousarray(near_pair.any(axis=1))
 
         def call(rows: slice, i0: int, i1: int, cap: int) -> tuple[Any, ...]:
             seed_rows = seeds[rows]
@@ -761,6 +769,7 @@ class _Search:
                     stop_first,
                     capacity,
                     relin[rows],
+                    contested,
                 )
                 n_out = int(out[3][5])
                 if n_out <= capacity or capacity >= MAX_COMPILED_LEAVES:
