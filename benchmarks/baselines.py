@@ -193,7 +193,8 @@ def _score(
         if max_range is not None:
             far = (d * d).sum(axis=2) > max_range**2
             pred = np.where(far, np.inf, pred)
-        r = np.abs(np.asarray(wrap(pred[:, :, None] - b[None, None, :])))  # (K, N, m)
+        with np.errstate(invalid="ignore"):  # out of range: inf, replaced just below
+            r = np.abs(np.asarray(wrap(pred[:, :, None] - b[None, None, :])))  # (K, N, m)
         if max_range is not None:
             r = np.where(np.isfinite(pred)[:, :, None], r, np.pi)
         near = r.argmin(axis=1)
