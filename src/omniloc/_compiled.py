@@ -426,6 +426,27 @@ def _gather(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _compact(
+    out_a: NDArray[np.int64],
+    out_p: NDArray[np.float64],
+    out_miss: NDArray[np.int64],
+    out_key: NDArray[np.float64],
+    bar: NDArray[np.float64],
+) -> int:
+    """Keep the better half of full output buffers (lowest key first, stable), in place;
+    ``bar[0]`` becomes the worst key kept. Returns the rows kept."""
+    full = out_key.shape[0]
+    keep = full // 2
+    order = np.argsort(out_key, kind="mergesort")[:keep]
+    out_a[:keep] = out_a[order].copy()
+    out_p[:keep] = out_p[order].copy()
+    out_miss[:keep] = out_miss[order].copy()
+    out_key[:keep] = out_key[order].copy()
+    bar[0] = out_key[keep - 1]
+    return keep
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _verify(
     L: NDArray[np.float64],
     beta: NDArray[np.float64],
@@ -475,6 +496,10 @@ def _verify(
     out_a: NDArray[np.int64],
     out_p: NDArray[np.float64],
     out_miss: NDArray[np.int64],
+    out_key: NDArray[np.float64],
+    bar: NDArray[np.float64],
+    spur_w: float,
+    miss_w: float,
     n_out: int,
     stop_first: bool,
     miss_allow: int,
@@ -492,8 +517,9 @@ def _verify(
     (with sigma) and written out with their count of missed landmarks.
 
     The hypothesis's three seed pairs are ``lm/mx/my/bm/om[:3]``, its pose and covariance
-    ``sp[0]``/``scov[0]``. Adds [nodes, examined, gate, bound] to ``cnt``; returns the new
-    output count and 2 when ``stop_first`` found its fit (1 when ``node_budget`` ran out).
+    ``sp[0]``/``scov[0]``. Adds [nodes, examined, gate, bound, complete paths] to ``cnt``;
+    returns the new output count and 2 when ``stop_first`` found its fit (1 when
+    ``node_budget`` ran out).
     """
     m = beta.shape[0]
     capacity = out_a.shape[0]
@@ -525,14 +551,21 @@ def _verify(
                             near_q, near_x, near_y, nn, stamp, hyp, qx, qy, qt, beta,
                             vis_hi, vis_lo, half_fov, margin,
                         )  # fmt: skip
-                        if n_out < capacity:
+                        # Keep the best ``capacity`` by the ranking's cost: when full, the
+                        # worse half goes and the bar for entry rises.
+                        key = (m - n) * spur_w + 0.5 * sse / sig2 + missed * miss_w
+                        cnt[4] += 1
+                        if n_out == capacity:
+                            n_out = _compact(out_a, out_p, out_miss, out_key, bar)
+                        if key <= bar[0] or (stop_first and missed <= miss_allow):
                             for o in range(m):
                                 out_a[n_out, o] = -1
                             for q in range(n):
                                 out_a[n_out, om[q]] = lm[q]
                             out_p[n_out, 0], out_p[n_out, 1], out_p[n_out, 2] = qx, qy, qt
                             out_miss[n_out] = missed
-                        n_out += 1
+                            out_key[n_out] = key
+                            n_out += 1
                         if stop_first and missed <= miss_allow:
                             return n_out, 2
                 level -= 1
@@ -729,6 +762,8 @@ def hypotheses(
     capacity: int,
     relin: NDArray[np.int64],
     contested: NDArray[np.bool_],
+    spur_w: float,
+    miss_w: float,
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Every interpretation that a seed triple of bearings starts, verified bearing by bearing.
 
@@ -751,10 +786,13 @@ def hypotheses(
     measured bearing) but matched to no bearing. ``stop_first`` ends the search at the first
     kept hypothesis with at most ``miss_allow`` of them.
 
-    Returns assignments (K, m) in observation order (-1 unmatched), poses (K, 3), missed (K,)
-    and the counters ``[nodes, examined, triples, existence, gate, n_out, stopped,
-    visibility, bound]``; ``stopped`` is 1 when ``max_nodes`` ran out, 2 when ``stop_first``
-    ended the search.
+    Returns assignments (K, m) in observation order (-1 unmatched), poses (K, 3) and missed
+    (K,) of at most ``capacity`` complete paths, best first by the ranking's cost
+    ``(m - n) spur_w + sse / (2 sigma^2) + missed miss_w`` (a huge ``spur_w`` ranks by matches
+    first; when more are found, the worse ones are dropped as they come, as search._finish
+    keeps its best MAX_LEAVES), and the counters ``[nodes, examined, triples, existence,
+    gate, found, stopped, visibility, bound]``; ``stopped`` is 1 when ``max_nodes`` ran out,
+    2 when ``stop_first`` ended the search.
     """
     N = L.shape[0]
     m = beta.shape[0]
@@ -773,6 +811,8 @@ def hypotheses(
     out_a = np.empty((capacity, m), dtype=np.int64)
     out_p = np.empty((capacity, 3))
     out_miss = np.empty(capacity, dtype=np.int64)
+    out_key = np.empty(capacity)
+    bar = np.full(1, np.inf)
     stamp = np.zeros(N, dtype=np.int64)
     lm = np.empty(m, dtype=np.int64)  # matched landmarks, in match order
     mx = np.empty(m)  # and their coordinates
@@ -805,7 +845,8 @@ def hypotheses(
     cgy = np.empty((m, width + 1))
     cv = np.empty((m, width + 1))
     cs = np.empty((m, width + 1))
-    cnt = np.zeros(4, dtype=np.int64)
+    cnt = np.zeros(5, dtype=np.int64)
+    found = 0
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
     for s in range(seeds.shape[0]):
@@ -912,23 +953,24 @@ def hypotheses(
                         near_q, near_x, near_y, nn, sp, scov, sn, sw, chosen, pos, ncand,
                         cq, cin, cgx, cgy, cv, cs, sig2, use_sigma, gate_chi2, threshold, bound_k,
                         rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
-                        half_fov, margin, out_a, out_p, out_miss, n_out, stop_first,
-                        miss_allow, left, relin[s], contested, cnt,
+                        half_fov, margin, out_a, out_p, out_miss, out_key, bar, spur_w,
+                        miss_w, n_out, stop_first, miss_allow, left, relin[s], contested, cnt,
                     )  # fmt: skip
                     nodes += cnt[0]
                     examined += cnt[1]
                     gate += cnt[2]
                     bound += cnt[3]
+                    found += cnt[4]
                     if stop:
                         stopped = stop
                         break
                 if max_nodes > 0 and nodes >= max_nodes:
                     stopped = 1
     counts = np.array(
-        [nodes, examined, triples, existence, gate, n_out, stopped, vis, bound], dtype=np.int64
+        [nodes, examined, triples, existence, gate, found, stopped, vis, bound], dtype=np.int64
     )
-    k = min(n_out, capacity)
-    return out_a[:k].copy(), out_p[:k].copy(), out_miss[:k].copy(), counts
+    order = np.argsort(out_key[:n_out], kind="mergesort")
+    return out_a[order], out_p[order], out_miss[order], counts
 
 
 @njit(cache=True, error_model="numpy")

@@ -736,45 +736,48 @@ class _Search:
         np.fill_diagonal(near_pair, False)
         contested = np.ascontiguousarray(near_pair.any(axis=1))
 
+        # The kernel keeps the best interpretations by the cost _finish ranks with.
+        sig = o.sigma_eff
+        if o.p_miss is None:
+            spur_w, miss_w = 1e6, 0.0  # matches first
+        else:
+            spur_w = max(0.5 * math.log(TWO_PI) - math.log(sig), 0.0)
+            miss_w = -math.log(o.p_miss)
+
         def call(rows: slice, i0: int, i1: int, cap: int) -> tuple[Any, ...]:
-            seed_rows = seeds[rows]
-            capacity = 2048
-            while True:
-                out = _compiled.hypotheses(
-                    L,
-                    beta,
-                    seed_rows,
-                    i0,
-                    i1,
-                    lo,
-                    hi,
-                    idx,
-                    nb_xy,
-                    limits,
-                    -1.0 if o.sigma is None else float(o.sigma),
-                    float(o.gate_chi2),
-                    float(o.threshold),
-                    joint,
-                    int(o.min_match),
-                    np.inf if o.reach_max is None else o.reach_max**2,
-                    0.0 if o.reach_min is None else o.reach_min**2,
-                    np.inf if o.half_fov is None else float(o.half_fov),
-                    # Plainly visible, as in _missed: 5 % inside the range limits.
-                    np.inf if o.max_range is None else (0.95 * o.max_range) ** 2,
-                    0.0 if o.min_range is None else (1.05 * o.min_range) ** 2,
-                    miss_allow,
-                    self.scale,
-                    SINGULAR_RTOL,
-                    cap,
-                    stop_first,
-                    capacity,
-                    relin[rows],
-                    contested,
-                )
-                n_out = int(out[3][5])
-                if n_out <= capacity or capacity >= MAX_COMPILED_LEAVES:
-                    return out
-                capacity = min(n_out, MAX_COMPILED_LEAVES)
+            return _compiled.hypotheses(
+                L,
+                beta,
+                seeds[rows],
+                i0,
+                i1,
+                lo,
+                hi,
+                idx,
+                nb_xy,
+                limits,
+                -1.0 if o.sigma is None else float(o.sigma),
+                float(o.gate_chi2),
+                float(o.threshold),
+                joint,
+                int(o.min_match),
+                np.inf if o.reach_max is None else o.reach_max**2,
+                0.0 if o.reach_min is None else o.reach_min**2,
+                np.inf if o.half_fov is None else float(o.half_fov),
+                # Plainly visible, as in _missed: 5 % inside the range limits.
+                np.inf if o.max_range is None else (0.95 * o.max_range) ** 2,
+                0.0 if o.min_range is None else (1.05 * o.min_range) ** 2,
+                miss_allow,
+                self.scale,
+                SINGULAR_RTOL,
+                cap,
+                stop_first,
+                2 * MAX_LEAVES,
+                relin[rows],
+                contested,
+                spur_w,
+                miss_w,
+            )
 
         if self.N <= 4 * CHUNK_ANCHORS:
             results = [call(slice(None), 0, self.N, budget)]
@@ -790,17 +793,10 @@ class _Search:
         c = self.count
         c.nodes, c.examined, c.triples, c.existence, c.gate = (int(v) for v in counts[:5])
         c.visibility, c.bound = int(counts[7]), int(counts[8])
-        overflow = any(int(r[3][5]) > len(r[0]) for r in results)
-        if stopped == 1 or any(int(r[3][6]) == 1 for r in results) or overflow:
+        if any(int(r[3][6]) == 1 for r in results):
             self.complete = False
         if stopped == 2:
             self.exhaustive = False
-        if overflow:
-            log.warning(
-                "localize: more than %d interpretations; kept the first ones "
-                "(result marked incomplete)",
-                MAX_COMPILED_LEAVES,
-            )
         assign = np.concatenate([r[0] for r in results])
         if len(assign) == 0:
             return
