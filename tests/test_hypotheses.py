@@ -329,3 +329,63 @@ def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
     # A correct interpretation is left alone.
     assign, _ = s._polish(truth[None], pose.as_array()[None])
     assert assign[0].tolist() == truth.tolist()
+
+
+# ---- ranking and the kernel's output buffer --------------------------------------------------
+
+
+@pytest.mark.parametrize("p_miss", [None, 0.05])
+def test_with_p_miss_the_whole_cost_ranks(p_miss: float | None) -> None:
+    # Two complete paths: the truth with its spurious bearing unmatched, and the same with
+    # that bearing forced onto a far landmark (one match more, a residual of tens of
+    # degrees). Without p_miss matches rank first, as the robust issue specifies; with it,
+    # the negative log-likelihood does.
+    from omniloc.search import _finish, _Search
+
+    lm = random_map(60, size=40.0, rng=2)
+    pose = Pose(20.0, 20.0, 0.4)
+    sc = observe(lm, pose, max_range=12.0, n_spurious=1, rng=5)
+    truth = np.array([-1 if a is None else a for a in sc.assignment], dtype=np.int64)
+    forced = truth.copy()
+    far = int(np.argmax(np.hypot(*(lm.xy - pose.as_array()[:2]).T)))
+    forced[truth < 0] = far
+    opt = _make_options(
+        len(truth),
+        method=Method.ROBUST,
+        threshold=DEG,
+        sigma=None,
+        confidence=0.99,
+        max_spurious=1,
+        ordering=False,
+        max_range=12.0,
+        min_range=None,
+        fov=None,
+        p_miss=p_miss,
+        max_nodes=None,
+        timeout_s=None,
+    )
+    s = _Search(lm, sc.bearings, np.arange(len(truth)), opt, "hypotheses")
+    s.leaves.append(s._leaf_batch(np.stack([forced, truth]), np.stack([pose.as_array()] * 2)))
+    sols, _ = _finish(s, sc.bearings, opt)
+    best = np.array([-1 if a is None else a for a in sols[0].assignment])
+    assert best.tolist() == (forced if p_miss is None else truth).tolist()
+
+
+def test_output_buffer_keeps_the_better_half_in_order() -> None:
+    # The kernel's full output buffer keeps its better half, best first, rows with their keys,
+    # and raises the bar for entry to the worst key kept.
+    n = 16
+    key0 = np.random.default_rng(0).permutation(n).astype(float)
+    key = key0.copy()
+    a = np.tile(np.arange(n)[:, None], (1, 3)).astype(np.int64)  # row j holds j
+    p = np.tile(np.arange(n, dtype=float)[:, None], (1, 3))
+    miss = np.arange(n, dtype=np.int64)
+    bar = np.full(1, np.inf)
+    kept = _compiled._compact(a, p, miss, key, bar)
+    assert kept == n // 2
+    assert key[:kept].tolist() == list(range(n // 2))
+    assert bar[0] == n // 2 - 1
+    for i in range(kept):
+        j = a[i, 0]
+        assert a[i].tolist() == [j] * 3 and p[i, 2] == j and miss[i] == j
+        assert key0[j] == key[i]

@@ -25,7 +25,15 @@ from .angles import TWO_PI
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["angle_between", "narrow", "pair_limits", "seed_triples", "triple_cost"]
+__all__ = [
+    "angle_between",
+    "gaps",
+    "narrow",
+    "pair_limits",
+    "seed_triples",
+    "spans",
+    "triple_cost",
+]
 
 #: Span of three bearings (radians) below which a seed is thought poorly conditioned.
 WIDE_SPAN = float(np.deg2rad(150.0))
@@ -60,11 +68,15 @@ def pair_limits(
     return np.asarray((d * (1.0 + 1e-9) + 1e-9) ** 2)
 
 
+def gaps(bearings: FloatArray, triples: IntArray) -> FloatArray:
+    """(T, 3) circular gaps between the bearings of each triple, going round once."""
+    s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
+    return np.asarray(np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1))
+
+
 def spans(bearings: FloatArray, triples: IntArray) -> FloatArray:
     """Angle each triple of bearings spans: 2 pi minus its largest circular gap."""
-    s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
-    gaps = np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1)
-    return np.asarray(TWO_PI - gaps.max(axis=1))
+    return np.asarray(TWO_PI - gaps(bearings, triples).max(axis=1))
 
 
 def narrow(bearings: FloatArray, triples: IntArray) -> NDArray[np.bool_]:
@@ -81,15 +93,14 @@ def triple_cost(bearings: FloatArray, triples: IntArray, limits: FloatArray) -> 
     preferred by a small margin.
     """
     a, b, c = triples[:, 0], triples[:, 1], triples[:, 2]
-    s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
-    gaps = np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1)
+    g = gaps(bearings, triples)
     # Three bearings within a narrow sector fix the pose poorly (the robot is outside the
     # triangle of their landmarks, often near its circumcircle): a pose metres off would
     # reject the true matches. Such seeds pay steeply below a span of WIDE_SPAN, and among
     # the rest the widest-spread are preferred by a small margin.
-    span = TWO_PI - gaps.max(axis=1)
+    span = TWO_PI - g.max(axis=1)
     short = np.maximum(0.0, (WIDE_SPAN - span) / WIDE_SPAN)
-    quality = 1.0 + 100.0 * short**2 + 0.01 * (1.0 - gaps.min(axis=1) / (TWO_PI / 3.0))
+    quality = 1.0 + 100.0 * short**2 + 0.01 * (1.0 - g.min(axis=1) / (TWO_PI / 3.0))
     if np.isfinite(limits).all():
         return np.asarray(limits[a, b] * np.minimum(limits[a, c], limits[b, c]) * quality)
     return np.asarray(quality)

@@ -669,12 +669,14 @@ class _Search:
         """Complete paths found by a compiled kernel, as a batch for :func:`_finish`."""
         k = len(assign)
         nmatch = (assign >= 0).sum(axis=1).astype(np.int64)
+        # Complete paths need no eq. 1-4 state (anchor, sums) any more: only the assignment
+        # and the pose are read from here on.
         return _Batch(
             self.m,
             assign,
             nmatch,
             self.m - nmatch,
-            assign.max(axis=1),
+            np.full(k, -1, dtype=np.int64),
             np.full(k, float(self.beta[0])),
             np.zeros((k, 3)),
             np.zeros((k, 2)),
@@ -1327,9 +1329,8 @@ def _robust_order(bearings: FloatArray) -> IntArray:
         best = list(_compiled.widest_triple(np.require(bearings[:12], np.float64, ["C", "W"])))
     else:
         triples = _TRIPLES[min(m, 12)]
-        s = np.sort(np.mod(bearings[triples], TWO_PI), axis=1)
-        gaps = np.diff(np.concatenate([s, s[:, :1] + TWO_PI], axis=1), axis=1)
-        best = [int(i) for i in triples[int(np.argmax(gaps.min(axis=1)))]]  # first widest
+        widest = int(np.argmax(_seeds.gaps(bearings, triples).min(axis=1)))  # the first one
+        best = [int(i) for i in triples[widest]]
     return np.array(best + [o for o in range(m) if o not in best], dtype=np.int64)
 
 
