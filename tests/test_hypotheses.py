@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -206,7 +207,7 @@ def test_node_budget_stops_the_hypotheses(big_map: LandmarkMap) -> None:
 # ---- options ---------------------------------------------------------------------------------
 
 
-def _opts(**kw: object) -> object:
+def _opts(m: int = 6, **kw: object) -> Any:
     base = dict(
         method=Method.ROBUST,
         threshold=DEG,
@@ -222,7 +223,7 @@ def _opts(**kw: object) -> object:
         timeout_s=None,
     )
     base.update(kw)
-    return _make_options(6, **base)  # type: ignore[arg-type]
+    return _make_options(m, **base)  # type: ignore[arg-type]
 
 
 def test_strategy_choice(monkeypatch) -> None:
@@ -307,21 +308,7 @@ def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
     truth = np.array([-1, *sc.assignment], dtype=np.int64)
     swapped = truth.copy()
     swapped[0], swapped[-1] = truth[-1], -1
-    opt = _make_options(
-        len(bearings),
-        method=Method.ROBUST,
-        threshold=DEG,
-        sigma=0.2 * DEG,
-        confidence=0.99,
-        max_spurious=1,
-        ordering=False,
-        max_range=20.0,
-        min_range=None,
-        fov=None,
-        p_miss=None,
-        max_nodes=None,
-        timeout_s=None,
-    )
+    opt = _opts(len(bearings), sigma=0.2 * DEG, max_spurious=1, max_range=20.0, p_miss=None)
     s = _Search(lm, bearings, np.arange(len(bearings)), opt, "first")
     assign, poses = s._polish(swapped[None], pose.as_array()[None])
     assert assign[0].tolist() == truth.tolist()
@@ -349,21 +336,7 @@ def test_with_p_miss_the_whole_cost_ranks(p_miss: float | None) -> None:
     forced = truth.copy()
     far = int(np.argmax(np.hypot(*(lm.xy - pose.as_array()[:2]).T)))
     forced[truth < 0] = far
-    opt = _make_options(
-        len(truth),
-        method=Method.ROBUST,
-        threshold=DEG,
-        sigma=None,
-        confidence=0.99,
-        max_spurious=1,
-        ordering=False,
-        max_range=12.0,
-        min_range=None,
-        fov=None,
-        p_miss=p_miss,
-        max_nodes=None,
-        timeout_s=None,
-    )
+    opt = _opts(len(truth), sigma=None, max_spurious=1, max_range=12.0, p_miss=p_miss)
     s = _Search(lm, sc.bearings, np.arange(len(truth)), opt, "hypotheses")
     s.leaves.append(s._leaf_batch(np.stack([forced, truth]), np.stack([pose.as_array()] * 2)))
     sols, _ = _finish(s, sc.bearings, opt)
