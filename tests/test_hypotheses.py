@@ -362,3 +362,85 @@ def test_output_buffer_keeps_the_better_half_in_order() -> None:
         j = a[i, 0]
         assert a[i].tolist() == [j] * 3 and p[i, 2] == j and miss[i] == j
         assert key0[j] == key[i]
+
+
+# ---- the cheap test before verification ------------------------------------------------------
+
+
+def _reach(bearing_hits: list[bool], need: int) -> bool:
+    """_can_reach on a pose at the origin facing +x with a tight covariance: one landmark
+    10 m out along each bearing that should hit, 30 degrees off it for one that should not."""
+    rest = np.arange(len(bearing_hits), dtype=np.int64)
+    beta = np.deg2rad(np.linspace(-150.0, 150.0, len(bearing_hits)))
+    ang = beta + np.where(bearing_hits, 0.0, np.deg2rad(30.0))
+    x, y = 10.0 * np.cos(ang), 10.0 * np.sin(ang)
+    q = np.arange(len(beta), dtype=np.int64) + 3
+    stamp = np.zeros(len(beta) + 3, dtype=np.int64)
+    c = 1e-6  # position m^2 and heading rad^2 variances: a gate of a few tenths of a degree
+    sig2 = (0.3 * DEG) ** 2
+    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 0.0, q, x, y, len(beta), stamp, 1)
+    return bool(
+        _compiled._can_reach(rest, len(rest), need, *args, c, 0.0, 0.0, c, 0.0, c, sig2, 16.0)
+    )
+
+
+@pytest.mark.parametrize(
+    ("hits", "need", "expected"),
+    [
+        ([True] * 5, 5, True),
+        ([True, True, False, True, True], 5, False),
+        ([True, True, False, True, True], 4, True),
+        ([False, False, True, True, True], 3, True),
+        ([False, False, False, True, True], 3, False),
+        ([False] * 5, 0, True),
+    ],
+)
+def test_can_reach_counts_bearings_with_a_landmark_in_the_gate(
+    hits: list[bool], need: int, expected: bool
+) -> None:
+    assert _reach(hits, need) is expected
+
+
+def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
+    # The seed's three landmarks (stamped with the hypothesis) cannot explain another bearing.
+    beta = np.deg2rad([0.0, 90.0])
+    x, y = 10.0 * np.cos(beta), 10.0 * np.sin(beta)
+    q = np.array([0, 1], dtype=np.int64)
+    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 0.0, q, x, y, 2)
+    tail = (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6, (0.3 * DEG) ** 2, 16.0)
+    rest = np.array([0, 1], dtype=np.int64)
+    free = np.zeros(2, dtype=np.int64)
+    own = np.array([7, 0], dtype=np.int64)  # landmark 0 belongs to hypothesis 7
+    assert _compiled._can_reach(rest, 2, 2, *args, free, 7, *tail)
+    assert not _compiled._can_reach(rest, 2, 2, *args, own, 7, *tail)
+
+
+@pytest.mark.parametrize("exhaustive", [True, False])
+def test_cheap_test_only_removes_poorly_fitting_interpretations(
+    exhaustive: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The cheap test is exact to first order only: with and without it the best
+    # interpretation is the same and it never adds one.
+    from omniloc import search
+
+    work = {"on": 0, "off": 0}
+    for seed in range(10):
+        rng = np.random.default_rng(300 + seed)
+        lm = random_map(30, size=40.0, rng=rng)
+        pose = random_pose(lm, rng=rng)
+        sc = observe(lm, pose, max_range=12.0, n_spurious=3, sigma=0.5 * DEG, rng=rng)
+        kw = {"sigma": 0.5 * DEG, "max_spurious": 3, "max_range": 12.0, "p_miss": 0.05}
+        kw["exhaustive"] = exhaustive
+        on = localize(lm, sc.bearings, strategy="hypotheses", **kw)
+        with monkeypatch.context() as mp:
+            mp.setattr(search, "PRETEST_SLACK", {True: (0.0, 0.0), False: (0.0, 0.0)})
+            off = localize(lm, sc.bearings, strategy="hypotheses", **kw)
+        assert (on.best is None) == (off.best is None)
+        if off.best is not None and on.best is not None:
+            assert on.best.assignment == off.best.assignment
+        if exhaustive:
+            assert {s.assignment for s in on.solutions} <= {s.assignment for s in off.solutions}
+        work["on"] += on.stats.examined_paths
+        work["off"] += off.stats.examined_paths
+    # ... and it spares most of the verification.
+    assert work["on"] < 0.5 * work["off"]

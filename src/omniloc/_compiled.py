@@ -397,6 +397,47 @@ def _inv3(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _pair_terms(
+    lo: int,
+    hi: int,
+    nb_idx: NDArray[np.int64],
+    nb_xy: NDArray[np.float64],
+    i: int,
+    lix: float,
+    liy: float,
+    d2max: float,
+    rot: complex,
+    q: NDArray[np.int64],
+    t: NDArray[np.float64],
+) -> int:
+    """The neighbours of anchor ``i`` within sqrt(d2max) of it, to ``q``, with their
+    coordinates, ``a`` and ``b`` (eqs. 1-2, real and imaginary parts) and the entries of P and
+    P b (eq. 3) for the rotation ``rot`` in the rows of ``t``; returns how many."""
+    n = 0
+    for qq in range(lo, hi):
+        j = nb_idx[qq]
+        if j == i:
+            continue
+        qx, qy = nb_xy[qq, 0], nb_xy[qq, 1]
+        ex, ey = qx - lix, qy - liy
+        if ex * ex + ey * ey > d2max:
+            continue
+        a, b, p00, p01, p11, pb0, pb1 = _pair_z(ex, ey, rot)
+        q[n] = j
+        t[n, 0], t[n, 1], t[n, 2], t[n, 3], t[n, 4], t[n, 5] = (
+            qx,
+            qy,
+            a.real,
+            a.imag,
+            b.real,
+            b.imag,
+        )
+        t[n, 6], t[n, 7], t[n, 8], t[n, 9], t[n, 10] = p00, p01, p11, pb0, pb1
+        n += 1
+    return n
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _gather(
     lo: int,
     hi: int,
@@ -444,6 +485,95 @@ def _compact(
     out_key[:keep] = out_key[order].copy()
     bar[0] = out_key[keep - 1]
     return keep
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _pred_var(
+    gx: float,
+    gy: float,
+    c00: float,
+    c01: float,
+    c02: float,
+    c11: float,
+    c12: float,
+    c22: float,
+    sig2: float,
+) -> float:
+    """Variance of a predicted bearing: g^T Cov g + sigma^2 with g = [gx, gy, -1]."""
+    v = gx * gx * c00 + gy * gy * c11 + c22
+    return max(v + 2.0 * (gx * gy * c01 - gx * c02 - gy * c12), 0.0) + sig2
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _can_reach(
+    rest: NDArray[np.int64],
+    nr: int,
+    need: int,
+    cb: NDArray[np.float64],
+    sb: NDArray[np.float64],
+    px: float,
+    py: float,
+    pt: float,
+    near_q: NDArray[np.int64],
+    near_x: NDArray[np.float64],
+    near_y: NDArray[np.float64],
+    nn: int,
+    stamp: NDArray[np.int64],
+    hyp: int,
+    c00: float,
+    c01: float,
+    c02: float,
+    c11: float,
+    c12: float,
+    c22: float,
+    sig2: float,
+    k_pre: float,
+) -> bool:
+    """Whether at least ``need`` of the bearings ``rest[:nr]`` each have some near landmark
+    (other than the hypothesis's own three, marked in ``stamp``) inside a gate of ``k_pre``
+    at the hypothesis's pose (px, py, pt) and covariance ``c``: a necessary condition for
+    :func:`_verify` to find a complete path, tested first because it is cheap.
+
+    Why it is necessary: to first order, the normalised squared innovation of a bearing at
+    the seed's pose is at most the joint chi-square statistic of every match the path goes on
+    to make (a marginal of a quadratic form is at most the whole), which the joint test
+    bounds by ``joint_chi2[n] <= joint_chi2[m]``; ``k_pre`` is that with a margin for the
+    nonlinearity. Each bearing stops at its first landmark inside the gate; the test stops
+    as soon as the outcome is settled.
+    """
+    ct, st = np.cos(pt), np.sin(pt)
+    # A bound without division: g^T C g <= 2 (c00 + c11) / r^2 + 2 c22 (Cauchy-Schwarz on
+    # the position and heading parts of g = [dy, -dx, -r^2] / r^2).
+    a0 = k_pre * 2.0 * (c00 + c11)
+    a1 = k_pre * (2.0 * c22 + sig2)
+    allowed = nr - need
+    misses = hits = 0
+    for r in range(nr):
+        o = rest[r]
+        ux = ct * cb[o] - st * sb[o]
+        uy = st * cb[o] + ct * sb[o]
+        hit = False
+        for t in range(nn):
+            dx, dy = near_x[t] - px, near_y[t] - py
+            rr = dx * dx + dy * dy
+            cr = ux * dy - uy * dx  # r sin(innovation)
+            if (cr * cr <= a0 + a1 * rr) & (dx * ux + dy * uy > 0):
+                if stamp[near_q[t]] == hyp:
+                    continue
+                gx, gy = dy / rr, -dx / rr
+                v = _pred_var(gx, gy, c00, c01, c02, c11, c12, c22, sig2)
+                if cr * cr <= k_pre * v * rr:
+                    hit = True
+                    break
+        if hit:
+            hits += 1
+            if hits >= need:
+                return True
+        else:
+            misses += 1
+            if misses > allowed:
+                return False
+    return True
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -601,8 +731,7 @@ def _verify(
                 if stamp[q] == hyp:
                     continue
                 gx, gy = dy / rr, -dx / rr
-                v = gx * gx * c00 + gy * gy * c11 + c22
-                v = max(v + 2.0 * (gx * gy * c01 - gx * c02 - gy * c12), 0.0) + sig2
+                v = _pred_var(gx, gy, c00, c01, c02, c11, c12, c22, sig2)
                 if use_sigma:
                     if cr * cr > gate_chi2 * v * rr:
                         continue
@@ -764,6 +893,7 @@ def hypotheses(
     contested: NDArray[np.bool_],
     spur_w: float,
     miss_w: float,
+    pretest: NDArray[np.float64],
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64]]:
     """Every interpretation that a seed triple of bearings starts, verified bearing by bearing.
 
@@ -830,6 +960,11 @@ def hypotheses(
     near_x = np.empty(width + 1)
     near_y = np.empty(width + 1)
     near2 = rmax2 * 1.05**2
+    # Per anchor: the candidates for the second and third landmark and their pair terms.
+    jq = np.empty(width, dtype=np.int64)
+    kq = np.empty(width, dtype=np.int64)
+    jt = np.empty((width, 11))
+    kt = np.empty((width, 11))
     # The verification's depth-first walk: state on entering each level, chosen landmark,
     # next option, and each level's gated candidates.
     sp = np.empty((m + 1, 4))
@@ -861,48 +996,46 @@ def hypotheses(
         rot_b = np.exp(1j * (beta[ob] - beta[oa]))
         rot_c = np.exp(1j * (beta[oc] - beta[oa]))
         d_ab, d_ac, d_bc = pair_d2[oa, ob], pair_d2[oa, oc], pair_d2[ob, oc]
+        # The cheap test of _can_reach (with sigma; 0 turns it off).
+        k_pre = pretest[s] * joint_chi2[m] if use_sigma else 0.0
         for i in range(i0, i1):
             if stopped:
                 break
             lo, hi = nb_lo[i], nb_hi[i]
             lix, liy = L[i, 0], L[i, 1]
-            for jj in range(lo, hi):
+            # Each neighbour's terms of eqs. 1-3 as the second landmark (bearing ob) and as
+            # the third (oc), once per anchor, for those within the pair limits.
+            nj = _pair_terms(lo, hi, nb_idx, nb_xy, i, lix, liy, d_ab, rot_b, jq, jt)
+            nk = _pair_terms(lo, hi, nb_idx, nb_xy, i, lix, liy, d_ac, rot_c, kq, kt)
+            vis += 2 * (hi - lo) - nj - nk
+            for jj in range(nj):
                 if stopped:
                     break
-                j, ljx, ljy = nb_idx[jj], nb_xy[jj, 0], nb_xy[jj, 1]
-                if j == i:
-                    continue
-                ejx, ejy = ljx - lix, ljy - liy
-                if ejx * ejx + ejy * ejy > d_ab:
-                    vis += 1
-                    continue
-                a1, b1, p00, p01, p11, pb0, pb1 = _pair_z(ejx, ejy, rot_b)
-                for kk in range(lo, hi):
-                    k, lkx, lky = nb_idx[kk], nb_xy[kk, 0], nb_xy[kk, 1]
-                    if k == i or k == j:
-                        continue
-                    ekx, eky = lkx - lix, lky - liy
+                j = jq[jj]
+                ljx, ljy = jt[jj, 0], jt[jj, 1]
+                a1r, a1i, b1r, b1i = jt[jj, 2], jt[jj, 3], jt[jj, 4], jt[jj, 5]
+                p00, p01, p11, pb0, pb1 = jt[jj, 6], jt[jj, 7], jt[jj, 8], jt[jj, 9], jt[jj, 10]
+                a1n = a1r * a1r + a1i * a1i
+                for kk in range(nk):
+                    k = kq[kk]
+                    lkx, lky = kt[kk, 0], kt[kk, 1]
                     ex, ey = lkx - ljx, lky - ljy
-                    if ekx * ekx + eky * eky > d_ac or ex * ex + ey * ey > d_bc:
-                        vis += 1
+                    if k == j or ex * ex + ey * ey > d_bc:
+                        vis += k != j
                         continue
                     nodes += 1
                     triples += 1
-                    a2, b2, q00, q01, q11, qb0, qb1 = _pair_z(ekx, eky, rot_c)
-                    s00, s01, s11 = p00 + q00, p01 + q01, p11 + q11
-                    t0, t1 = pb0 + qb0, pb1 + qb1
+                    s00, s01, s11 = p00 + kt[kk, 6], p01 + kt[kk, 7], p11 + kt[kk, 8]
+                    t0, t1 = pb0 + kt[kk, 9], pb1 + kt[kk, 10]
+                    a2r, a2i, b2r, b2i = kt[kk, 2], kt[kk, 3], kt[kk, 4], kt[kk, 5]
                     # Eq. 4 then eq. 5; the heading (eq. 6) waits until the position passes.
                     det = s00 * s11 - s01 * s01
                     fx = -(s11 * t0 - s01 * t1) / det
                     fy = -(-s01 * t0 + s00 * t1) / det
                     f2 = fx * fx + fy * fy
                     smax = max(1.0, abs(s00), abs(s01), abs(s11))
-                    r1 = (a1.real * (fx + b1.real) + a1.imag * (fy + b1.imag)) / (
-                        a1.real * a1.real + a1.imag * a1.imag
-                    )
-                    r2 = (a2.real * (fx + b2.real) + a2.imag * (fy + b2.imag)) / (
-                        a2.real * a2.real + a2.imag * a2.imag
-                    )
+                    r1 = (a1r * (fx + b1r) + a1i * (fy + b1i)) / a1n
+                    r2 = (a2r * (fx + b2r) + a2i * (fy + b2i)) / (a2r * a2r + a2i * a2i)
                     if not (
                         abs(det) > singular_rtol * smax * smax
                         and r1 > 0
@@ -943,6 +1076,12 @@ def hypotheses(
                     stamp[i] = stamp[j] = stamp[k] = hyp
                     h00, h01, h02, h11, h12, h22 = _info(mx, my, 3, px, py)
                     c00, c01, c02, c11, c12, c22, tr = _inv3(h00, h01, h02, h11, h12, h22, sig2)
+                    if k_pre > 0 and not _can_reach(
+                        rest, nr, min_match - 3, cb, sb, px, py, pt, near_q, near_x, near_y,
+                        nn, stamp, hyp, c00, c01, c02, c11, c12, c22, sig2, k_pre,
+                    ):  # fmt: skip
+                        bound += 1
+                        continue
                     sp[0, 0], sp[0, 1], sp[0, 2], sp[0, 3] = px, py, pt, tr
                     scov[0, 0], scov[0, 1], scov[0, 2] = c00, c01, c02
                     scov[0, 3], scov[0, 4], scov[0, 5] = c11, c12, c22
