@@ -379,9 +379,8 @@ def _reach(bearing_hits: list[bool], need: int) -> bool:
     c = 1e-6  # position m^2 and heading rad^2 variances: a gate of a few tenths of a degree
     sig2 = (0.3 * DEG) ** 2
     args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 0.0, q, x, y, len(beta), stamp, 1)
-    return bool(
-        _compiled._can_reach(rest, len(rest), need, *args, c, 0.0, 0.0, c, 0.0, c, sig2, 16.0)
-    )
+    tail = ((c, 0.0, 0.0, c, 0.0, c), sig2, 16.0, np.empty((5, 8)), np.empty(8, dtype=bool))
+    return bool(_compiled._can_reach(rest, len(rest), need, *args, *tail))
 
 
 @pytest.mark.parametrize(
@@ -407,7 +406,8 @@ def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
     x, y = 10.0 * np.cos(beta), 10.0 * np.sin(beta)
     q = np.array([0, 1], dtype=np.int64)
     args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 0.0, q, x, y, 2)
-    tail = (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6, (0.3 * DEG) ** 2, 16.0)
+    cov = (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6)
+    tail = (cov, (0.3 * DEG) ** 2, 16.0, np.empty((5, 2)), np.empty(2, dtype=bool))
     rest = np.array([0, 1], dtype=np.int64)
     free = np.zeros(2, dtype=np.int64)
     own = np.array([7, 0], dtype=np.int64)  # landmark 0 belongs to hypothesis 7

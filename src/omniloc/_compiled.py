@@ -520,60 +520,48 @@ def _can_reach(
     nn: int,
     stamp: NDArray[np.int64],
     hyp: int,
-    c00: float,
-    c01: float,
-    c02: float,
-    c11: float,
-    c12: float,
-    c22: float,
+    cov: tuple[float, float, float, float, float, float],
     sig2: float,
     k_pre: float,
+    work: NDArray[np.float64],
+    hit: NDArray[np.bool_],
 ) -> bool:
     """Whether at least ``need`` of the bearings ``rest[:nr]`` each have some near landmark
     (other than the hypothesis's own three, marked in ``stamp``) inside a gate of ``k_pre``
-    at the hypothesis's pose (px, py, pt) and covariance ``c``: a necessary condition for
-    :func:`_verify` to find a complete path, tested first because it is cheap.
+    at the hypothesis's pose (px, py, pt) and covariance ``cov`` (upper triangle): a
+    necessary condition for :func:`_verify` to find a complete path, tested first because it
+    is cheap (no arctangent, no branch in the inner loop).
 
     Why it is necessary: to first order, the normalised squared innovation of a bearing at
     the seed's pose is at most the joint chi-square statistic of every match the path goes on
     to make (a marginal of a quadratic form is at most the whole), which the joint test
     bounds by ``joint_chi2[n] <= joint_chi2[m]``; ``k_pre`` is that with a margin for the
-    nonlinearity. Each bearing stops at its first landmark inside the gate; the test stops
-    as soon as the outcome is settled.
+    nonlinearity. ``work`` (5, >= max(nn, nr)) and ``hit`` (>= nr) are scratch.
     """
+    c00, c01, c02, c11, c12, c22 = cov
     ct, st = np.cos(pt), np.sin(pt)
-    # A bound without division: g^T C g <= 2 (c00 + c11) / r^2 + 2 c22 (Cauchy-Schwarz on
-    # the position and heading parts of g = [dy, -dx, -r^2] / r^2).
-    a0 = k_pre * 2.0 * (c00 + c11)
-    a1 = k_pre * (2.0 * c22 + sig2)
-    allowed = nr - need
-    misses = hits = 0
+    ux, uy, tx, ty, tg = work[0], work[1], work[2], work[3], work[4]
     for r in range(nr):
         o = rest[r]
-        ux = ct * cb[o] - st * sb[o]
-        uy = st * cb[o] + ct * sb[o]
-        hit = False
-        for t in range(nn):
-            dx, dy = near_x[t] - px, near_y[t] - py
-            rr = dx * dx + dy * dy
-            cr = ux * dy - uy * dx  # r sin(innovation)
-            if (cr * cr <= a0 + a1 * rr) & (dx * ux + dy * uy > 0):
-                if stamp[near_q[t]] == hyp:
-                    continue
-                gx, gy = dy / rr, -dx / rr
-                v = _pred_var(gx, gy, c00, c01, c02, c11, c12, c22, sig2)
-                if cr * cr <= k_pre * v * rr:
-                    hit = True
-                    break
-        if hit:
-            hits += 1
-            if hits >= need:
-                return True
-        else:
-            misses += 1
-            if misses > allowed:
-                return False
-    return True
+        ux[r] = ct * cb[o] - st * sb[o]  # the bearing's direction in the world
+        uy[r] = st * cb[o] + ct * sb[o]
+        hit[r] = False
+    for t in range(nn):
+        dx, dy = near_x[t] - px, near_y[t] - py
+        rr = dx * dx + dy * dy
+        v = _pred_var(dy / rr, -dx / rr, c00, c01, c02, c11, c12, c22, sig2)
+        tx[t], ty[t] = dx, dy
+        # |r sin(innovation)|^2 <= k_pre v r^2 (sin x <= x); never for the own landmarks.
+        tg[t] = k_pre * v * rr if stamp[near_q[t]] != hyp else -1.0
+    for t in range(nn):
+        dx, dy, g = tx[t], ty[t], tg[t]
+        for r in range(nr):
+            cr = ux[r] * dy - uy[r] * dx
+            hit[r] |= (cr * cr <= g) & (ux[r] * dx + uy[r] * dy > 0)
+    hits = 0
+    for r in range(nr):
+        hits += hit[r]
+    return hits >= need
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -981,6 +969,8 @@ def hypotheses(
     cv = np.empty((m, width + 1))
     cs = np.empty((m, width + 1))
     cnt = np.zeros(5, dtype=np.int64)
+    pre_work = np.empty((5, max(width + 1, m)))
+    pre_hit = np.empty(m, dtype=np.bool_)
     found = 0
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
@@ -1078,7 +1068,8 @@ def hypotheses(
                     c00, c01, c02, c11, c12, c22, tr = _inv3(h00, h01, h02, h11, h12, h22, sig2)
                     if k_pre > 0 and not _can_reach(
                         rest, nr, min_match - 3, cb, sb, px, py, pt, near_q, near_x, near_y,
-                        nn, stamp, hyp, c00, c01, c02, c11, c12, c22, sig2, k_pre,
+                        nn, stamp, hyp, (c00, c01, c02, c11, c12, c22), sig2, k_pre,
+                        pre_work, pre_hit,
                     ):  # fmt: skip
                         bound += 1
                         continue
