@@ -178,3 +178,36 @@ def test_evaluate_mrclam_slice(tmp_path: Path) -> None:
 def test_evaluate_dataset_rejects_unknown_kind() -> None:
     with pytest.raises(InputError, match="roh"):
         evaluate_dataset("kitti", "/nowhere", progress=False)
+
+
+def test_range_sensing_sees_exactly_the_landmarks_in_range() -> None:
+    # The "range" reading of the spurious target: every true observation is a landmark
+    # within the sensor's range, and every landmark within it is observed.
+    cfg = SweepConfig.targets_spurious(trials=3, sensing="range")
+    assert cfg.name == "targets_spurious_range"
+    res = run_sweep(cfg, rng=1, progress=False)
+    assert len(res.trials) == 12
+    for t in res.trials:
+        assert t.n_true == 6 and t.n_spurious == 2
+        assert 3.0 < t.sensor_range_m < 10.0
+    # The search is told the range: the truth is found in nearly all (see docs/evaluation.md).
+    assert sum(t.in_solutions for t in res.trials) >= 10
+    chosen = run_sweep(SweepConfig.targets_spurious(trials=1), rng=1, progress=False)
+    assert all(math.isnan(t.sensor_range_m) for t in chosen.trials)
+
+
+def test_sensor_range_holds_the_requested_landmarks_on_average() -> None:
+    from omniloc.evaluate import sensor_range
+    from omniloc.simulate import random_map
+
+    lm = random_map(400, size=100.0, rng=3)
+    r = sensor_range(lm, 6)
+    gen = np.random.default_rng(0)
+    p = gen.uniform(r, 100.0 - r, (500, 2))
+    counts = [(np.hypot(*(lm.xy - q).T) <= r).sum() for q in p]
+    assert abs(float(np.mean(counts)) - 6.0) < 0.5
+
+
+def test_bad_sensing_is_refused() -> None:
+    with pytest.raises(InputError, match="sensing"):
+        SweepConfig(sensing="sonar")

@@ -8,11 +8,12 @@ else keeps its traceback, because it is a bug.
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import logging
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
@@ -118,7 +119,14 @@ def _build_parser() -> argparse.ArgumentParser:
     e = sub.add_parser("evaluate", help="Monte Carlo sweeps and real-data evaluation")
     e.add_argument(
         "--preset",
-        choices=["quick", "default", "targets-spurious", "targets-crlb"],
+        choices=[
+            "quick",
+            "default",
+            "targets-spurious",
+            "targets-spurious-range",
+            "targets-spurious-range-0.9999",
+            "targets-crlb",
+        ],
         default="quick",
         help="which sweep to run (default: quick)",
     )
@@ -399,10 +407,16 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
             kind, path, max_samples=args.max_samples, rng=args.seed, progress=progress
         )
     else:
-        presets = {
+        presets: dict[str, Callable[[], ev.SweepConfig]] = {
             "quick": ev.SweepConfig.quick,
             "default": ev.SweepConfig.default,
             "targets-spurious": ev.SweepConfig.targets_spurious,
+            "targets-spurious-range": functools.partial(
+                ev.SweepConfig.targets_spurious, sensing="range"
+            ),
+            "targets-spurious-range-0.9999": functools.partial(
+                ev.SweepConfig.targets_spurious, sensing="range", confidence=0.9999
+            ),
             "targets-crlb": ev.SweepConfig.targets_crlb,
         }
         config = presets[args.preset]()

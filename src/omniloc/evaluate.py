@@ -53,6 +53,10 @@ NAN = float("nan")
 #: positive value keeps the chi-square gate meaningful for round-off.
 ZERO_NOISE_SIGMA = float(np.deg2rad(0.01))
 
+#: Miss probability handed to the search with ``sensing="range"`` when the simulation itself
+#: misses nothing (a small value: negative evidence without ruling a miss out).
+RANGE_P_MISS = 0.05
+
 
 # --------------------------------------------------------------------------------------------
 # Configuration
@@ -84,6 +88,18 @@ class SweepConfig:
         A trial succeeds when the best solution is within both of the true pose.
     timeout_s, max_nodes : optional
         Search budget per localization.
+    sensing : {"chosen", "range"}
+        Which landmarks the robot observes. ``chosen``: the true observations are drawn at
+        random among every landmark in view (all of a map without walls), so nothing says
+        which others the robot should have seen. ``range``: the robot observes exactly the
+        landmarks within its sensor's range, a radius that holds the requested number of true
+        observations on average at the map's density; poses are drawn until exactly that many
+        are in range, and the search is told ``max_range`` and ``p_miss`` (the miss rate, or
+        RANGE_P_MISS), so that a pose which should have seen more landmarks is penalised.
+    confidence : float, optional
+        The search's gate confidence (None: the library default, 0.99). With
+        ``max_spurious`` equal to the true count every true bearing must pass its gate, so
+        the truth is lost in about m (1 - confidence) of the trials.
     """
 
     name: str = "custom"
@@ -98,8 +114,14 @@ class SweepConfig:
     success_heading_deg: float = 1.0
     timeout_s: float | None = 5.0
     max_nodes: int | None = None
+    sensing: str = "chosen"
+    confidence: float | None = None
 
     def __post_init__(self) -> None:
+        if self.confidence is not None and not 0.0 < self.confidence < 1.0:
+            raise InputError(f"confidence must lie in (0, 1), got {self.confidence}")
+        if self.sensing not in ("chosen", "range"):
+            raise InputError(f"sensing must be 'chosen' or 'range', got {self.sensing!r}")
         if self.trials < 1:
             raise InputError(f"trials must be >= 1, got {self.trials}")
         for s in self.sigmas_deg:
@@ -166,11 +188,21 @@ class SweepConfig:
         )
 
     @classmethod
-    def targets_spurious(cls, trials: int = 250) -> SweepConfig:
+    def targets_spurious(
+        cls, trials: int = 250, sensing: str = "chosen", confidence: float | None = None
+    ) -> SweepConfig:
         """Issue target: random maps of 12-30 landmarks, 8 observations of which 2 spurious,
-        sigma 0.5 degrees; 4 map sizes x ``trials`` (default 1,000 trials in all)."""
+        sigma 0.5 degrees; 4 map sizes x ``trials`` (default 1,000 trials in all).
+
+        ``sensing="range"`` reads it with a range-limited sensor: the 6 true observations are
+        the landmarks within range (see :class:`SweepConfig`)."""
+        name = "targets_spurious" if sensing == "chosen" else "targets_spurious_range"
+        if confidence is not None:
+            name += f"_conf{confidence:g}"
         return cls(
-            name="targets_spurious",
+            name=name,
+            sensing=sensing,
+            confidence=confidence,
             sigmas_deg=(0.5,),
             spurious_rates=(0.25,),
             n_obs=(8,),
@@ -237,6 +269,7 @@ class Trial:
     refined_heading_err_deg: float
     crlb_pos_m: float
     crlb_heading_deg: float
+    sensor_range_m: float
     time_s: float
 
 
@@ -439,18 +472,62 @@ def _match(res: LocalizationResult, pose: Pose, pos_tol: float, hdg_tol: float) 
     ]
 
 
+def sensor_range(lm: LandmarkMap, n_true: int) -> float:
+    """The radius that holds ``n_true`` landmarks on average at the map's density (bounding
+    box area / landmarks), metres."""
+    x0, y0, x1, y1 = lm.bounds
+    area = max((x1 - x0) * (y1 - y0), 1e-12)
+    return math.sqrt(n_true * area / (math.pi * lm.n))
+
+
+def _range_pose(lm: LandmarkMap, n_true: int, gen: np.random.Generator) -> Pose | None:
+    """A random pose with exactly ``n_true`` landmarks within :func:`sensor_range` (None if
+    2,000 draws find none: a clustered map)."""
+    r = sensor_range(lm, n_true)
+    for _ in range(2000):
+        pose = random_pose(lm, rng=gen)
+        if int((np.hypot(*(lm.xy - pose.as_array()[:2]).T) <= r).sum()) == n_true:
+            return pose
+    return None
+
+
 def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
     gen = np.random.default_rng(seed)
     lm = make_map(cond.map_kind, cond.map_size, rng=gen)
-    pose = random_pose(lm, rng=gen)
     n_obs = min(cond.n_obs, lm.n + round(cond.spurious_rate * cond.n_obs))
     n_spur = round(cond.spurious_rate * n_obs)
     n_real = min(n_obs - n_spur, lm.n)
-    vis = visible_landmarks(lm, pose)
-    chosen = gen.choice(vis, size=min(n_real, vis.size), replace=False)
     sigma = math.radians(cond.sigma_deg)
+    rng_m = NAN
+    search_kw: dict[str, Any] = {}
+    chosen = None
+    if cfg.confidence is not None:
+        search_kw["confidence"] = cfg.confidence
+    if cfg.sensing == "range" and n_real < lm.n:
+        found = _range_pose(lm, n_real, gen)
+        for _ in range(20):
+            if found is not None or cond.map_kind != "random":
+                break
+            lm = make_map(cond.map_kind, cond.map_size, rng=gen)
+            found = _range_pose(lm, n_real, gen)
+        if found is None:
+            raise InputError(f"no pose of the {cond.map_kind} map sees exactly {n_real} landmarks")
+        pose, rng_m = found, sensor_range(lm, n_real)
+        search_kw["max_range"] = rng_m
+        search_kw["p_miss"] = cond.miss_rate if cond.miss_rate > 0 else RANGE_P_MISS
+    else:
+        pose = random_pose(lm, rng=gen)
+        vis = visible_landmarks(lm, pose)
+        chosen = gen.choice(vis, size=min(n_real, vis.size), replace=False)
     scene = observe(
-        lm, pose, visible=chosen, sigma=sigma, n_spurious=n_spur, p_miss=cond.miss_rate, rng=gen
+        lm,
+        pose,
+        visible=chosen,
+        max_range=search_kw.get("max_range"),
+        sigma=sigma,
+        n_spurious=n_spur,
+        p_miss=cond.miss_rate,
+        rng=gen,
     )
     n_true = len(scene.assignment) - scene.n_spurious
     known = _known_pairs(lm, scene.bearings, scene.assignment, pose, sigma)
@@ -467,6 +544,7 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
         refined_heading_err_deg=known[3],
         crlb_pos_m=known[4],
         crlb_heading_deg=known[5],
+        sensor_range_m=rng_m,
     )
     if n_true < 3:
         # Too few true landmarks survived the misses: no pose can be right; a failure.
@@ -490,6 +568,7 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
         max_spurious=scene.n_spurious,
         timeout_s=cfg.timeout_s,
         max_nodes=cfg.max_nodes,
+        **search_kw,
     )
     dt = time.perf_counter() - t0
     good = _match(res, pose, pos_tol, hdg_tol)
