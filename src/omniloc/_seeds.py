@@ -183,15 +183,24 @@ def _avoids(m: int, k: int) -> NDArray[np.bool_]:
 def _greedy(m: int, k: int, triples: IntArray, cost: FloatArray) -> IntArray:
     """Greedy set cover: most uncovered spurious sets per unit cost, repeatedly."""
     avoid = _avoids(m, k)
-    open_ = np.ones(avoid.shape[1], dtype=bool)
+    weight = _avoids_f(m, k)
+    open_ = np.ones(avoid.shape[1])
     chosen: list[int] = []
     while open_.any():
-        gain = avoid[:, open_].sum(axis=1)
+        gain = weight @ open_  # uncovered sets each triple avoids
         t = int(np.argmax(gain / cost))
         chosen.append(t)
-        open_ &= ~avoid[t]
+        open_[avoid[t]] = 0.0
     out = triples[chosen]
     return out[np.argsort(cost[chosen], kind="stable")]
+
+
+@functools.lru_cache(maxsize=64)
+def _avoids_f(m: int, k: int) -> FloatArray:
+    """:func:`_avoids` as 0/1 floats, for a matrix product (read-only, cached)."""
+    out = _avoids(m, k).astype(np.float64)
+    out.setflags(write=False)
+    return out
 
 
 def _disjoint(m: int, k: int, triples: IntArray, cost: FloatArray) -> IntArray:
