@@ -486,7 +486,7 @@ def _range_pose(lm: LandmarkMap, n_true: int, gen: np.random.Generator) -> Pose 
     r = sensor_range(lm, n_true)
     for _ in range(2000):
         pose = random_pose(lm, rng=gen)
-        if int((np.hypot(*(lm.xy - pose.as_array()[:2]).T) <= r).sum()) == n_true:
+        if int(lm.kdtree.query_ball_point((pose.x, pose.y), r, return_length=True)) == n_true:
             return pose
     return None
 
