@@ -367,19 +367,20 @@ def test_output_buffer_keeps_the_better_half_in_order() -> None:
 # ---- the cheap test before verification ------------------------------------------------------
 
 
-def _reach(bearing_hits: list[bool], need: int) -> bool:
-    """_can_reach on a pose at the origin facing +x with a tight covariance: one landmark
-    10 m out along each bearing that should hit, 30 degrees off it for one that should not."""
+def _reach(bearing_hits: list[bool], need: int, heading: float = 0.0) -> bool:
+    """_can_reach on a pose at the origin with a tight covariance: one landmark 10 m out
+    along each bearing that should hit, 30 degrees off it for one that should not."""
     rest = np.arange(len(bearing_hits), dtype=np.int64)
     beta = np.deg2rad(np.linspace(-150.0, 150.0, len(bearing_hits)))
-    ang = beta + np.where(bearing_hits, 0.0, np.deg2rad(30.0))
+    ang = heading + beta + np.where(bearing_hits, 0.0, np.deg2rad(30.0))
     x, y = 10.0 * np.cos(ang), 10.0 * np.sin(ang)
     q = np.arange(len(beta), dtype=np.int64) + 3
     stamp = np.zeros(len(beta) + 3, dtype=np.int64)
     c = 1e-6  # position m^2 and heading rad^2 variances: a gate of a few tenths of a degree
     sig2 = (0.3 * DEG) ** 2
-    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 0.0, q, x, y, len(beta), stamp, 1)
-    tail = ((c, 0.0, 0.0, c, 0.0, c), sig2, 16.0, np.empty((5, 8)), np.empty(8, dtype=bool))
+    ct, st = np.cos(heading), np.sin(heading)
+    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, ct, st, q, x, y, len(beta), stamp, 1)
+    tail = ((c, 0.0, 0.0, c, 0.0, c), sig2, 16.0, np.empty((3, 8)))
     return bool(_compiled._can_reach(rest, len(rest), need, *args, *tail))
 
 
@@ -398,6 +399,8 @@ def test_can_reach_counts_bearings_with_a_landmark_in_the_gate(
     hits: list[bool], need: int, expected: bool
 ) -> None:
     assert _reach(hits, need) is expected
+    # The same from a turned robot: the rays turn with its heading.
+    assert _reach(hits, need, heading=2.0) is expected
 
 
 def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
@@ -405,9 +408,9 @@ def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
     beta = np.deg2rad([0.0, 90.0])
     x, y = 10.0 * np.cos(beta), 10.0 * np.sin(beta)
     q = np.array([0, 1], dtype=np.int64)
-    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 0.0, q, x, y, 2)
+    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 1.0, 0.0, q, x, y, 2)
     cov = (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6)
-    tail = (cov, (0.3 * DEG) ** 2, 16.0, np.empty((5, 2)), np.empty(2, dtype=bool))
+    tail = (cov, (0.3 * DEG) ** 2, 16.0, np.empty((3, 2)))
     rest = np.array([0, 1], dtype=np.int64)
     free = np.zeros(2, dtype=np.int64)
     own = np.array([7, 0], dtype=np.int64)  # landmark 0 belongs to hypothesis 7

@@ -513,7 +513,8 @@ def _can_reach(
     sb: NDArray[np.float64],
     px: float,
     py: float,
-    pt: float,
+    ct: float,
+    st: float,
     near_q: NDArray[np.int64],
     near_x: NDArray[np.float64],
     near_y: NDArray[np.float64],
@@ -524,44 +525,119 @@ def _can_reach(
     sig2: float,
     k_pre: float,
     work: NDArray[np.float64],
-    hit: NDArray[np.bool_],
 ) -> bool:
     """Whether at least ``need`` of the bearings ``rest[:nr]`` each have some near landmark
     (other than the hypothesis's own three, marked in ``stamp``) inside a gate of ``k_pre``
-    at the hypothesis's pose (px, py, pt) and covariance ``cov`` (upper triangle): a
-    necessary condition for :func:`_verify` to find a complete path, tested first because it
-    is cheap (no arctangent, no branch in the inner loop).
+    at the hypothesis's pose (px, py, heading with cosine ``ct`` and sine ``st``) and
+    covariance ``cov`` (upper triangle): a necessary condition for :func:`_verify` to find a
+    complete path, tested first because it is cheap (no arctangent; the inner loop has no
+    branch, and the bearings stop as soon as too many have missed).
 
     Why it is necessary: to first order, the normalised squared innovation of a bearing at
     the seed's pose is at most the joint chi-square statistic of every match the path goes on
     to make (a marginal of a quadratic form is at most the whole), which the joint test
     bounds by ``joint_chi2[n] <= joint_chi2[m]``; ``k_pre`` is that with a margin for the
-    nonlinearity. ``work`` (5, >= max(nn, nr)) and ``hit`` (>= nr) are scratch.
+    nonlinearity. ``work`` (3, >= nn) is scratch.
     """
     c00, c01, c02, c11, c12, c22 = cov
-    ct, st = np.cos(pt), np.sin(pt)
-    ux, uy, tx, ty, tg = work[0], work[1], work[2], work[3], work[4]
-    for r in range(nr):
-        o = rest[r]
-        ux[r] = ct * cb[o] - st * sb[o]  # the bearing's direction in the world
-        uy[r] = st * cb[o] + ct * sb[o]
-        hit[r] = False
+    tx, ty, tg = work[0], work[1], work[2]
     for t in range(nn):
         dx, dy = near_x[t] - px, near_y[t] - py
         rr = dx * dx + dy * dy
-        v = _pred_var(dy / rr, -dx / rr, c00, c01, c02, c11, c12, c22, sig2)
+        # (g^T Cov g) r^2 with g = [dy / r^2, -dx / r^2, -1], as in _pred_var.
+        vr = (dy * dy * c00 + dx * dx * c11 - 2.0 * dx * dy * c01) / rr
+        vr += 2.0 * (dx * c12 - dy * c02) + c22 * rr
         tx[t], ty[t] = dx, dy
-        # |r sin(innovation)|^2 <= k_pre v r^2 (sin x <= x); never for the own landmarks.
-        tg[t] = k_pre * v * rr if stamp[near_q[t]] != hyp else -1.0
+        # |r sin(innovation)|^2 <= k_pre v r^2 (sin x <= x).
+        tg[t] = k_pre * (max(vr, 0.0) + sig2 * rr)
     for t in range(nn):
-        dx, dy, g = tx[t], ty[t], tg[t]
-        for r in range(nr):
-            cr = ux[r] * dy - uy[r] * dx
-            hit[r] |= (cr * cr <= g) & (ux[r] * dx + uy[r] * dy > 0)
-    hits = 0
+        if stamp[near_q[t]] == hyp:
+            tg[t] = -1.0  # never the hypothesis's own landmarks
+    allow = nr - need
+    missed = 0
     for r in range(nr):
-        hits += hit[r]
-    return hits >= need
+        o = rest[r]
+        ux = ct * cb[o] - st * sb[o]  # the bearing's direction in the world
+        uy = st * cb[o] + ct * sb[o]
+        hit = False
+        for t in range(nn):
+            cr = ux * ty[t] - uy * tx[t]
+            hit |= (cr * cr <= tg[t]) & (ux * tx[t] + uy * ty[t] > 0)
+        missed += not hit
+        if missed > allow:
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _triple_poses(
+    j: int,
+    jr: NDArray[np.float64],
+    lix: float,
+    liy: float,
+    kq: NDArray[np.int64],
+    kt: NDArray[np.float64],
+    nk: int,
+    d_bc: float,
+    singular_rtol: float,
+    eps_f2: float,
+    rmax2: float,
+    rmin2: float,
+    hk: NDArray[np.int64],
+    hx: NDArray[np.float64],
+    hy: NDArray[np.float64],
+    hd: NDArray[np.float64],
+    status: NDArray[np.int64],
+) -> int:
+    """The poses of the anchor, the second landmark ``j`` (its row ``jr`` of pair terms) and
+    each third-landmark candidate ``kt[:nk]`` (eqs. 4-5), in one pass without branches: the
+    candidates whose pose exists and sees all three within the range limits go to ``hk``
+    (index into ``kq``), ``hx``, ``hy`` and ``hd`` (squared distance to the anchor); returns
+    how many. ``status[kk]`` says what became of each: 0 the same landmark as ``j``, 1
+    beyond the pair limit, 2 no pose (existence), 3 out of range, 4 a hypothesis."""
+    ljx, ljy, a1r, a1i, b1r, b1i = jr[0], jr[1], jr[2], jr[3], jr[4], jr[5]
+    p00, p01, p11, pb0, pb1 = jr[6], jr[7], jr[8], jr[9], jr[10]
+    a1n = a1r * a1r + a1i * a1i
+    n = 0
+    for kk in range(nk):
+        lkx, lky = kt[kk, 0], kt[kk, 1]
+        ex, ey = lkx - ljx, lky - ljy
+        other = kq[kk] != j
+        paired = other & (ex * ex + ey * ey <= d_bc)
+        s00, s01, s11 = p00 + kt[kk, 6], p01 + kt[kk, 7], p11 + kt[kk, 8]
+        t0, t1 = pb0 + kt[kk, 9], pb1 + kt[kk, 10]
+        a2r, a2i, b2r, b2i = kt[kk, 2], kt[kk, 3], kt[kk, 4], kt[kk, 5]
+        # Eq. 4 then eq. 5; the heading (eq. 6) waits until the position passes.
+        det = s00 * s11 - s01 * s01
+        fx = -(s11 * t0 - s01 * t1) / det
+        fy = -(-s01 * t0 + s00 * t1) / det
+        f2 = fx * fx + fy * fy
+        smax = max(1.0, abs(s00), abs(s01), abs(s11))
+        r1 = (a1r * (fx + b1r) + a1i * (fy + b1i)) / a1n
+        r2 = (a2r * (fx + b2r) + a2i * (fy + b2i)) / (a2r * a2r + a2i * a2i)
+        px = lix - fx / f2
+        py = liy + fy / f2
+        exists = (
+            (abs(det) > singular_rtol * smax * smax)
+            & (r1 > 0)
+            & (r2 > 0)
+            & np.isfinite(f2)
+            & (f2 > eps_f2)
+            & np.isfinite(px)
+            & np.isfinite(py)
+        )
+        # The pose must see its three landmarks within the range limits.
+        ex, ey = lix - px, liy - py
+        d2a = ex * ex + ey * ey
+        ex, ey = ljx - px, ljy - py
+        d2b = ex * ex + ey * ey
+        ex, ey = lkx - px, lky - py
+        d2c = ex * ex + ey * ey
+        seen = (max(d2a, d2b, d2c) <= rmax2) & (min(d2a, d2b, d2c) >= rmin2)
+        status[kk] = other + paired + (paired & exists) + (paired & exists & seen)
+        hk[n], hx[n], hy[n], hd[n] = kk, px, py, d2a
+        n += paired & exists & seen
+    return n
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -953,6 +1029,12 @@ def hypotheses(
     kq = np.empty(width, dtype=np.int64)
     jt = np.empty((width, 11))
     kt = np.empty((width, 11))
+    # Per second landmark: the third-landmark candidates that make a hypothesis.
+    hk = np.empty(width, dtype=np.int64)
+    hx = np.empty(width)
+    hy = np.empty(width)
+    hd = np.empty(width)
+    status = np.empty(width, dtype=np.int64)
     # The verification's depth-first walk: state on entering each level, chosen landmark,
     # next option, and each level's gated candidates.
     sp = np.empty((m + 1, 4))
@@ -969,8 +1051,7 @@ def hypotheses(
     cv = np.empty((m, width + 1))
     cs = np.empty((m, width + 1))
     cnt = np.zeros(5, dtype=np.int64)
-    pre_work = np.empty((5, max(width + 1, m)))
-    pre_hit = np.empty(m, dtype=np.bool_)
+    pre_work = np.empty((3, width + 1))
     found = 0
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
@@ -1003,57 +1084,38 @@ def hypotheses(
                     break
                 j = jq[jj]
                 ljx, ljy = jt[jj, 0], jt[jj, 1]
-                a1r, a1i, b1r, b1i = jt[jj, 2], jt[jj, 3], jt[jj, 4], jt[jj, 5]
-                p00, p01, p11, pb0, pb1 = jt[jj, 6], jt[jj, 7], jt[jj, 8], jt[jj, 9], jt[jj, 10]
-                a1n = a1r * a1r + a1i * a1i
-                for kk in range(nk):
+                nh = _triple_poses(
+                    j, jt[jj], lix, liy, kq, kt, nk, d_bc, singular_rtol, eps_f2, rmax2, rmin2,
+                    hk, hx, hy, hd, status,
+                )  # fmt: skip
+                # The counters advance over the candidates in order, as if each were taken in
+                # turn, so that they (and the node budget) read the same wherever it stops.
+                done = 0
+                for h in range(nh + 1):
+                    upto = hk[h] if h < nh else nk
+                    for kk in range(done, upto):
+                        st_k = status[kk]
+                        vis += (st_k == 1) | (st_k == 3)
+                        existence += st_k == 2
+                        triples += st_k >= 2
+                        nodes += st_k >= 2
+                    if h == nh:
+                        break
+                    kk = upto
+                    done = kk + 1
+                    triples += 1
+                    nodes += 1
                     k = kq[kk]
                     lkx, lky = kt[kk, 0], kt[kk, 1]
-                    ex, ey = lkx - ljx, lky - ljy
-                    if k == j or ex * ex + ey * ey > d_bc:
-                        vis += k != j
-                        continue
-                    nodes += 1
-                    triples += 1
-                    s00, s01, s11 = p00 + kt[kk, 6], p01 + kt[kk, 7], p11 + kt[kk, 8]
-                    t0, t1 = pb0 + kt[kk, 9], pb1 + kt[kk, 10]
-                    a2r, a2i, b2r, b2i = kt[kk, 2], kt[kk, 3], kt[kk, 4], kt[kk, 5]
-                    # Eq. 4 then eq. 5; the heading (eq. 6) waits until the position passes.
-                    det = s00 * s11 - s01 * s01
-                    fx = -(s11 * t0 - s01 * t1) / det
-                    fy = -(-s01 * t0 + s00 * t1) / det
-                    f2 = fx * fx + fy * fy
-                    smax = max(1.0, abs(s00), abs(s01), abs(s11))
-                    r1 = (a1r * (fx + b1r) + a1i * (fy + b1i)) / a1n
-                    r2 = (a2r * (fx + b2r) + a2i * (fy + b2i)) / (a2r * a2r + a2i * a2i)
-                    if not (
-                        abs(det) > singular_rtol * smax * smax
-                        and r1 > 0
-                        and r2 > 0
-                        and np.isfinite(f2)
-                        and f2 > eps_f2
-                    ):
-                        existence += 1
-                        continue
-                    px = lix - fx / f2
-                    py = liy + fy / f2
-                    if not (np.isfinite(px) and np.isfinite(py)):
-                        existence += 1
-                        continue
-                    # The pose must see its three landmarks within the range limits.
-                    ex, ey = lix - px, liy - py
-                    d2a = ex * ex + ey * ey
-                    ex, ey = ljx - px, ljy - py
-                    d2b = ex * ex + ey * ey
-                    ex, ey = lkx - px, lky - py
-                    d2c = ex * ex + ey * ey
-                    if max(d2a, d2b, d2c) > rmax2 or min(d2a, d2b, d2c) < rmin2:
-                        vis += 1
-                        continue
-                    pt = _wrap(np.arctan2(liy - py, lix - px) - beta[oa])
-                    if not np.isfinite(pt):
-                        existence += 1
-                        continue
+                    px, py, d2a = hx[h], hy[h], hd[h]
+                    # The heading's cosine and sine: the direction to the first landmark turned
+                    # back by its bearing (the arctangent waits for the cheap test).
+                    if d2a > 0.0:
+                        da = np.sqrt(d2a)
+                        ct = ((lix - px) * cb[oa] + (liy - py) * sb[oa]) / da
+                        st = ((liy - py) * cb[oa] - (lix - px) * sb[oa]) / da
+                    else:
+                        ct, st = cb[oa], -sb[oa]
                     nn = _gather(
                         lo, hi, nb_idx, nb_xy, i, lix, liy, px, py, near2, near_q, near_x, near_y
                     )
@@ -1067,12 +1129,13 @@ def hypotheses(
                     h00, h01, h02, h11, h12, h22 = _info(mx, my, 3, px, py)
                     c00, c01, c02, c11, c12, c22, tr = _inv3(h00, h01, h02, h11, h12, h22, sig2)
                     if k_pre > 0 and not _can_reach(
-                        rest, nr, min_match - 3, cb, sb, px, py, pt, near_q, near_x, near_y,
-                        nn, stamp, hyp, (c00, c01, c02, c11, c12, c22), sig2, k_pre,
-                        pre_work, pre_hit,
+                        rest, nr, min_match - 3, cb, sb, px, py, ct, st, near_q, near_x,
+                        near_y, nn, stamp, hyp, (c00, c01, c02, c11, c12, c22), sig2, k_pre,
+                        pre_work,
                     ):  # fmt: skip
                         bound += 1
                         continue
+                    pt = _wrap(np.arctan2(liy - py, lix - px) - beta[oa])
                     sp[0, 0], sp[0, 1], sp[0, 2], sp[0, 3] = px, py, pt, tr
                     scov[0, 0], scov[0, 1], scov[0, 2] = c00, c01, c02
                     scov[0, 3], scov[0, 4], scov[0, 5] = c11, c12, c22
