@@ -375,11 +375,10 @@ def _reach(bearing_hits: list[bool], need: int, heading: float = 0.0) -> bool:
     ang = heading + beta + np.where(bearing_hits, 0.0, np.deg2rad(30.0))
     x, y = 10.0 * np.cos(ang), 10.0 * np.sin(ang)
     q = np.arange(len(beta), dtype=np.int64) + 3
-    stamp = np.zeros(len(beta) + 3, dtype=np.int64)
     c = 1e-6  # position m^2 and heading rad^2 variances: a gate of a few tenths of a degree
     sig2 = (0.3 * DEG) ** 2
     ct, st = np.cos(heading), np.sin(heading)
-    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, ct, st, q, x, y, len(beta), stamp, 1)
+    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, ct, st, q, x, y, len(beta), (0, 1, 2))
     tail = ((c, 0.0, 0.0, c, 0.0, c), sig2, 16.0, np.empty((3, 8)))
     return bool(_compiled._can_reach(rest, len(rest), need, *args, *tail))
 
@@ -404,7 +403,7 @@ def test_can_reach_counts_bearings_with_a_landmark_in_the_gate(
 
 
 def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
-    # The seed's three landmarks (stamped with the hypothesis) cannot explain another bearing.
+    # The seed's three landmarks cannot explain another bearing.
     beta = np.deg2rad([0.0, 90.0])
     x, y = 10.0 * np.cos(beta), 10.0 * np.sin(beta)
     q = np.array([0, 1], dtype=np.int64)
@@ -412,10 +411,9 @@ def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
     cov = (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6)
     tail = (cov, (0.3 * DEG) ** 2, 16.0, np.empty((3, 2)))
     rest = np.array([0, 1], dtype=np.int64)
-    free = np.zeros(2, dtype=np.int64)
-    own = np.array([7, 0], dtype=np.int64)  # landmark 0 belongs to hypothesis 7
-    assert _compiled._can_reach(rest, 2, 2, *args, free, 7, *tail)
-    assert not _compiled._can_reach(rest, 2, 2, *args, own, 7, *tail)
+    assert _compiled._can_reach(rest, 2, 2, *args, (5, 6, 7), *tail)
+    for own in [(0, 6, 7), (5, 0, 7), (5, 6, 0)]:  # landmark 0 is one of the three
+        assert not _compiled._can_reach(rest, 2, 2, *args, own, *tail)
 
 
 @pytest.mark.parametrize("exhaustive", [True, False])

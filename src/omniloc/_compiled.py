@@ -519,15 +519,14 @@ def _can_reach(
     near_x: NDArray[np.float64],
     near_y: NDArray[np.float64],
     nn: int,
-    stamp: NDArray[np.int64],
-    hyp: int,
+    own: tuple[int, int, int],
     cov: tuple[float, float, float, float, float, float],
     sig2: float,
     k_pre: float,
     work: NDArray[np.float64],
 ) -> bool:
     """Whether at least ``need`` of the bearings ``rest[:nr]`` each have some near landmark
-    (other than the hypothesis's own three, marked in ``stamp``) inside a gate of ``k_pre``
+    (other than the hypothesis's ``own`` three) inside a gate of ``k_pre``
     at the hypothesis's pose (px, py, heading with cosine ``ct`` and sine ``st``) and
     covariance ``cov`` (upper triangle): a necessary condition for :func:`_verify` to find a
     complete path, tested first because it is cheap (no arctangent; the inner loop has no
@@ -548,11 +547,11 @@ def _can_reach(
         vr = (dy * dy * c00 + dx * dx * c11 - 2.0 * dx * dy * c01) / rr
         vr += 2.0 * (dx * c12 - dy * c02) + c22 * rr
         tx[t], ty[t] = dx, dy
-        # |r sin(innovation)|^2 <= k_pre v r^2 (sin x <= x).
-        tg[t] = k_pre * (max(vr, 0.0) + sig2 * rr)
-    for t in range(nn):
-        if stamp[near_q[t]] == hyp:
-            tg[t] = -1.0  # never the hypothesis's own landmarks
+        # |r sin(innovation)|^2 <= k_pre v r^2 (sin x <= x); never for the hypothesis's own
+        # landmarks (compared by index: cheaper than a lookup in a map-sized array).
+        q = near_q[t]
+        mine = (q == own[0]) | (q == own[1]) | (q == own[2])
+        tg[t] = -1.0 if mine else k_pre * (max(vr, 0.0) + sig2 * rr)
     allow = nr - need
     missed = 0
     for r in range(nr):
@@ -1130,7 +1129,7 @@ def hypotheses(
                     c00, c01, c02, c11, c12, c22, tr = _inv3(h00, h01, h02, h11, h12, h22, sig2)
                     if k_pre > 0 and not _can_reach(
                         rest, nr, min_match - 3, cb, sb, px, py, ct, st, near_q, near_x,
-                        near_y, nn, stamp, hyp, (c00, c01, c02, c11, c12, c22), sig2, k_pre,
+                        near_y, nn, (i, j, k), (c00, c01, c02, c11, c12, c22), sig2, k_pre,
                         pre_work,
                     ):  # fmt: skip
                         bound += 1

@@ -322,9 +322,9 @@ class LandmarkMap:
     def _id_to_row(self) -> dict[LandmarkId, int]:
         return {lid: row for row, lid in enumerate(self.ids)}
 
-    @property
+    @cached_property
     def bounds(self) -> tuple[float, float, float, float]:
-        """``(xmin, ymin, xmax, ymax)`` of the landmarks, in metres."""
+        """``(xmin, ymin, xmax, ymax)`` of the landmarks, in metres (computed once)."""
         lo = self.xy.min(axis=0)
         hi = self.xy.max(axis=0)
         return float(lo[0]), float(lo[1]), float(hi[0]), float(hi[1])

@@ -617,7 +617,8 @@ class _Search:
         gate = opt.threshold if opt.sigma is None else math.sqrt(opt.gate_chi2) * opt.sigma
         self.order_tol = 2.0 * gate
         # Scale for "robot at infinity" tests.
-        self.scale = float(np.ptp(self.L, axis=0).max()) or 1.0
+        x0, y0, x1, y1 = lm.bounds
+        self.scale = max(x1 - x0, y1 - y0) or 1.0
 
     # ---- budget --------------------------------------------------------------------------
     def _over_budget(self) -> bool:
@@ -1507,13 +1508,17 @@ def _same_pose(p: FloatArray, cp: FloatArray, q: FloatArray, cq: FloatArray) -> 
 #: _missed works on all poses x all landmarks at once up to this many pairs (scene b: 30
 #: landmarks x a few hundred poses), else pose by pose on the landmarks within range.
 MISSED_DENSE = 200_000
+#: ... and, with a range, only on maps up to this size: beyond, the k-d tree's few landmarks
+#: in range beat every landmark of the map (4 ms per pose at 10,000 landmarks).
+MISSED_DENSE_MAP = 256
 
 
 def _missed(
     s: _Search, poses: FloatArray, assign: IntArray, bearings: FloatArray, opt: _Options
 ) -> IntArray:
     """Landmarks plainly visible from each pose but not observed (negative evidence)."""
-    if len(poses) * s.N <= MISSED_DENSE:
+    small = opt.max_range is None or s.N <= MISSED_DENSE_MAP
+    if small and len(poses) * s.N <= MISSED_DENSE:
         cand = np.broadcast_to(np.arange(s.N), (len(poses), s.N))
         return _missed_among(s, poses, assign, cand, bearings, opt)
     out = np.zeros(len(poses), dtype=np.int64)
