@@ -367,7 +367,9 @@ def test_output_buffer_keeps_the_better_half_in_order() -> None:
 # ---- the cheap test before verification ------------------------------------------------------
 
 
-def _reach(bearing_hits: list[bool], need: int, heading: float = 0.0) -> bool:
+def _reach(
+    bearing_hits: list[bool], need: int, heading: float = 0.0, work: np.ndarray | None = None
+) -> bool:
     """_can_reach on a pose at the origin with a tight covariance: one landmark 10 m out
     along each bearing that should hit, 30 degrees off it for one that should not."""
     rest = np.arange(len(bearing_hits), dtype=np.int64)
@@ -379,7 +381,8 @@ def _reach(bearing_hits: list[bool], need: int, heading: float = 0.0) -> bool:
     sig2 = (0.3 * DEG) ** 2
     ct, st = np.cos(heading), np.sin(heading)
     args = (np.cos(beta), np.sin(beta), 0.0, 0.0, ct, st, q, x, y, len(beta), (0, 1, 2))
-    tail = ((c, 0.0, 0.0, c, 0.0, c), sig2, 16.0, np.empty((3, 8)))
+    work = np.empty((4, 8)) if work is None else work
+    tail = ((c, 0.0, 0.0, c, 0.0, c), sig2, 16.0, work)
     return bool(_compiled._can_reach(rest, len(rest), need, *args, *tail))
 
 
@@ -402,6 +405,14 @@ def test_can_reach_counts_bearings_with_a_landmark_in_the_gate(
     assert _reach(hits, need, heading=2.0) is expected
 
 
+def test_can_reach_flags_the_bearings_without_a_landmark() -> None:
+    # A first fit reserves wildcards for them (see _compiled._verify).
+    hits = [True, False, True, True, False, True]
+    work = np.full((4, 8), 7.0)
+    assert _reach(hits, 4, work=work)
+    assert work[3, :6].tolist() == [0.0, 1.0, 0.0, 0.0, 1.0, 0.0]
+
+
 def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
     # The seed's three landmarks cannot explain another bearing.
     beta = np.deg2rad([0.0, 90.0])
@@ -409,7 +420,7 @@ def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
     q = np.array([0, 1], dtype=np.int64)
     args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 1.0, 0.0, q, x, y, 2)
     cov = (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6)
-    tail = (cov, (0.3 * DEG) ** 2, 16.0, np.empty((3, 2)))
+    tail = (cov, (0.3 * DEG) ** 2, 16.0, np.empty((4, 2)))
     rest = np.array([0, 1], dtype=np.int64)
     assert _compiled._can_reach(rest, 2, 2, *args, (5, 6, 7), *tail)
     for own in [(0, 6, 7), (5, 0, 7), (5, 6, 0)]:  # landmark 0 is one of the three

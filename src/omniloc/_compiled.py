@@ -412,7 +412,8 @@ def _pair_terms(
 ) -> int:
     """The neighbours of anchor ``i`` within sqrt(d2max) of it, to ``q``, with their
     coordinates, ``a`` and ``b`` (eqs. 1-2, real and imaginary parts) and the entries of P and
-    P b (eq. 3) for the rotation ``rot`` in the rows of ``t``; returns how many."""
+    P b (eq. 3) for the rotation ``rot`` in the columns of ``t`` (11, >= n: one row per
+    quantity, so that :func:`_triple_poses` reads each contiguously); returns how many."""
     n = 0
     for qq in range(lo, hi):
         j = nb_idx[qq]
@@ -424,7 +425,7 @@ def _pair_terms(
             continue
         a, b, p00, p01, p11, pb0, pb1 = _pair_z(ex, ey, rot)
         q[n] = j
-        t[n, 0], t[n, 1], t[n, 2], t[n, 3], t[n, 4], t[n, 5] = (
+        t[0, n], t[1, n], t[2, n], t[3, n], t[4, n], t[5, n] = (
             qx,
             qy,
             a.real,
@@ -432,7 +433,7 @@ def _pair_terms(
             b.real,
             b.imag,
         )
-        t[n, 6], t[n, 7], t[n, 8], t[n, 9], t[n, 10] = p00, p01, p11, pb0, pb1
+        t[6, n], t[7, n], t[8, n], t[9, n], t[10, n] = p00, p01, p11, pb0, pb1
         n += 1
     return n
 
@@ -536,7 +537,9 @@ def _can_reach(
     the seed's pose is at most the joint chi-square statistic of every match the path goes on
     to make (a marginal of a quadratic form is at most the whole), which the joint test
     bounds by ``joint_chi2[n] <= joint_chi2[m]``; ``k_pre`` is that with a margin for the
-    nonlinearity. ``work`` (3, >= nn) is scratch.
+    nonlinearity. ``work`` (4, >= max(nn, nr)) is scratch; when the test passes, ``work[3,
+    r]`` is 1 for each bearing ``rest[r]`` that has no landmark in its gate (which no path
+    that passes the joint test can match, by the same argument), else 0.
     """
     c00, c01, c02, c11, c12, c22 = cov
     tx, ty, tg = work[0], work[1], work[2]
@@ -562,6 +565,7 @@ def _can_reach(
         for t in range(nn):
             cr = ux * ty[t] - uy * tx[t]
             hit |= (cr * cr <= tg[t]) & (ux * tx[t] + uy * ty[t] > 0)
+        work[3, r] = not hit
         missed += not hit
         if missed > allow:
             return False
@@ -588,24 +592,26 @@ def _triple_poses(
     hd: NDArray[np.float64],
     status: NDArray[np.int64],
 ) -> int:
-    """The poses of the anchor, the second landmark ``j`` (its row ``jr`` of pair terms) and
-    each third-landmark candidate ``kt[:nk]`` (eqs. 4-5), in one pass without branches: the
-    candidates whose pose exists and sees all three within the range limits go to ``hk``
-    (index into ``kq``), ``hx``, ``hy`` and ``hd`` (squared distance to the anchor); returns
-    how many. ``status[kk]`` says what became of each: 0 the same landmark as ``j``, 1
-    beyond the pair limit, 2 no pose (existence), 3 out of range, 4 a hypothesis."""
+    """The poses of the anchor, the second landmark ``j`` (its pair terms ``jr``) and each
+    third-landmark candidate ``kt[:, :nk]`` (eqs. 4-5), in one pass without branches that
+    the compiler vectorises: each candidate's position goes to ``hx[kk]``, ``hy[kk]`` and its
+    squared distance to the anchor to ``hd[kk]``, and ``status[kk]`` says what became of it:
+    0 the same landmark as ``j``, 1 beyond the pair limit, 2 no pose (existence), 3 out of
+    range, 4 a hypothesis (its pose exists and sees all three within the range limits).
+    ``hk`` lists the hypotheses' candidate indices, in order; returns how many."""
     ljx, ljy, a1r, a1i, b1r, b1i = jr[0], jr[1], jr[2], jr[3], jr[4], jr[5]
     p00, p01, p11, pb0, pb1 = jr[6], jr[7], jr[8], jr[9], jr[10]
     a1n = a1r * a1r + a1i * a1i
-    n = 0
+    k0, k1, k2, k3, k4, k5 = kt[0], kt[1], kt[2], kt[3], kt[4], kt[5]
+    k6, k7, k8, k9, k10 = kt[6], kt[7], kt[8], kt[9], kt[10]
     for kk in range(nk):
-        lkx, lky = kt[kk, 0], kt[kk, 1]
+        lkx, lky = k0[kk], k1[kk]
         ex, ey = lkx - ljx, lky - ljy
         other = kq[kk] != j
         paired = other & (ex * ex + ey * ey <= d_bc)
-        s00, s01, s11 = p00 + kt[kk, 6], p01 + kt[kk, 7], p11 + kt[kk, 8]
-        t0, t1 = pb0 + kt[kk, 9], pb1 + kt[kk, 10]
-        a2r, a2i, b2r, b2i = kt[kk, 2], kt[kk, 3], kt[kk, 4], kt[kk, 5]
+        s00, s01, s11 = p00 + k6[kk], p01 + k7[kk], p11 + k8[kk]
+        t0, t1 = pb0 + k9[kk], pb1 + k10[kk]
+        a2r, a2i, b2r, b2i = k2[kk], k3[kk], k4[kk], k5[kk]
         # Eq. 4 then eq. 5; the heading (eq. 6) waits until the position passes.
         det = s00 * s11 - s01 * s01
         fx = -(s11 * t0 - s01 * t1) / det
@@ -634,8 +640,12 @@ def _triple_poses(
         d2c = ex * ex + ey * ey
         seen = (max(d2a, d2b, d2c) <= rmax2) & (min(d2a, d2b, d2c) >= rmin2)
         status[kk] = other + paired + (paired & exists) + (paired & exists & seen)
-        hk[n], hx[n], hy[n], hd[n] = kk, px, py, d2a
-        n += paired & exists & seen
+        hx[kk], hy[kk], hd[kk] = px, py, d2a
+    # The hypotheses, in order (a separate pass, so that the one above vectorises).
+    n = 0
+    for kk in range(nk):
+        hk[n] = kk
+        n += status[kk] == 4
     return n
 
 
@@ -700,14 +710,20 @@ def _verify(
     relin: int,
     contested: NDArray[np.bool_],
     cnt: NDArray[np.int64],
+    ahead: NDArray[np.int64],
 ) -> tuple[int, int]:
     """Verify one hypothesis: a depth-first walk over the other bearings (``rest``), each
     matched in turn to every landmark inside its gate, best first, then left unmatched (a
     wildcard) while at most ``max_wild`` are, as in the tree. The state of a path (pose,
     covariance, matches) takes each match in with one Kalman update and is restored on the
-    way back. Complete
-    paths with at least ``min_match`` matches are refined, tested for joint compatibility
-    (with sigma) and written out with their count of missed landmarks.
+    way back. Complete paths with at least ``min_match`` matches are refined, tested for
+    joint compatibility (with sigma) and written out with their count of missed landmarks.
+
+    ``ahead[level]`` wildcards are reserved for the bearings from ``level`` on that failed
+    the cheap test (:func:`_can_reach`): a wildcard is taken only while the path's wildcards
+    and those still fit within ``max_wild``, so a first fit drops a hypothesis at its first
+    unexplained bearing once the cheap test's misses use up the allowance (all zero: the
+    tree's rule).
 
     The hypothesis's three seed pairs are ``lm/mx/my/bm/om[:3]``, its pose and covariance
     ``sp[0]``/``scov[0]``. Adds [nodes, examined, gate, bound, complete paths] to ``cnt``;
@@ -871,7 +887,7 @@ def _verify(
             # one close by (``contested``): otherwise the wildcard could only give the same
             # interpretation with one match fewer, which the merge would drop. A first fit,
             # which gives up completeness anyway, takes it only where nothing fits.
-            if wild < max_wild:
+            if wild + 1 + ahead[level + 1] <= max_wild:
                 wild += 1
                 level += 1
                 enter = True
@@ -1026,9 +1042,10 @@ def hypotheses(
     # Per anchor: the candidates for the second and third landmark and their pair terms.
     jq = np.empty(width, dtype=np.int64)
     kq = np.empty(width, dtype=np.int64)
-    jt = np.empty((width, 11))
-    kt = np.empty((width, 11))
-    # Per second landmark: the third-landmark candidates that make a hypothesis.
+    jt = np.empty((11, width))
+    kt = np.empty((11, width))
+    jrow = np.empty(11)
+    # Per second landmark: each third-landmark candidate's pose and fate, and the hypotheses.
     hk = np.empty(width, dtype=np.int64)
     hx = np.empty(width)
     hy = np.empty(width)
@@ -1050,7 +1067,10 @@ def hypotheses(
     cv = np.empty((m, width + 1))
     cs = np.empty((m, width + 1))
     cnt = np.zeros(5, dtype=np.int64)
-    pre_work = np.empty((3, width + 1))
+    pre_work = np.empty((4, max(width + 1, m)))
+    # Per level of a first fit's verification: bearings from there on that failed the cheap
+    # test (wildcards to be, reserved in advance; zero in an exhaustive search).
+    ahead = np.zeros(m + 1, dtype=np.int64)
     found = 0
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
@@ -1082,9 +1102,11 @@ def hypotheses(
                 if stopped:
                     break
                 j = jq[jj]
-                ljx, ljy = jt[jj, 0], jt[jj, 1]
+                ljx, ljy = jt[0, jj], jt[1, jj]
+                for c in range(11):
+                    jrow[c] = jt[c, jj]
                 nh = _triple_poses(
-                    j, jt[jj], lix, liy, kq, kt, nk, d_bc, singular_rtol, eps_f2, rmax2, rmin2,
+                    j, jrow, lix, liy, kq, kt, nk, d_bc, singular_rtol, eps_f2, rmax2, rmin2,
                     hk, hx, hy, hd, status,
                 )  # fmt: skip
                 # The counters advance over the candidates in order, as if each were taken in
@@ -1105,8 +1127,8 @@ def hypotheses(
                     triples += 1
                     nodes += 1
                     k = kq[kk]
-                    lkx, lky = kt[kk, 0], kt[kk, 1]
-                    px, py, d2a = hx[h], hy[h], hd[h]
+                    lkx, lky = kt[0, kk], kt[1, kk]
+                    px, py, d2a = hx[kk], hy[kk], hd[kk]
                     # The heading's cosine and sine: the direction to the first landmark turned
                     # back by its bearing (the arctangent waits for the cheap test).
                     if d2a > 0.0:
@@ -1134,6 +1156,9 @@ def hypotheses(
                     ):  # fmt: skip
                         bound += 1
                         continue
+                    if k_pre > 0 and stop_first:
+                        for r in range(nr - 1, -1, -1):
+                            ahead[r] = ahead[r + 1] + int(pre_work[3, r])
                     pt = _wrap(np.arctan2(liy - py, lix - px) - beta[oa])
                     sp[0, 0], sp[0, 1], sp[0, 2], sp[0, 3] = px, py, pt, tr
                     scov[0, 0], scov[0, 1], scov[0, 2] = c00, c01, c02
@@ -1147,6 +1172,7 @@ def hypotheses(
                         rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
                         half_fov, margin, out_a, out_p, out_miss, out_key, bar, spur_w,
                         miss_w, n_out, stop_first, miss_allow, left, relin[s], contested, cnt,
+                        ahead,
                     )  # fmt: skip
                     nodes += cnt[0]
                     examined += cnt[1]
