@@ -66,6 +66,45 @@ def test_seeds_prefer_well_spread_bearings() -> None:
     assert np.rad2deg(span) >= 200.0
 
 
+def test_seeds_with_a_range_prefer_those_that_make_fewer_hypotheses() -> None:
+    # With a range, of two wide seeds the one whose pose has the smaller Jacobian makes fewer
+    # hypotheses; two bearings a degree apart still pay as a poorly conditioned seed.
+    b = np.deg2rad([0.0, 120.0, 240.0, 60.0, 75.0, 200.0, 201.0])
+    limits = _seeds.pair_limits(b, 20.0, None, 0.01)
+    cost = _seeds.triple_cost(b, np.array([[0, 1, 2], [0, 4, 5], [0, 5, 6]]), limits)
+    vol = _seeds.hypothesis_volume(b, np.array([[0, 1, 2], [0, 4, 5], [0, 5, 6]]))
+    assert vol[1] < vol[0] and cost[1] < cost[0]
+    assert vol[2] < vol[1] and cost[2] > cost[0]
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    pose=st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-math.pi, math.pi)),
+    bearings=st.lists(st.floats(-math.pi, math.pi), min_size=3, max_size=3),
+    ranges=st.lists(st.floats(0.5, 20.0), min_size=3, max_size=3),
+)
+def test_hypothesis_volume_integrates_the_jacobian_of_the_pose(
+    pose: tuple[float, float, float], bearings: list[float], ranges: list[float]
+) -> None:
+    # Landmarks (6 coordinates) <-> pose (x, y, theta) and ranges along the three rays: the
+    # determinant of that map is the integrand of hypothesis_volume.
+    b, r = np.array(bearings), np.array(ranges)
+
+    def landmarks(q: np.ndarray) -> np.ndarray:
+        ang = q[2] + b
+        return np.stack([q[0] + q[3:] * np.cos(ang), q[1] + q[3:] * np.sin(ang)], 1).ravel()
+
+    q0 = np.array([*pose, *r])
+    h = 1e-6
+    J = np.stack([(landmarks(q0 + h * e) - landmarks(q0 - h * e)) / (2 * h) for e in np.eye(6)])
+    s = np.sin(b[[2, 0, 1]] - b[[1, 2, 0]])
+    assert abs(np.linalg.det(J)) == pytest.approx(abs(r @ s), rel=1e-4, abs=1e-6)
+    # ... and the volume is its mean over the ranges (in units of the largest).
+    v = _seeds.hypothesis_volume(b, np.array([[0, 1, 2]]))[0]
+    g = np.stack(np.meshgrid(*[(np.arange(6) + 0.5) / 6] * 3, indexing="ij"), -1)
+    assert v == pytest.approx(float(np.abs(g.reshape(-1, 3) @ s).mean()))
+
+
 @settings(max_examples=60, deadline=None)
 @given(
     seed=st.integers(0, 2**31 - 1),
