@@ -711,6 +711,7 @@ def _verify(
     contested: NDArray[np.bool_],
     cnt: NDArray[np.int64],
     ahead: NDArray[np.int64],
+    pick: NDArray[np.int64],
 ) -> tuple[int, int]:
     """Verify one hypothesis: a depth-first walk over the other bearings (``rest``), each
     matched in turn to every landmark inside its gate, best first, then left unmatched (a
@@ -726,9 +727,9 @@ def _verify(
     tree's rule).
 
     The hypothesis's three seed pairs are ``lm/mx/my/bm/om[:3]``, its pose and covariance
-    ``sp[0]``/``scov[0]``. Adds [nodes, examined, gate, bound, complete paths] to ``cnt``;
-    returns the new output count and 2 when ``stop_first`` found its fit (1 when
-    ``node_budget`` ran out).
+    ``sp[0]``/``scov[0]``; ``pick`` (2, >= nn) is scratch. Adds [nodes, examined, gate,
+    bound, complete paths] to ``cnt``; returns the new output count and 2 when
+    ``stop_first`` found its fit (1 when ``node_budget`` ran out).
     """
     m = beta.shape[0]
     capacity = out_a.shape[0]
@@ -789,23 +790,32 @@ def _verify(
             uy = st * cb[o] + ct * sb[o]
             # The landmarks inside the gate, best (smallest normalised innovation) first.
             nc = 0
+            # One bound first, for every near landmark in a pass that vectorises: |sin(innov)|
+            # <= |innov| and g^T Cov g <= trace(Cov) |g|^2 with |g|^2 = 1 / r^2 + 1, so most
+            # candidates fail it, and it needs no division or arctangent. The few that pass
+            # are listed, then gated exactly.
+            okf, sel = pick[0], pick[1]
             for t in range(nn):
                 dx, dy = near_x[t] - px, near_y[t] - py
                 rr = dx * dx + dy * dy
                 dot = dx * ux + dy * uy
                 cr = ux * dy - uy * dx  # r sin(innovation)
-                # One branch for the common case: |sin(innov)| <= |innov| and g^T Cov g <=
-                # trace(Cov) |g|^2 with |g|^2 = 1 / r^2 + 1, so most candidates fail this
-                # bound, which needs no division or arctangent; the conditions are combined
-                # without short-circuits (their outcomes are unpredictable).
-                ok = (
+                okf[t] = (
                     (cr * cr <= bound_k * (tr * (1.0 + rr) + sig2 * rr))
                     & (dot > 0)
                     & (rr <= rmax2)
                     & (rr >= rmin2)
                 )
-                if not ok:
-                    continue
+            nsel = 0
+            for t in range(nn):
+                sel[nsel] = t
+                nsel += okf[t]
+            for u in range(nsel):
+                t = sel[u]
+                dx, dy = near_x[t] - px, near_y[t] - py
+                rr = dx * dx + dy * dy
+                dot = dx * ux + dy * uy
+                cr = ux * dy - uy * dx
                 q = near_q[t]
                 if stamp[q] == hyp:
                     continue
@@ -1071,6 +1081,8 @@ def hypotheses(
     # Per level of a first fit's verification: bearings from there on that failed the cheap
     # test (wildcards to be, reserved in advance; zero in an exhaustive search).
     ahead = np.zeros(m + 1, dtype=np.int64)
+    # Scratch of the verification's first bound: flags and the near landmarks that pass.
+    pick = np.empty((2, width + 1), dtype=np.int64)
     found = 0
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
@@ -1172,7 +1184,7 @@ def hypotheses(
                         rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
                         half_fov, margin, out_a, out_p, out_miss, out_key, bar, spur_w,
                         miss_w, n_out, stop_first, miss_allow, left, relin[s], contested, cnt,
-                        ahead,
+                        ahead, pick,
                     )  # fmt: skip
                     nodes += cnt[0]
                     examined += cnt[1]
