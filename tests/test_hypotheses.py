@@ -75,6 +75,13 @@ def test_seeds_with_a_range_prefer_those_that_make_fewer_hypotheses() -> None:
     vol = _seeds.hypothesis_volume(b, np.array([[0, 1, 2], [0, 4, 5], [0, 5, 6]]))
     assert vol[1] < vol[0] and cost[1] < cost[0]
     assert vol[2] < vol[1] and cost[2] > cost[0]
+    # Narrow seeds (a narrow field of view): the widest first, whatever their count.
+    b = np.deg2rad([0.0, 10.0, 20.0, 30.0, 60.0])
+    limits = _seeds.pair_limits(b, 8.0, None, 0.01)
+    narrow = np.array([[0, 1, 2], [0, 3, 4]])
+    cost = _seeds.triple_cost(b, narrow, limits)
+    assert _seeds.hypothesis_volume(b, narrow)[0] < _seeds.hypothesis_volume(b, narrow)[1]
+    assert cost[1] < cost[0]
 
 
 @settings(max_examples=40, deadline=None)
@@ -401,6 +408,24 @@ def test_output_buffer_keeps_the_better_half_in_order() -> None:
         j = a[i, 0]
         assert a[i].tolist() == [j] * 3 and p[i, 2] == j and miss[i] == j
         assert key0[j] == key[i]
+
+
+def test_output_buffer_keeps_one_row_per_interpretation() -> None:
+    # The same interpretation reached from several seeds takes one row (its best), so that
+    # repeats do not crowd distinct interpretations out of the buffer.
+    n = 16
+    a = np.array([[r % 3, -1, 7] for r in range(n)], dtype=np.int64)  # 3 interpretations
+    key = np.arange(n, dtype=float)[::-1].copy()  # later rows fit better
+    p = np.zeros((n, 3))
+    p[:, 0] = np.arange(n)
+    miss = np.zeros(n, dtype=np.int64)
+    bar = np.full(1, np.inf)
+    kept = _compiled._compact(a, p, miss, key, bar)
+    assert kept == 3
+    assert sorted(a[:kept, 0].tolist()) == [0, 1, 2]
+    assert key[:kept].tolist() == [0.0, 1.0, 2.0]  # each one's best row, best first
+    assert p[:kept, 0].tolist() == [15.0, 14.0, 13.0]
+    assert bar[0] == np.inf  # no interpretation had to go
 
 
 # ---- the cheap test before verification ------------------------------------------------------

@@ -475,16 +475,45 @@ def _compact(
     out_key: NDArray[np.float64],
     bar: NDArray[np.float64],
 ) -> int:
-    """Keep the better half of full output buffers (lowest key first, stable), in place;
-    ``bar[0]`` becomes the worst key kept. Returns the rows kept."""
-    full = out_key.shape[0]
-    keep = full // 2
-    order = np.argsort(out_key, kind="mergesort")[:keep]
+    """Make room in full output buffers, in place: repeats of one interpretation (reached
+    from several seeds) keep only their best row, then at most the better half of the rest
+    stays (lowest key first, stable). When rows had to go, ``bar[0]`` becomes the worst key
+    kept. Returns the rows kept."""
+    full, m = out_a.shape
+    # Rows that hold the same assignment: a hash (FNV-1a) groups them, a comparison decides.
+    h = np.empty(full, dtype=np.uint64)
+    for r in range(full):
+        v = np.uint64(14695981039346656037)
+        for o in range(m):
+            v = (v ^ np.uint64(out_a[r, o] + 2)) * np.uint64(1099511628211)
+        h[r] = v
+    by_h = np.argsort(h, kind="mergesort")
+    alive = np.ones(full, dtype=np.bool_)
+    for u in range(1, full):
+        r = by_h[u]
+        w = u - 1
+        while w >= 0 and h[by_h[w]] == h[r]:
+            q = by_h[w]
+            same = alive[q]
+            for o in range(m):
+                same &= out_a[q, o] == out_a[r, o]
+            if same:
+                if out_key[r] < out_key[q]:
+                    alive[q] = False
+                else:
+                    alive[r] = False
+                break
+            w -= 1
+    rows = np.flatnonzero(alive)
+    order = rows[np.argsort(out_key[rows], kind="mergesort")]
+    keep = min(order.shape[0], full // 2)
+    if keep < order.shape[0]:
+        bar[0] = out_key[order[keep - 1]]
+    order = order[:keep]
     out_a[:keep] = out_a[order].copy()
     out_p[:keep] = out_p[order].copy()
     out_miss[:keep] = out_miss[order].copy()
     out_key[:keep] = out_key[order].copy()
-    bar[0] = out_key[keep - 1]
     return keep
 
 
@@ -1008,8 +1037,9 @@ def hypotheses(
     Returns assignments (K, m) in observation order (-1 unmatched), poses (K, 3) and missed
     (K,) of at most ``capacity`` complete paths, best first by the ranking's cost
     ``(m - n) spur_w + sse / (2 sigma^2) + missed miss_w`` (a huge ``spur_w`` ranks by matches
-    first; when more are found, the worse ones are dropped as they come, as search._finish
-    keeps its best MAX_LEAVES), and the counters ``[nodes, examined, triples, existence,
+    first; when more are found, repeats of an interpretation from other seeds and then the
+    worse ones are dropped as they come, as search._finish keeps its best MAX_LEAVES
+    distinct ones), and the counters ``[nodes, examined, triples, existence,
     gate, found, stopped, visibility, bound]``; ``stopped`` is 1 when ``max_nodes`` ran out,
     2 when ``stop_first`` ended the search.
     """

@@ -47,6 +47,9 @@ MAX_GREEDY = 3_000_000
 #: measured per seed on scene c of the benchmarks.
 NARROW_COST = 2.0
 
+#: :func:`hypothesis_volume` of three bearings 120 degrees apart: sin(120 deg) x 1.5.
+SPREAD_VOLUME = float(np.sin(np.deg2rad(120.0)) * 1.5)
+
 #: Two bearings of a seed closer than this fix its pose poorly (the same noise moves it
 #: far): such seeds pay steeply, as narrow ones do.
 MIN_GAP = float(np.deg2rad(15.0))
@@ -144,11 +147,18 @@ def triple_cost(bearings: FloatArray, triples: IntArray, limits: FloatArray) -> 
     quality = 1.0 + 100.0 * short**2 + 0.01 * (1.0 - g.min(axis=1) / (TWO_PI / 3.0))
     if np.isfinite(limits).all():
         # Fewer hypotheses come from worse-conditioned seeds (the volume is the Jacobian of
-        # the pose), so two bearings close together pay as narrow seeds do.
+        # the pose), so the count decides only among wide seeds, two bearings close together
+        # paying steeply. A narrow seed counts as a well-spread one, twice over, times the
+        # areas its pair limits allow (the second landmark near the first, the third near
+        # both) relative to the smallest: with a narrow field of view conditioning matters
+        # more than the count (on MRCLAM, ranking narrow seeds by their count lost the truth
+        # in 1.5-3 % more frames).
+        a, b, c = triples[:, 0], triples[:, 1], triples[:, 2]
         close = np.maximum(0.0, (MIN_GAP - g.min(axis=1)) / MIN_GAP)
-        per_hypothesis = np.where(span < WIDE_SPAN, NARROW_COST, 1.0)
-        volume = hypothesis_volume(bearings, triples)
-        return np.asarray(volume * per_hypothesis * quality * (1.0 + 100.0 * close**2))
+        wide = hypothesis_volume(bearings, triples) * (1.0 + 100.0 * close**2)
+        areas = limits[a, b] * np.minimum(limits[a, c], limits[b, c]) / limits.min() ** 2
+        work = np.where(span < WIDE_SPAN, NARROW_COST * SPREAD_VOLUME * areas, wide)
+        return np.asarray(work * quality)
     return np.asarray(quality)
 
 
