@@ -1116,6 +1116,7 @@ def hypotheses(
     found = 0
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
+    upfront = max_nodes == 0
     for s in range(seeds.shape[0]):
         if stopped:
             break
@@ -1153,21 +1154,32 @@ def hypotheses(
                 )  # fmt: skip
                 # The counters advance over the candidates in order, as if each were taken in
                 # turn, so that they (and the node budget) read the same wherever it stops.
-                done = 0
-                for h in range(nh + 1):
-                    upto = hk[h] if h < nh else nk
-                    for kk in range(done, upto):
+                # Without a budget they are added for all at once, in a pass that vectorises,
+                # and those of the candidates after a stop are taken back.
+                if upfront:
+                    for kk in range(nk):
                         st_k = status[kk]
                         vis += (st_k == 1) | (st_k == 3)
                         existence += st_k == 2
                         triples += st_k >= 2
                         nodes += st_k >= 2
+                done = 0
+                for h in range(nh + 1):
+                    upto = hk[h] if h < nh else nk
+                    if not upfront:
+                        for kk in range(done, upto):
+                            st_k = status[kk]
+                            vis += (st_k == 1) | (st_k == 3)
+                            existence += st_k == 2
+                            triples += st_k >= 2
+                            nodes += st_k >= 2
                     if h == nh:
                         break
                     kk = upto
                     done = kk + 1
-                    triples += 1
-                    nodes += 1
+                    if not upfront:
+                        triples += 1
+                        nodes += 1
                     k = kq[kk]
                     lkx, lky = kt[0, kk], kt[1, kk]
                     px, py, d2a = hx[kk], hy[kk], hd[kk]
@@ -1223,6 +1235,13 @@ def hypotheses(
                     found += cnt[4]
                     if stop:
                         stopped = stop
+                        if upfront:
+                            for k2 in range(kk + 1, nk):
+                                st_k = status[k2]
+                                vis -= (st_k == 1) | (st_k == 3)
+                                existence -= st_k == 2
+                                triples -= st_k >= 2
+                                nodes -= st_k >= 2
                         break
                 if max_nodes > 0 and nodes >= max_nodes:
                     stopped = 1
