@@ -106,10 +106,12 @@ def test_hypothesis_volume_integrates_the_jacobian_of_the_pose(
     J = np.stack([(landmarks(q0 + h * e) - landmarks(q0 - h * e)) / (2 * h) for e in np.eye(6)])
     s = np.sin(b[[2, 0, 1]] - b[[1, 2, 0]])
     assert abs(np.linalg.det(J)) == pytest.approx(abs(r @ s), rel=1e-4, abs=1e-6)
-    # ... and the volume is its mean over the ranges (in units of the largest).
+    # ... and the volume is its mean over the ranges (in units of the largest): against a
+    # fine Monte Carlo estimate of that integral (the 6^3 midpoint rule is a few per cent
+    # off where the integrand's kink crosses the cube; the seeds need only the ranking).
     v = _seeds.hypothesis_volume(b, np.array([[0, 1, 2]]))[0]
-    g = np.stack(np.meshgrid(*[(np.arange(6) + 0.5) / 6] * 3, indexing="ij"), -1)
-    assert v == pytest.approx(float(np.abs(g.reshape(-1, 3) @ s).mean()))
+    u = np.random.default_rng(0).random((200_000, 3))
+    assert v == pytest.approx(float(np.abs(u @ s).mean()), rel=0.05, abs=2e-3)
 
 
 @settings(max_examples=60, deadline=None)
@@ -226,6 +228,23 @@ def test_first_fit_on_a_large_map(big_map: LandmarkMap) -> None:
             hits += 1
             assert not res.stats.exhaustive
     assert hits >= 2
+
+
+def test_first_fit_counts_the_same_with_and_without_a_node_budget(
+    big_map: LandmarkMap,
+) -> None:
+    # Without a budget the kernel adds a second landmark's counters at once and takes back
+    # those after a stop; with one it adds them candidate by candidate. Same figures.
+    kw = {"sigma": 0.2 * DEG, "max_spurious": 1, "max_range": 15.0, "p_miss": 0.01}
+    b, _ = _big_scene(big_map, 0)
+    free = localize(big_map, b, exhaustive=False, confidence=0.9999, **kw)
+    budget = localize(big_map, b, exhaustive=False, confidence=0.9999, max_nodes=10**12, **kw)
+    assert not free.stats.exhaustive and free.stats.complete
+    assert [s.assignment for s in free.solutions] == [s.assignment for s in budget.solutions]
+    figures = [
+        {k: v for k, v in r.stats.as_dict().items() if k != "elapsed_s"} for r in (free, budget)
+    ]
+    assert figures[0] == figures[1]
 
 
 def test_chunked_search_equals_one_call(big_map: LandmarkMap, monkeypatch) -> None:

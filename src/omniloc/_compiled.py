@@ -679,6 +679,19 @@ def _triple_poses(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _tally(status: NDArray[np.int64], lo: int, hi: int) -> tuple[int, int, int]:
+    """The counters of the third-landmark candidates ``lo:hi`` by their ``status`` (see
+    :func:`_triple_poses`): (out of range or beyond the pair limit, no pose, solved)."""
+    vis = existence = solved = 0
+    for kk in range(lo, hi):
+        st_k = status[kk]
+        vis += (st_k == 1) | (st_k == 3)
+        existence += st_k == 2
+        solved += st_k >= 2
+    return vis, existence, solved
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _verify(
     L: NDArray[np.float64],
     beta: NDArray[np.float64],
@@ -1084,7 +1097,6 @@ def hypotheses(
     kq = np.empty(width, dtype=np.int64)
     jt = np.empty((11, width))
     kt = np.empty((11, width))
-    jrow = np.empty(11)
     # Per second landmark: each third-landmark candidate's pose and fate, and the hypotheses.
     hk = np.empty(width, dtype=np.int64)
     hx = np.empty(width)
@@ -1146,10 +1158,8 @@ def hypotheses(
                     break
                 j = jq[jj]
                 ljx, ljy = jt[0, jj], jt[1, jj]
-                for c in range(11):
-                    jrow[c] = jt[c, jj]
                 nh = _triple_poses(
-                    j, jrow, lix, liy, kq, kt, nk, d_bc, singular_rtol, eps_f2, rmax2, rmin2,
+                    j, jt[:, jj], lix, liy, kq, kt, nk, d_bc, singular_rtol, eps_f2, rmax2, rmin2,
                     hk, hx, hy, hd, status,
                 )  # fmt: skip
                 # The counters advance over the candidates in order, as if each were taken in
@@ -1157,22 +1167,20 @@ def hypotheses(
                 # Without a budget they are added for all at once, in a pass that vectorises,
                 # and those of the candidates after a stop are taken back.
                 if upfront:
-                    for kk in range(nk):
-                        st_k = status[kk]
-                        vis += (st_k == 1) | (st_k == 3)
-                        existence += st_k == 2
-                        triples += st_k >= 2
-                        nodes += st_k >= 2
+                    t_vis, t_ex, t_sol = _tally(status, 0, nk)
+                    vis += t_vis
+                    existence += t_ex
+                    triples += t_sol
+                    nodes += t_sol
                 done = 0
                 for h in range(nh + 1):
                     upto = hk[h] if h < nh else nk
                     if not upfront:
-                        for kk in range(done, upto):
-                            st_k = status[kk]
-                            vis += (st_k == 1) | (st_k == 3)
-                            existence += st_k == 2
-                            triples += st_k >= 2
-                            nodes += st_k >= 2
+                        t_vis, t_ex, t_sol = _tally(status, done, upto)
+                        vis += t_vis
+                        existence += t_ex
+                        triples += t_sol
+                        nodes += t_sol
                     if h == nh:
                         break
                     kk = upto
@@ -1236,12 +1244,11 @@ def hypotheses(
                     if stop:
                         stopped = stop
                         if upfront:
-                            for k2 in range(kk + 1, nk):
-                                st_k = status[k2]
-                                vis -= (st_k == 1) | (st_k == 3)
-                                existence -= st_k == 2
-                                triples -= st_k >= 2
-                                nodes -= st_k >= 2
+                            t_vis, t_ex, t_sol = _tally(status, kk + 1, nk)
+                            vis -= t_vis
+                            existence -= t_ex
+                            triples -= t_sol
+                            nodes -= t_sol
                         break
                 if max_nodes > 0 and nodes >= max_nodes:
                     stopped = 1

@@ -56,9 +56,8 @@ MIN_GAP = float(np.deg2rad(15.0))
 
 #: Midpoints of a 6 x 6 x 6 grid on the unit cube: the ranges of a seed's three landmarks,
 #: in units of max_range, for :func:`hypothesis_volume`.
-_RANGES = np.stack(np.meshgrid(*[(np.arange(6) + 0.5) / 6.0] * 3, indexing="ij"), axis=-1).reshape(
-    -1, 3
-)
+_MID = (np.arange(6) + 0.5) / 6.0
+_RANGES = np.stack(np.meshgrid(_MID, _MID, _MID, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
 def angle_between(bearings: FloatArray) -> FloatArray:
