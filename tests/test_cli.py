@@ -92,6 +92,11 @@ def test_no_solution_is_a_sentence_and_exit_0(tmp_path, capsys) -> None:
         (["localize", "--map", "{map}"], "required"),
         (["localize", "--map", "{map}", "--bearings", "{b}", "--method", "x"], "method"),
         (["localize", "--map", "{map}", "--bearings", "{b}", "--sigma", "-1"], "sigma"),
+        (["localize", "--map", "{map}", "--bearings", "{b}", "--fov", "400"], "--fov"),
+        (["localize", "--map", "{map}", "--bearings", "{b}", "--p-miss", "1"], "--p-miss"),
+        (["localize", "--map", "{map}", "--bearings", "{b}", "--timeout", "0"], "--timeout"),
+        (["evaluate", "--dataset", "roh", "{bad}", "--max-samples", "0"], "max_samples"),
+        (["evaluate", "--dataset", "roh", "{nowhere}"], "no such folder or file"),
         (["localize", "--map", "{map}", "--image", "{bad}"], "bad.txt"),
         (["bearings", "{bad}"], "bad.txt"),
         (["nonsense"], "invalid choice"),
@@ -105,6 +110,7 @@ def test_bad_input_is_one_line_and_exit_1(room_files, tmp_path, capsys, args, me
     few = tmp_path / "few.txt"
     few.write_text("1.0 2.0\n")
     subst = {"{map}": str(m), "{b}": str(b), "{bad}": str(bad), "{few}": str(few)}
+    subst["{nowhere}"] = str(tmp_path / "nowhere")
     argv = [subst.get(a, a) for a in args]
     assert main(argv) == 1
     err = capsys.readouterr().err.strip()

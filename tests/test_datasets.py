@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
 
@@ -146,3 +147,10 @@ def test_mrclam_malformed_rows_name_file_and_line(tmp_path: Path) -> None:
     assert ds.frames[0].assignment == (0, 1, 2, 3, None)
     with pytest.raises(InputError, match=r"robot2_frames\.csv: no such file"):
         load_mrclam(tmp_path, robots=(2,))
+
+
+@pytest.mark.parametrize("loader", [load_roh, load_mrclam])
+def test_a_missing_dataset_path_is_named(tmp_path: Path, loader: Callable[[Path], object]) -> None:
+    gone = tmp_path / "no-such-dataset"
+    with pytest.raises(InputError, match=r"no-such-dataset: no such folder or file"):
+        loader(gone)

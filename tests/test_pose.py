@@ -197,3 +197,8 @@ def test_pose_validation_and_helpers() -> None:
         crlb([[0, 0], [1, 0], [0, 1]], p, 0.0)
     with pytest.raises(DegenerateGeometryError):
         crlb([[0, 0], [1, 0]], p, 0.1)
+
+
+def test_crlb_at_a_landmark_names_it() -> None:
+    with pytest.raises(DegenerateGeometryError, match="coincides with landmark 1"):
+        crlb([[0, 0], [1, 0], [0, 1]], Pose(1.0, 0.0, 0.0), 0.01)

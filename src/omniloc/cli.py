@@ -36,7 +36,8 @@ class _Parser(argparse.ArgumentParser):
         raise InputError(f"{self.prog}: {message}")
 
 
-def _deg(text: str) -> float:
+def _number(text: str) -> float:
+    """A finite number from the command line (argparse names the option on error)."""
     try:
         v = float(text)
     except ValueError as exc:
@@ -46,12 +47,36 @@ def _deg(text: str) -> float:
     return v
 
 
+def _positive(text: str) -> float:
+    """A finite number > 0, checked in the user's units (degrees, metres, seconds)."""
+    v = _number(text)
+    if v <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return v
+
+
+def _fov_deg(text: str) -> float:
+    v = _positive(text)
+    if v > 360:
+        raise argparse.ArgumentTypeError(
+            f"a full field of view in degrees, at most 360, got {text!r}"
+        )
+    return v
+
+
+def _probability(text: str) -> float:
+    v = _number(text)
+    if not 0 < v < 1:
+        raise argparse.ArgumentTypeError(f"must lie strictly between 0 and 1, got {text!r}")
+    return v
+
+
 def _add_image_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("image options (conic-mirror camera)")
-    g.add_argument("--center", nargs=2, type=_deg, metavar=("CX", "CY"), help="rim centre, px")
-    g.add_argument("--aspect", type=_deg, help="rim semi-axis along u / along v")
+    g.add_argument("--center", nargs=2, type=_number, metavar=("CX", "CY"), help="rim centre, px")
+    g.add_argument("--aspect", type=_positive, help="rim semi-axis along u / along v")
     g.add_argument(
-        "--forward", type=_deg, default=0.0, help="image angle of the robot's forward axis, deg"
+        "--forward", type=_number, default=0.0, help="image angle of the robot's forward axis, deg"
     )
     g.add_argument("--mirrored", action="store_true", help="the mirror flips the rotation sense")
 
@@ -76,19 +101,21 @@ def _build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the bearings file is in degrees, and human output shows degrees",
     )
-    p.add_argument("--threshold", type=_deg, default=1.0, help="rule (ii) gate, deg (default 1)")
-    p.add_argument("--sigma", type=_deg, help="bearing noise std, deg: chi-square gating")
+    p.add_argument(
+        "--threshold", type=_positive, default=1.0, help="rule (ii) gate, deg (default 1)"
+    )
+    p.add_argument("--sigma", type=_positive, help="bearing noise std, deg: chi-square gating")
     p.add_argument("--method", choices=["robust", "paper"], default="robust")
     p.add_argument(
         "--max-spurious", type=float, default=0, help="spurious bearings allowed (int or fraction)"
     )
     p.add_argument("--ordering", action="store_true", help="apply the angular ordering constraint")
-    p.add_argument("--max-range", type=_deg, help="sensor range, m")
-    p.add_argument("--min-range", type=_deg, help="minimum sensor range, m")
-    p.add_argument("--fov", type=_deg, help="full field of view, deg (omit for 360)")
-    p.add_argument("--p-miss", type=_deg, help="probability of missing a visible landmark")
+    p.add_argument("--max-range", type=_positive, help="sensor range, m")
+    p.add_argument("--min-range", type=_positive, help="minimum sensor range, m")
+    p.add_argument("--fov", type=_fov_deg, help="full field of view, deg (omit for 360)")
+    p.add_argument("--p-miss", type=_probability, help="probability of missing a visible landmark")
     p.add_argument("--max-nodes", type=int, help="node budget")
-    p.add_argument("--timeout", type=_deg, help="time budget, s")
+    p.add_argument("--timeout", type=_positive, help="time budget, s")
     p.add_argument(
         "--strategy",
         choices=["auto", "tree", "hypotheses"],

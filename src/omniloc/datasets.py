@@ -157,6 +157,14 @@ class RohDataset:
             yield _shuffled(raw, gen)
 
 
+def _existing(path: PathLike, name: str) -> Path:
+    """``path`` as a Path, or an error naming it when there is nothing there."""
+    p = Path(path)
+    if not p.exists():
+        raise InputError(f"{p}: no such folder or file (the {name} dataset)")
+    return p
+
+
 def load_roh(path: PathLike) -> RohDataset:
     """Load the Roh dataset from its folder (or from its ``measurements.csv``).
 
@@ -165,7 +173,7 @@ def load_roh(path: PathLike) -> RohDataset:
     InputError
         A file is missing or a row is malformed (the message names the file and line).
     """
-    p = Path(path)
+    p = _existing(path, "Roh")
     folder = p if p.is_dir() else p.parent
     meas = folder / "measurements.csv" if p.is_dir() else p
     lm_path = folder / "landmarks.csv"
@@ -270,7 +278,7 @@ def load_mrclam(
     InputError
         Missing files, an unknown landmark id, or a malformed row (file and line named).
     """
-    p = Path(path)
+    p = _existing(path, "MRCLAM")
     if p.is_dir():
         folder = p
         files = [folder / f"robot{r}_frames.csv" for r in robots]

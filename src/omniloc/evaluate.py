@@ -867,6 +867,8 @@ def evaluate_dataset(
 
     if kind not in DATASET_DEFAULTS:
         raise InputError(f"dataset kind must be 'roh' or 'mrclam', got {kind!r}")
+    if max_samples is not None and max_samples < 1:
+        raise InputError(f"max_samples must be >= 1, got {max_samples}")
     dflt = DATASET_DEFAULTS[kind]
     opts: dict[str, Any] = {**dflt["options"], **(options or {})}
     ptol = float(dflt["pos_tol_m"] if pos_tol_m is None else pos_tol_m)

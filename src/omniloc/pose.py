@@ -367,6 +367,12 @@ def fisher_information(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: f
     if not (np.isfinite(sigma) and sigma > 0):
         raise InputError(f"sigma must be a positive bearing standard deviation, got {sigma}")
     p = _check_pose(pose)
+    at = np.flatnonzero(np.hypot(L[:, 0] - p[0], L[:, 1] - p[1]) <= 1e-9)
+    if at.size:
+        raise DegenerateGeometryError(
+            f"the pose ({p[0]:.3f}, {p[1]:.3f}) coincides with landmark {int(at[0])}: "
+            "it has no bearing from there"
+        )
     _, g = _bearing_jacobian(L, p)
     return np.asarray(g.T @ g / sigma**2)
 
