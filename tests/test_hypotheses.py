@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from omniloc import InputError, LandmarkMap, _compiled, _seeds, localize
 from omniloc.pose import Pose
-from omniloc.search import Method, _choose_strategy, _make_options
+from omniloc.search import Method, Strategy, _choose_strategy, _make_options
 from omniloc.simulate import (
     DEMO_POSE,
     DEMO_VISIBLE,
@@ -302,6 +302,8 @@ def test_strategy_choice(monkeypatch) -> None:
     monkeypatch.setattr(_compiled, "AVAILABLE", False)
     assert _choose_strategy("auto", Method.ROBUST, robust, True) == "tree"
     assert _choose_strategy("auto", Method.ROBUST, robust, False) == "first"
+    assert _choose_strategy(Strategy.TREE, Method.ROBUST, robust, True) == "tree"
+    assert _choose_strategy(Strategy.HYPOTHESES, Method.ROBUST, robust, False) == "first"
 
 
 @pytest.mark.parametrize(

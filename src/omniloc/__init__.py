@@ -32,7 +32,7 @@ from .errors import (
 from .io import check_bearings, load_bearings, save_bearings
 from .maps import LandmarkMap, as_landmark_map
 from .pose import Pose, crlb, estimate_pose, fisher_information, predict_bearings, refine_pose
-from .search import LocalizationResult, Method, SearchStats, Solution, localize
+from .search import LocalizationResult, Method, SearchStats, Solution, Strategy, localize
 from .simulate import demo_room, observe, random_map, random_pose, symmetric_map
 
 __version__ = "0.1.0"
@@ -49,6 +49,7 @@ __all__ = [
     "Pose",
     "SearchStats",
     "Solution",
+    "Strategy",
     "VisionError",
     "__version__",
     "angdiff",

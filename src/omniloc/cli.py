@@ -22,6 +22,7 @@ import numpy as np
 from . import __version__
 from .errors import InputError, OmnilocError
 from .pose import Pose
+from .search import Method, Strategy
 
 log = logging.getLogger("omniloc")
 
@@ -105,7 +106,7 @@ def _build_parser() -> argparse.ArgumentParser:
         "--threshold", type=_positive, default=1.0, help="rule (ii) gate, deg (default 1)"
     )
     p.add_argument("--sigma", type=_positive, help="bearing noise std, deg: chi-square gating")
-    p.add_argument("--method", choices=["robust", "paper"], default="robust")
+    p.add_argument("--method", choices=[m.value for m in Method], default=Method.ROBUST.value)
     p.add_argument(
         "--max-spurious", type=float, default=0, help="spurious bearings allowed (int or fraction)"
     )
@@ -118,8 +119,8 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--timeout", type=_positive, help="time budget, s")
     p.add_argument(
         "--strategy",
-        choices=["auto", "tree", "hypotheses"],
-        default="auto",
+        choices=[s.value for s in Strategy],
+        default=Strategy.AUTO.value,
         help="search strategy (default auto: compiled where numba is installed)",
     )
     p.add_argument(

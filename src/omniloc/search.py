@@ -126,6 +126,24 @@ class Method(str, enum.Enum):
     ROBUST = "robust"
 
 
+class Strategy(str, enum.Enum):
+    """How :func:`localize` runs a robust search (see its ``strategy`` parameter).
+
+    ``auto``
+        The compiled paper tree where the paper's rules alone apply, the hypotheses search
+        for the robust options when numba is installed, the tree otherwise.
+    ``tree``
+        The interpretation tree with wildcard branches (the reference).
+    ``hypotheses``
+        Compiled: a pose hypothesis from every landmark triple that can be seen together, for
+        a few seed triples of bearings, verified on the other bearings.
+    """
+
+    AUTO = "auto"
+    TREE = "tree"
+    HYPOTHESES = "hypotheses"
+
+
 @dataclass(frozen=True)
 class SearchStats:
     """What the search did.
@@ -1566,10 +1584,16 @@ def _missed_among(
 # --------------------------------------------------------------------------------------------
 
 
-def _choose_strategy(strategy: str, meth: Method, opt: _Options, exhaustive: bool) -> str:
+def _choose_strategy(
+    strategy: Strategy | str, meth: Method, opt: _Options, exhaustive: bool
+) -> str:
     """ "tree", "hypotheses" or "first" (hypotheses, stopping at the first fit)."""
-    if strategy not in ("auto", "tree", "hypotheses"):
-        raise InputError(f"strategy must be one of 'auto', 'tree', 'hypotheses', got {strategy!r}")
+    try:
+        strategy = Strategy(strategy).value
+    except ValueError as exc:
+        raise InputError(
+            f"strategy must be one of {[s.value for s in Strategy]}, got {strategy!r}"
+        ) from exc
     if not isinstance(exhaustive, (bool, np.bool_)):
         raise InputError(f"exhaustive must be True or False, got {exhaustive!r}")
     if meth is Method.PAPER:
@@ -1613,7 +1637,7 @@ def localize(
     p_miss: float | None = None,
     max_nodes: int | None = None,
     timeout_s: float | None = None,
-    strategy: str = "auto",
+    strategy: Strategy | str = Strategy.AUTO,
     exhaustive: bool = True,
 ) -> LocalizationResult:
     """Find where the robot is, and which landmark each bearing is, from bearings alone.
@@ -1655,7 +1679,7 @@ def localize(
         False. Where the compiled walk runs (fixed threshold, no robust option), ``timeout_s``
         is enforced as a budget of :data:`COMPILED_NODES_PER_SECOND` nodes per second (of
         :data:`HYPOTHESIS_NODES_PER_SECOND` with ``strategy="hypotheses"``).
-    strategy : {"auto", "tree", "hypotheses"}
+    strategy : Strategy or {"auto", "tree", "hypotheses"}
         How the robust search runs. ``"tree"`` walks the interpretation tree with wildcard
         branches (the reference). ``"hypotheses"`` (compiled) starts a hypothesis from every
         landmark triple that can be seen together, for a few seed triples of bearings that
