@@ -367,3 +367,37 @@ def test_too_many_complete_paths_are_capped(
     assert len(res) <= 100
     if search_module._compiled.AVAILABLE:
         assert any("kept the first 100" in r.getMessage() for r in caplog.records)
+
+
+# A real MRCLAM frame (robot 2, frames line 1931): six tubes seen through a 65 degree lens, a
+# pose that is poorly fixed along the robot's forward axis.
+NARROW_L = np.array([[0.59, -4.28], [0.68, -4.45], [3.05, -2.54], [3.12, -2.29], [2.86, -2.39]])
+NARROW_L = np.vstack([NARROW_L, [[0.86, -4.47]]])
+NARROW_B = np.deg2rad([-19.65, -18.51, 21.94, 24.81, 20.8, -16.33])
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_gauss_newton_reaches_the_least_squares_pose_when_poorly_fixed(
+    compiled: bool, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A full Gauss-Newton step overshoots along the valley here; without backtracking the
+    search kept a pose 0.42 m from the least-squares one (it stopped at the first failed
+    step), so the solution with the true pairs was not reported where it belongs."""
+    from omniloc import _compiled
+    from omniloc.pose import refine_pose
+    from omniloc.search import _gauss_newton
+
+    if compiled and not _compiled.AVAILABLE:
+        pytest.skip("numba is not installed")
+    monkeypatch.setattr(_compiled, "AVAILABLE", compiled)
+    best = refine_pose(NARROW_L, NARROW_B)[0].as_array()
+    start = np.array(
+        [[0.2002, 0.2398, -1.1444], [0.9, 0.3, -1.3], best + np.array([0.0, 0.0, 0.01])]
+    )
+    K = len(start)
+    poses, sse = _gauss_newton(
+        np.repeat(NARROW_L[None], K, 0), np.repeat(NARROW_B[None], K, 0), np.ones((K, 6)),
+        start, iters=10,
+    )  # fmt: skip
+    assert np.allclose(poses, best, atol=1e-5)
+    assert np.allclose(sse, sse.min(), rtol=1e-6)

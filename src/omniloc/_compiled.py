@@ -41,6 +41,10 @@ __all__ = ["AVAILABLE", "gauss_newton", "hypotheses", "paper_tree"]
 
 TWO_PI = 2.0 * np.pi
 
+#: Gauss-Newton halves a step that does not lower the squared error up to this many times
+#: before it stops (a step of 1/64 of the Gauss-Newton step is still tried).
+GN_HALVINGS = 6
+
 
 @njit(cache=True, error_model="numpy")
 def _wrap(a: float) -> float:
@@ -302,7 +306,8 @@ def _gn_core(
     iters: int,
 ) -> tuple[float, float, float, float]:
     """Gauss-Newton from (x, y, t) on the pairs ``i < n`` with ``w[i] > 0``: landmark
-    (lx[i], ly[i]), bearing bm[i]. A step is kept only if it lowers the squared error.
+    (lx[i], ly[i]), bearing bm[i]. A step is kept only if it lowers the squared error (halved
+    up to GN_HALVINGS times until it does).
     Returns the pose (heading wrapped) and its squared error."""
     sse = 0.0
     for i in range(n):
@@ -342,17 +347,24 @@ def _gn_core(
         s2 = (c02 * g0 + c12 * g1 + c22 * g2) / det
         if not (np.isfinite(s0) and np.isfinite(s1) and np.isfinite(s2)):
             break
-        nx, ny, nt = x + s0, y + s1, t + s2
-        nsse = 0.0
-        for i in range(n):
-            if w[i] > 0:
-                r = _wrap(np.arctan2(ly[i] - ny, lx[i] - nx) - nt - bm[i])
-                nsse += r * r
+        if max(abs(s0), abs(s1), abs(s2)) < 1e-13:
+            break
+        # Backtracking: where the pose is poorly fixed (a narrow field of view) the full step
+        # can overshoot along the valley; halving it keeps a descent direction going.
+        nsse = sse
+        for _ in range(GN_HALVINGS + 1):
+            nx, ny, nt = x + s0, y + s1, t + s2
+            nsse = 0.0
+            for i in range(n):
+                if w[i] > 0:
+                    r = _wrap(np.arctan2(ly[i] - ny, lx[i] - nx) - nt - bm[i])
+                    nsse += r * r
+            if nsse < sse:
+                break
+            s0, s1, s2 = 0.5 * s0, 0.5 * s1, 0.5 * s2
         if not nsse < sse:
             break
         x, y, t, sse = nx, ny, nt, nsse
-        if max(abs(s0), abs(s1), abs(s2)) < 1e-13:
-            break
     return x, y, _wrap(t), sse
 
 

@@ -511,7 +511,8 @@ def _gauss_newton(
 
     ``Lm`` (K, n, 2) landmarks, ``bm`` (K, n) bearings, ``w`` (K, n) weights (0 for padding),
     ``start`` (K, 3) poses. The 3x3 normal equations are solved by Cramer's rule; a step is
-    kept only where it lowers the squared error, so the result is never worse than ``start``.
+    kept only where it lowers the squared error (a step that does not is halved, up to
+    ``_compiled.GN_HALVINGS`` times), so the result is never worse than ``start``.
     Returns the poses and their weighted squared errors.
     """
     if _compiled.AVAILABLE:
@@ -527,13 +528,15 @@ def _gauss_newton(
     p = start.copy()
     lx, ly = Lm[..., 0], Lm[..., 1]
 
-    def residuals(q: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        dx = lx - q[:, None, 0]
-        dy = ly - q[:, None, 1]
-        res = _wrap_fast(np.arctan2(dy, dx) - q[:, None, 2] - bm) * w
+    def residuals_of(
+        q: FloatArray, rows: IntArray | slice
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        dx = lx[rows] - q[:, None, 0]
+        dy = ly[rows] - q[:, None, 1]
+        res = _wrap_fast(np.arctan2(dy, dx) - q[:, None, 2] - bm[rows]) * w[rows]
         return dx, dy, res, (res * res).sum(axis=1)
 
-    dx, dy, res, sse = residuals(p)
+    dx, dy, res, sse = residuals_of(p, slice(None))
     for _ in range(iters):
         r2 = dx * dx + dy * dy
         gx, gy = dy / r2 * w, -dx / r2 * w
@@ -560,14 +563,22 @@ def _gauss_newton(
                 axis=1,
             )
         step[~np.isfinite(step).all(axis=1)] = 0.0
-        cand = p + step
-        cdx, cdy, cres, csse = residuals(cand)
-        better = csse < sse
-        if not better.any():
-            break
-        p[better], sse[better] = cand[better], csse[better]
-        dx[better], dy[better], res[better] = cdx[better], cdy[better], cres[better]
-        if np.abs(step[better]).max() < 1e-13:
+        step[np.abs(step).max(axis=1) < 1e-13] = 0.0
+        moved = np.zeros(len(p), dtype=bool)
+        for _ in range(_compiled.GN_HALVINGS + 1):
+            # Backtracking, as in _compiled._gn_core: halve the steps that do not descend.
+            todo = np.flatnonzero(~moved & (step != 0.0).any(axis=1))
+            if todo.size == 0:
+                break
+            cand = p[todo] + step[todo]
+            cdx, cdy, cres, csse = residuals_of(cand, todo)
+            better = csse < sse[todo]
+            take = todo[better]
+            p[take], sse[take] = cand[better], csse[better]
+            dx[take], dy[take], res[take] = cdx[better], cdy[better], cres[better]
+            moved[take] = True
+            step[todo[~better]] *= 0.5
+        if not moved.any():
             break
     p[:, 2] = _wrap_fast(p[:, 2])
     return p, sse
