@@ -401,3 +401,20 @@ def test_gauss_newton_reaches_the_least_squares_pose_when_poorly_fixed(
     )  # fmt: skip
     assert np.allclose(poses, best, atol=1e-5)
     assert np.allclose(sse, sse.min(), rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("method", "strategy"), [("paper", "tree"), ("robust", "tree"), ("robust", "auto")]
+)
+def test_no_solution_stands_on_one_of_its_landmarks(method: str, strategy: str) -> None:
+    """On a grid, a pose exactly on a matched landmark passed the gate by accident (the
+    bearing of a landmark at the robot is atan2(0, 0) = 0) and came back with an infinite
+    covariance."""
+    grid = np.array([[i % 6, i // 6] for i in range(36)], dtype=float)
+    res = localize(grid, np.deg2rad([0.0, 90.0, 180.0]), method=method, strategy=strategy)
+    assert len(res) > 100
+    for s in res.solutions:
+        rows = [a for a in s.assignment if a is not None]
+        gaps = np.hypot(*(grid[rows] - s.pose.xy).T)
+        assert gaps.min() > 1e-6
+        assert np.isfinite(s.covariance).all()

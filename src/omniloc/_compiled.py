@@ -1309,6 +1309,58 @@ def covariances(
 
 
 @njit(cache=True, error_model="numpy")
+def merge(
+    rank: NDArray[np.int64],
+    poses: NDArray[np.float64],
+    inv: NDArray[np.float64],
+    reach2: NDArray[np.float64],
+    same_chi2: float,
+) -> NDArray[np.int64]:
+    """Greedy merge in rank order (see search._merge); returns the indices kept.
+
+    ``reach2[i]`` bounds the squared Euclidean gap (x, y, theta) at which pose i can still be
+    within ``same_chi2`` of another in its own metric (``same_chi2`` times the largest
+    eigenvalue of its covariance), so most pairs are passed over before the quadratic forms.
+    """
+    K = rank.shape[0]
+    keep = np.empty(K, np.int64)
+    nk = 0
+    for a in range(K):
+        i = rank[a]
+        xi, yi, ti = poses[i, 0], poses[i, 1], poses[i, 2]
+        dup = False
+        for b in range(nk):
+            k = keep[b]
+            d0 = poses[k, 0] - xi
+            d1 = poses[k, 1] - yi
+            d2 = _wrap(poses[k, 2] - ti)
+            if abs(d0) < 1e-6 and abs(d1) < 1e-6 and abs(d2) < 1e-6:
+                dup = True
+                break
+            dd = d0 * d0 + d1 * d1 + d2 * d2
+            if dd > reach2[i] or dd > reach2[k]:
+                continue
+            for j in (i, k):
+                q = (
+                    inv[j, 0, 0] * d0 * d0
+                    + inv[j, 1, 1] * d1 * d1
+                    + inv[j, 2, 2] * d2 * d2
+                    + (inv[j, 0, 1] + inv[j, 1, 0]) * d0 * d1
+                    + (inv[j, 0, 2] + inv[j, 2, 0]) * d0 * d2
+                    + (inv[j, 1, 2] + inv[j, 2, 1]) * d1 * d2
+                )
+                if not q <= same_chi2:  # NaN (a covariance that is not finite): no merge
+                    break
+            else:
+                dup = True
+                break
+        if not dup:
+            keep[nk] = i
+            nk += 1
+    return keep[:nk].copy()
+
+
+@njit(cache=True, error_model="numpy")
 def widest_triple(bearings: NDArray[np.float64]) -> tuple[int, int, int]:
     """The first triple (in lexicographic order) whose smallest circular gap is largest."""
     m = bearings.shape[0]

@@ -22,6 +22,7 @@ References
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -68,11 +69,14 @@ class Pose:
             x, y, t = (float(v) for v in vals)
         except (TypeError, ValueError) as exc:
             raise InputError(f"pose components must be numbers, got {vals!r}") from exc
-        if not np.isfinite([x, y, t]).all():
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(t)):
             raise InputError(f"pose components must be finite, got ({x}, {y}, {t})")
         object.__setattr__(self, "x", x)
         object.__setattr__(self, "y", y)
-        object.__setattr__(self, "theta", float(wrap(t)))
+        if not -math.pi <= t < math.pi:
+            object.__setattr__(self, "theta", float(wrap(t)))
+        else:
+            object.__setattr__(self, "theta", t)
 
     @property
     def xy(self) -> FloatArray:

@@ -106,7 +106,10 @@ LARGE_MAP = 1000
 MAX_COMPILED_LEAVES = 200_000
 
 #: At most this many complete paths are refined and returned (the best by matches and fit).
-MAX_LEAVES = 2000
+#: Measured on MRCLAM set 6 (8 bearings, 3 of them robots, are explained 6 at a time by
+#: ~1,800 interpretations of a clustered map, the true one only 5 at a time): true pose among
+#: the solutions 87.9 % at 2,000, 90.0 % at 8,000, 90.1 % at 16,000 and 32,000.
+MAX_LEAVES = 8000
 
 
 class Method(str, enum.Enum):
@@ -1407,22 +1410,26 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
     bm = np.broadcast_to(bearings, assign.shape)
     poses, sse = _gauss_newton(Lm, np.ascontiguousarray(bm), w, leaves.pose, iters=10)
     nmatch = w.sum(axis=1).astype(np.int64)
+    # A pose on one of its own landmarks has no bearing to it (atan2(0, 0) = 0 can pass a gate
+    # by accident on a grid map): not a pose.
+    gap2 = ((Lm - poses[:, None, :2]) ** 2).sum(axis=2)
+    joint = ((gap2 > (1e-9 * s.scale) ** 2) | (w == 0)).all(axis=1)
     if opt.sigma is not None:
         # Joint compatibility (JCBB): each pairing passed its own gate, but all of them
         # together must also fit one pose: sse / sigma^2 ~ chi-square with n - 3 dof.
-        joint = sse / opt.sigma**2 <= opt.joint_chi2[nmatch]
-        if not joint.any():
-            return [], False
-        if not joint.all():
-            keep_j = np.flatnonzero(joint)
-            assign, w, Lm, poses, sse, nmatch = (
-                assign[keep_j],
-                w[keep_j],
-                Lm[keep_j],
-                poses[keep_j],
-                sse[keep_j],
-                nmatch[keep_j],
-            )
+        joint &= sse / opt.sigma**2 <= opt.joint_chi2[nmatch]
+    if not joint.any():
+        return [], False
+    if not joint.all():
+        keep_j = np.flatnonzero(joint)
+        assign, w, Lm, poses, sse, nmatch = (
+            assign[keep_j],
+            w[keep_j],
+            Lm[keep_j],
+            poses[keep_j],
+            sse[keep_j],
+            nmatch[keep_j],
+        )
     rms = np.sqrt(sse / nmatch)
     sig = opt.sigma_eff
     # Covariance at the refined pose: sigma^2 (G^T G)^-1 over the matched pairs.
@@ -1471,14 +1478,13 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
         for i, cf in zip(keep, conf, strict=True)
     ]
     top = sols[0]
-    rivals = [
-        t
-        for t in sols[1:]
-        if (t.matched == top.matched or opt.p_miss is not None)
+    rivals = any(
+        (t.matched == top.matched or opt.p_miss is not None)
         and t.confidence >= 0.01 * top.confidence
         and not _same_pose(t.pose.as_array(), t.covariance, top.pose.as_array(), top.covariance)
-    ]
-    return sols, bool(rivals)
+        for t in sols[1:]
+    )
+    return sols, rivals
 
 
 #: Two solutions are "the same pose" when each lies within one standard deviation (Mahalanobis
@@ -1488,11 +1494,15 @@ def _finish(s: _Search, bearings: FloatArray, opt: _Options) -> tuple[list[Solut
 SAME_POSE_CHI2 = 1.0
 
 
+def _regularised(cov: FloatArray) -> FloatArray:
+    """(K, 3, 3) covariances nudged so that exact fits stay invertible."""
+    scale = np.maximum(np.abs(cov).max(axis=(1, 2)), 1e-300)
+    return np.asarray(cov + (1e-12 * scale + 1e-24)[:, None, None] * np.eye(3))
+
+
 def _inv_cov(cov: FloatArray) -> FloatArray:
     """Inverses of (K, 3, 3) covariances, regularised so that exact fits stay finite."""
-    scale = np.maximum(np.abs(cov).max(axis=(1, 2)), 1e-300)
-    reg = cov + (1e-12 * scale + 1e-24)[:, None, None] * np.eye(3)
-    return np.asarray(np.linalg.inv(reg))
+    return np.asarray(np.linalg.inv(_regularised(cov)))
 
 
 def _pose_gaps(p: FloatArray, q: FloatArray) -> FloatArray:
@@ -1506,7 +1516,22 @@ def _merge(rank: IntArray, poses: FloatArray, cov: FloatArray) -> list[int]:
     the confidence ellipsoid of each, or within a micrometre) is dropped."""
     if len(rank) == 1:
         return [int(rank[0])]
-    inv = _inv_cov(cov)
+    reg = _regularised(cov)
+    inv = np.asarray(np.linalg.inv(reg))
+    if _compiled.AVAILABLE:
+        # d^T C^-1 d >= |d|^2 / lambda_max(C) >= |d|^2 / trace(C): beyond that reach no merge
+        # is possible. (A covariance that is not finite gives no reach and is left to the
+        # quadratic forms, as below.)
+        with np.errstate(invalid="ignore", over="ignore"):
+            reach2 = SAME_POSE_CHI2 * np.trace(reg, axis1=1, axis2=2) * (1.0 + 1e-9)
+        kept = _compiled.merge(
+            np.ascontiguousarray(rank, dtype=np.int64),
+            np.ascontiguousarray(poses),
+            np.ascontiguousarray(inv),
+            reach2,
+            SAME_POSE_CHI2,
+        )
+        return [int(i) for i in kept]
     keep: list[int] = []
     for i in rank:
         if keep:
