@@ -123,6 +123,14 @@ def plot_localization(
     matplotlib.figure.Figure
     """
     lm = as_landmark_map(result.landmarks)
+    b = np.asarray(bearings, dtype=float)
+    if result.solutions and b.shape != (len(result.solutions[0].assignment),):
+        raise InputError(
+            f"bearings must be the {len(result.solutions[0].assignment)} that were localized, "
+            f"got shape {b.shape}"
+        )
+    if max_solutions < 1:
+        raise InputError(f"max_solutions must be >= 1, got {max_solutions}")
     sols = result.solutions[:max_solutions]
     n = max(1, len(sols))
     fig, axes = _new_figure(ncols=n, size=4.5)
@@ -140,7 +148,7 @@ def plot_localization(
         draw_scene(
             ax,
             lm,
-            bearings,
+            b,
             p,
             sol.assignment,
             color=palette[k % len(palette)],

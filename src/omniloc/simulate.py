@@ -104,6 +104,8 @@ def random_map(
     elif size is None:
         w = h = 20.0
     elif isinstance(size, tuple):
+        if len(size) != 2:
+            raise InputError(f"size must be one side or (width, height), got {size}")
         w, h = float(size[0]), float(size[1])
     else:
         w = h = float(size)
@@ -118,13 +120,16 @@ def random_map(
     pts = gen.uniform((0.0, 0.0), (w, h), size=(n, 2))
     for _ in range(100):
         if min_separation <= 0:
-            break
+            return LandmarkMap(pts)
         pairs = cKDTree(pts).query_pairs(min_separation, output_type="ndarray")
         if pairs.size == 0:
-            break
+            return LandmarkMap(pts)
         redo = np.unique(pairs[:, 1])
         pts[redo] = gen.uniform((0.0, 0.0), (w, h), size=(redo.size, 2))
-    return LandmarkMap(pts)
+    raise InputError(
+        f"could not place {n} landmarks {min_separation} m apart in {w:.1f} m x {h:.1f} m "
+        "in 100 rounds; use a smaller min_separation or a larger area"
+    )
 
 
 def symmetric_map(kind: str = "square", *, size: float = 6.0) -> LandmarkMap:

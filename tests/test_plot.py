@@ -1,0 +1,83 @@
+"""Figures of solutions (omniloc.plot): what is drawn, where it is saved, bad input."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from omniloc.errors import InputError
+from omniloc.plot import plot_localization, plot_solutions_grid
+from omniloc.search import localize
+from omniloc.simulate import DEMO_POSE, DEMO_VISIBLE, demo_room, observe
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def _rays(ax: object) -> int:
+    """Two-point lines in a panel: the rays (landmarks and robots are markers)."""
+    lines = ax.get_lines()  # type: ignore[attr-defined]
+    return sum(1 for ln in lines if len(ln.get_xdata()) == 2)
+
+
+def test_one_panel_per_solution_with_a_ray_per_bearing(tmp_path: Path) -> None:
+    lm = demo_room()
+    sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE[:4], rng=0)
+    res = localize(lm, sc.bearings, method="paper")
+    assert len(res) > 2  # four bearings in the demo room are ambiguous
+    out = tmp_path / "sub" / "sols.png"
+    fig = plot_localization(res, sc.bearings, out, true_pose=DEMO_POSE, max_solutions=2)
+    assert out.read_bytes()[:8] == PNG_MAGIC
+    axes = fig.get_axes()
+    assert len(axes) == 2
+    for ax, sol in zip(axes, res.solutions, strict=False):
+        assert _rays(ax) == 4
+        assert f"{sol.pose.x:.2f}" in ax.get_title() and f"/{len(res)}:" in ax.get_title()
+    # The rays of a matched bearing end at its landmark.
+    best = res.solutions[0]
+    ends = {
+        tuple(np.round(ln.get_xydata()[1], 6))
+        for ln in axes[0].get_lines()
+        if len(ln.get_xdata()) == 2
+    }
+    for a in best.assignment:
+        assert a is not None and tuple(np.round(lm.xy[a], 6)) in ends
+
+
+def test_no_solution_gets_one_titled_panel() -> None:
+    lm = demo_room()
+    res = localize(lm, np.array([0.0, 0.01, 0.02, 3.0]), method="paper")
+    assert not res
+    fig = plot_localization(res, np.array([0.0, 0.01, 0.02, 3.0]))
+    assert [ax.get_title() for ax in fig.get_axes()] == ["no solution"]
+
+
+def test_plot_input_is_checked(tmp_path: Path) -> None:
+    lm = demo_room()
+    sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE[:5], rng=0)
+    res = localize(lm, sc.bearings)
+    with pytest.raises(InputError, match="bearings must be the 5 that were localized"):
+        plot_localization(res, sc.bearings[:4])
+    with pytest.raises(InputError, match="max_solutions"):
+        plot_localization(res, sc.bearings, max_solutions=0)
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    with pytest.raises(InputError, match="cannot write figure"):
+        plot_localization(res, sc.bearings, blocker / "x.png")
+    with pytest.raises(InputError, match="at least one panel"):
+        plot_solutions_grid([])
+
+
+def test_grid_shows_each_runs_best(tmp_path: Path) -> None:
+    lm = demo_room()
+    panels = []
+    for m in (5, 6):
+        sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE[:m], rng=1)
+        panels.append((f"{m} bearings", localize(lm, sc.bearings), sc.bearings, DEMO_POSE))
+    fig = plot_solutions_grid(panels, tmp_path / "grid.png")
+    assert [ax.get_title() for ax in fig.get_axes()] == ["5 bearings", "6 bearings"]
+    assert [_rays(ax) for ax in fig.get_axes()] == [5, 6]
+    assert (tmp_path / "grid.png").read_bytes()[:8] == PNG_MAGIC
+    assert math.isfinite(fig.get_axes()[0].get_xlim()[0])
