@@ -1,6 +1,7 @@
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -418,3 +419,19 @@ def test_no_solution_stands_on_one_of_its_landmarks(method: str, strategy: str) 
         gaps = np.hypot(*(grid[rows] - s.pose.xy).T)
         assert gaps.min() > 1e-6
         assert np.isfinite(s.covariance).all()
+
+
+@pytest.mark.parametrize("strategy", ["hypotheses", "tree"])
+def test_a_time_budget_stops_a_large_map_without_a_range(strategy: str) -> None:
+    """Without a range every landmark triple is a hypothesis and every landmark is near
+    each: the kernel once counted only solved triples and verification nodes against a time
+    budget, and ran for minutes on 0.3 s (the candidates and the landmarks a node scans
+    count now). Not a speed test: the bound only says that it stops."""
+    lm = random_map(5000, density=0.01, min_separation=1.0, rng=1)
+    scene = observe(lm, random_pose(lm, rng=2), max_range=20.0, sigma=0.3 * DEG, rng=3)
+    t0 = time.perf_counter()
+    res = localize(
+        lm, scene.bearings[:9], sigma=0.3 * DEG, max_spurious=2, timeout_s=0.3, strategy=strategy
+    )
+    assert time.perf_counter() - t0 < 60.0
+    assert not res.complete

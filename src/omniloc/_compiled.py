@@ -41,6 +41,14 @@ __all__ = ["AVAILABLE", "gauss_newton", "hypotheses", "paper_tree"]
 
 TWO_PI = 2.0 * np.pi
 
+#: A verification node's work (see :func:`hypotheses`) beyond the landmarks it scans (its
+#: Kalman update or relinearisation), and a complete path's (its Gauss-Newton refinement,
+#: the output buffer). With HYPOTHESIS_WORK_PER_SECOND in search.py, fitted to the kernel's
+#: time on benchmark scenes b, b360 and c, 150 MRCLAM frames and maps of 40 and 60
+#: landmarks without a range: predicted / actual time 0.9-1.25.
+NODE_WORK = 256
+LEAF_WORK = 4096
+
 #: Gauss-Newton halves a step that does not lower the squared error up to this many times
 #: before it stops (a step of 1/64 of the Gauss-Newton step is still tried).
 GN_HALVINGS = 6
@@ -501,21 +509,36 @@ def _compact(
         h[r] = v
     by_h = np.argsort(h, kind="mergesort")
     alive = np.ones(full, dtype=np.bool_)
-    for u in range(1, full):
+    # Within a run of equal hashes, the best row of each distinct assignment so far (more
+    # than one only on a hash collision): each row is compared with these, not with every
+    # repeat before it (thousands of repeats of one interpretation made that quadratic).
+    reps = np.empty(full, dtype=np.int64)
+    n_reps = 0
+    for u in range(full):
         r = by_h[u]
-        w = u - 1
-        while w >= 0 and h[by_h[w]] == h[r]:
-            q = by_h[w]
-            same = alive[q]
+        if u == 0 or h[by_h[u - 1]] != h[r]:
+            reps[0] = r
+            n_reps = 1
+            continue
+        new_rep = True
+        for t in range(n_reps):
+            q = reps[t]
+            same = True
             for o in range(m):
-                same &= out_a[q, o] == out_a[r, o]
+                if out_a[q, o] != out_a[r, o]:
+                    same = False
+                    break
             if same:
                 if out_key[r] < out_key[q]:
                     alive[q] = False
+                    reps[t] = r
                 else:
                     alive[r] = False
+                new_rep = False
                 break
-            w -= 1
+        if new_rep:
+            reps[n_reps] = r
+            n_reps += 1
     rows = np.flatnonzero(alive)
     order = rows[np.argsort(out_key[rows], kind="mergesort")]
     keep = min(order.shape[0], full // 2)
@@ -761,6 +784,7 @@ def _verify(
     stop_first: bool,
     miss_allow: int,
     node_budget: int,
+    work_budget: int,
     relin: int,
     contested: NDArray[np.bool_],
     cnt: NDArray[np.int64],
@@ -783,10 +807,13 @@ def _verify(
     The hypothesis's three seed pairs are ``lm/mx/my/bm/om[:3]``, its pose and covariance
     ``sp[0]``/``scov[0]``; ``pick`` (2, >= nn) is scratch. Adds [nodes, examined, gate,
     bound, complete paths] to ``cnt``; returns the new output count and 2 when
-    ``stop_first`` found its fit (1 when ``node_budget`` ran out).
+    ``stop_first`` found its fit (1 when ``node_budget`` nodes or ``work_budget`` work, as
+    counted by :func:`hypotheses`, ran out; 0 for no limit).
     """
     m = beta.shape[0]
     capacity = out_a.shape[0]
+    node_cost = nn + NODE_WORK
+    leaf_cost = LEAF_WORK + (nn if miss_w > 0.0 else 0)
     n = 3
     wild = 0
     px, py, pt, tr = sp[0, 0], sp[0, 1], sp[0, 2], sp[0, 3]
@@ -811,10 +838,14 @@ def _verify(
                 if n >= min_match:
                     qx, qy, qt, sse = _gn_core(mx, my, bm, ones, n, px, py, pt, 10)
                     if not use_sigma or sse / sig2 <= joint_chi2[n]:
-                        missed = _missed_count(
-                            near_q, near_x, near_y, nn, stamp, hyp, qx, qy, qt, beta,
-                            vis_hi, vis_lo, half_fov, margin,
-                        )  # fmt: skip
+                        # Negative evidence only where it is asked for (p_miss: miss_w > 0);
+                        # without a range it would look at the whole map for every path.
+                        missed = 0
+                        if miss_w > 0.0:
+                            missed = _missed_count(
+                                near_q, near_x, near_y, nn, stamp, hyp, qx, qy, qt, beta,
+                                vis_hi, vis_lo, half_fov, margin,
+                            )  # fmt: skip
                         # Keep the best ``capacity`` by the ranking's cost: when full, the
                         # worse half goes and the bar for entry rises.
                         key = (m - n) * spur_w + 0.5 * sse / sig2 + missed * miss_w
@@ -838,6 +869,8 @@ def _verify(
             cnt[0] += 1
             cnt[1] += 1
             if node_budget > 0 and cnt[0] >= node_budget:
+                return n_out, 1
+            if work_budget > 0 and cnt[0] * node_cost + cnt[4] * leaf_cost >= work_budget:
                 return n_out, 1
             ct, st = np.cos(pt), np.sin(pt)
             ux = ct * cb[o] - st * sb[o]  # measured direction in the world
@@ -1030,6 +1063,7 @@ def hypotheses(
     scale: float,
     singular_rtol: float,
     max_nodes: int,
+    max_work: int,
     stop_first: bool,
     capacity: int,
     relin: NDArray[np.int64],
@@ -1065,8 +1099,14 @@ def hypotheses(
     first; when more are found, repeats of an interpretation from other seeds and then the
     worse ones are dropped as they come, as search._finish keeps its best MAX_LEAVES
     distinct ones), and the counters ``[nodes, examined, triples, existence,
-    gate, found, stopped, visibility, bound]``; ``stopped`` is 1 when ``max_nodes`` ran out,
-    2 when ``stop_first`` ended the search.
+    gate, found, stopped, visibility, bound, work]``; ``stopped`` is 1 when ``max_nodes`` or
+    ``max_work`` ran out, 2 when ``stop_first`` ended the search.
+
+    ``work`` measures time where ``nodes`` does not: every candidate landmark looked at
+    counts, a node of the verification NODE_WORK plus once per landmark near its
+    hypothesis (without a range, the whole map), a complete path LEAF_WORK. ``max_work``
+    (0: none) is checked after every hypothesis and inside the verification, so a search of
+    a large map without a range still stops when told to.
     """
     N = L.shape[0]
     m = beta.shape[0]
@@ -1140,7 +1180,8 @@ def hypotheses(
     found = 0
     nodes = examined = triples = existence = gate = n_out = stopped = vis = bound = 0
     hyp = 0
-    upfront = max_nodes == 0
+    work = 0
+    upfront = max_nodes == 0 and max_work == 0
     for s in range(seeds.shape[0]):
         if stopped:
             break
@@ -1165,6 +1206,7 @@ def hypotheses(
             nj = _pair_terms(lo, hi, nb_idx, nb_xy, i, lix, liy, d_ab, rot_b, jq, jt)
             nk = _pair_terms(lo, hi, nb_idx, nb_xy, i, lix, liy, d_ac, rot_c, kq, kt)
             vis += 2 * (hi - lo) - nj - nk
+            work += 2 * (hi - lo)
             for jj in range(nj):
                 if stopped:
                     break
@@ -1174,6 +1216,7 @@ def hypotheses(
                     j, jt[:, jj], lix, liy, kq, kt, nk, d_bc, singular_rtol, eps_f2, rmax2, rmin2,
                     hk, hx, hy, hd, status,
                 )  # fmt: skip
+                work += nk
                 # The counters advance over the candidates in order, as if each were taken in
                 # turn, so that they (and the node budget) read the same wherever it stops.
                 # Without a budget they are added for all at once, in a pass that vectorises,
@@ -1214,6 +1257,12 @@ def hypotheses(
                     nn = _gather(
                         lo, hi, nb_idx, nb_xy, i, lix, liy, px, py, near2, near_q, near_x, near_y
                     )
+                    work += (hi - lo) + nr * nn
+                    if (max_work > 0 and work >= max_work) or (
+                        max_nodes > 0 and nodes >= max_nodes
+                    ):
+                        stopped = 1
+                        break
                     hyp += 1
                     lm[0], lm[1], lm[2] = i, j, k
                     mx[0], mx[1], mx[2] = lix, ljx, lkx
@@ -1238,17 +1287,23 @@ def hypotheses(
                     scov[0, 0], scov[0, 1], scov[0, 2] = c00, c01, c02
                     scov[0, 3], scov[0, 4], scov[0, 5] = c11, c12, c22
                     cnt[:] = 0
-                    left = max_nodes - nodes if max_nodes > 0 else 0
+                    # Budgets left to the verification (0: no limit; at least 1 when limited).
+                    left = max(1, max_nodes - nodes) if max_nodes > 0 else 0
+                    left_work = max(1, max_work - work) if max_work > 0 else 0
                     n_out, stop = _verify(
                         L, beta, cb, sb, rest, nr, lm, mx, my, ones, bm, om, stamp, hyp,
                         near_q, near_x, near_y, nn, sp, scov, sn, sw, chosen, pos, ncand,
                         cq, cin, cgx, cgy, cv, cs, sig2, use_sigma, gate_chi2, threshold, bound_k,
                         rmax2, rmin2, max_wild, min_match, joint_chi2, vis_hi, vis_lo,
                         half_fov, margin, out_a, out_p, out_miss, out_key, bar, spur_w,
-                        miss_w, n_out, stop_first, miss_allow, left, relin[s], contested, cnt,
+                        miss_w, n_out, stop_first, miss_allow, left, left_work, relin[s],
+                        contested, cnt,
                         ahead, pick,
                     )  # fmt: skip
                     nodes += cnt[0]
+                    work += cnt[0] * (nn + NODE_WORK) + cnt[4] * (
+                        LEAF_WORK + (nn if miss_w > 0.0 else 0)
+                    )  # as _verify counts it
                     examined += cnt[1]
                     gate += cnt[2]
                     bound += cnt[3]
@@ -1262,10 +1317,11 @@ def hypotheses(
                             triples -= t_sol
                             nodes -= t_sol
                         break
-                if max_nodes > 0 and nodes >= max_nodes:
+                if (max_nodes > 0 and nodes >= max_nodes) or (max_work > 0 and work >= max_work):
                     stopped = 1
     counts = np.array(
-        [nodes, examined, triples, existence, gate, found, stopped, vis, bound], dtype=np.int64
+        [nodes, examined, triples, existence, gate, found, stopped, vis, bound, work],
+        dtype=np.int64,
     )
     order = np.argsort(out_key[:n_out], kind="mergesort")
     return out_a[order], out_p[order], out_miss[order], counts
