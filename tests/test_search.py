@@ -435,3 +435,22 @@ def test_a_time_budget_stops_a_large_map_without_a_range(strategy: str) -> None:
     )
     assert time.perf_counter() - t0 < 60.0
     assert not res.complete
+
+
+def test_a_timeout_spent_before_the_search_starts_is_incomplete(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """On a big map the neighbour lists can take the whole timeout: no chunk runs, and the
+    answer is an empty, incomplete result (it was a crash on an empty list of chunks)."""
+    from omniloc import _compiled, search
+
+    if not _compiled.AVAILABLE:
+        pytest.skip("numba is not installed")
+    monkeypatch.setattr(search, "CHUNK_ANCHORS", 16)
+    monkeypatch.setattr(search._Search, "_work_left", lambda self: -1)
+    lm = random_map(200, density=0.01, min_separation=1.0, rng=1)
+    scene = observe(lm, random_pose(lm, rng=2), max_range=20.0, sigma=0.3 * DEG, rng=3)
+    res = localize(
+        lm, scene.bearings, sigma=0.3 * DEG, max_range=20.0, timeout_s=1.0, exhaustive=False
+    )
+    assert not res and not res.complete

@@ -838,6 +838,10 @@ class _Search:
                 for i0 in range(0, self.N, CHUNK_ANCHORS)
             ]
             results = self._run_chunks(call, chunks, budget)
+        if not results:
+            # The time was up before the first chunk (a big map's neighbour lists took it).
+            self.complete = False
+            return
         counts = np.sum([r[3] for r in results], axis=0)
         stopped = max(int(r[3][6]) for r in results)
         c = self.count
