@@ -510,8 +510,8 @@ def _compact(
     by_h = np.argsort(h, kind="mergesort")
     alive = np.ones(full, dtype=np.bool_)
     # Within a run of equal hashes, the best row of each distinct assignment so far (more
-    # than one only on a hash collision): each row is compared with these, not with every
-    # repeat before it (thousands of repeats of one interpretation made that quadratic).
+    # than one only on a hash collision): each row is compared with these rather than walking
+    # back over every repeat before it (quadratic in the repeats of one interpretation).
     reps = np.empty(full, dtype=np.int64)
     n_reps = 0
     for u in range(full):
