@@ -64,8 +64,8 @@ log = logging.getLogger(__name__)
 RANGE_SLACK = 0.05
 
 #: Rate at which a time budget becomes a budget of work in the hypothesise-and-verify kernel
-#: (landmarks looked at: candidates, and each verification node once per landmark near its
-#: hypothesis; see _compiled.hypotheses).
+#: (candidate landmarks looked at, a verification node once per landmark near its hypothesis
+#: plus _compiled.NODE_WORK, a complete path _compiled.LEAF_WORK; see _compiled.hypotheses).
 HYPOTHESIS_WORK_PER_SECOND = 600_000_000
 
 #: From a narrow seed (three bearings spanning less than _seeds.WIDE_SPAN), the hypotheses'
