@@ -362,6 +362,32 @@ def test_compiled_covariances_match_numpy() -> None:
     assert np.allclose(_compiled.covariances(Lm, w, poses, 0.01), want, rtol=1e-9, atol=0)
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_compiled_merge_matches_numpy(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The compiled merge (which skips pairs beyond the covariance's reach) keeps exactly
+    the solutions the numpy loop keeps, on poses clustered so that many merge: some with
+    tight covariances, some wide, some at a heading across +-pi, one duplicate."""
+    from omniloc.search import _merge
+
+    rng = np.random.default_rng(seed)
+    K = 300
+    centres = rng.uniform(0, 10, (6, 3))
+    centres[0, 2] = np.pi - 1e-3
+    poses = centres[rng.integers(0, 6, K)] + rng.normal(0, [0.05, 0.05, 0.02], (K, 3))
+    poses[:, 2] = np.angle(np.exp(1j * poses[:, 2]))
+    poses[1] = poses[0]
+    scale = rng.choice([1e-4, 1e-2, 1.0], K)[:, None, None]
+    A = rng.normal(size=(K, 3, 3))
+    cov = (A @ A.transpose(0, 2, 1) + 0.1 * np.eye(3)) * scale
+    rank = rng.permutation(K).astype(np.int64)
+    kept = {}
+    for flag in (True, False):
+        monkeypatch.setattr(_compiled, "AVAILABLE", flag)
+        kept[flag] = _merge(rank, poses, cov)
+    assert kept[True] == kept[False]
+    assert 6 <= len(kept[True]) < K - 50  # merges happened, and not everything merged
+
+
 def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
     # A spurious bearing just beside a true one took the true one's landmark (the first fit
     # checks bearings in a fixed order): the polish gives it back.

@@ -727,6 +727,14 @@ def _tally(status: NDArray[np.int64], lo: int, hi: int) -> tuple[int, int, int]:
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _walk_work(nodes: int, leaves: int, nn: int, miss_w: float) -> int:
+    """The work (see :func:`hypotheses`) of a verification that visited ``nodes`` nodes and
+    reached ``leaves`` complete paths among ``nn`` near landmarks: each node scans them, each
+    complete path is refined (and, with negative evidence, scans them again)."""
+    return nodes * (nn + NODE_WORK) + leaves * (LEAF_WORK + (nn if miss_w > 0.0 else 0))
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _verify(
     L: NDArray[np.float64],
     beta: NDArray[np.float64],
@@ -807,13 +815,11 @@ def _verify(
     The hypothesis's three seed pairs are ``lm/mx/my/bm/om[:3]``, its pose and covariance
     ``sp[0]``/``scov[0]``; ``pick`` (2, >= nn) is scratch. Adds [nodes, examined, gate,
     bound, complete paths] to ``cnt``; returns the new output count and 2 when
-    ``stop_first`` found its fit (1 when ``node_budget`` nodes or ``work_budget`` work, as
-    counted by :func:`hypotheses`, ran out; 0 for no limit).
+    ``stop_first`` found its fit (1 when ``node_budget`` nodes or ``work_budget`` work, see
+    :func:`_walk_work`, ran out; 0 for no limit).
     """
     m = beta.shape[0]
     capacity = out_a.shape[0]
-    node_cost = nn + NODE_WORK
-    leaf_cost = LEAF_WORK + (nn if miss_w > 0.0 else 0)
     n = 3
     wild = 0
     px, py, pt, tr = sp[0, 0], sp[0, 1], sp[0, 2], sp[0, 3]
@@ -870,7 +876,7 @@ def _verify(
             cnt[1] += 1
             if node_budget > 0 and cnt[0] >= node_budget:
                 return n_out, 1
-            if work_budget > 0 and cnt[0] * node_cost + cnt[4] * leaf_cost >= work_budget:
+            if work_budget > 0 and _walk_work(cnt[0], cnt[4], nn, miss_w) >= work_budget:
                 return n_out, 1
             ct, st = np.cos(pt), np.sin(pt)
             ux = ct * cb[o] - st * sb[o]  # measured direction in the world
@@ -1301,9 +1307,7 @@ def hypotheses(
                         ahead, pick,
                     )  # fmt: skip
                     nodes += cnt[0]
-                    work += cnt[0] * (nn + NODE_WORK) + cnt[4] * (
-                        LEAF_WORK + (nn if miss_w > 0.0 else 0)
-                    )  # as _verify counts it
+                    work += _walk_work(cnt[0], cnt[4], nn, miss_w)
                     examined += cnt[1]
                     gate += cnt[2]
                     bound += cnt[3]
@@ -1375,8 +1379,9 @@ def merge(
     """Greedy merge in rank order (see search._merge); returns the indices kept.
 
     ``reach2[i]`` bounds the squared Euclidean gap (x, y, theta) at which pose i can still be
-    within ``same_chi2`` of another in its own metric (``same_chi2`` times the largest
-    eigenvalue of its covariance), so most pairs are passed over before the quadratic forms.
+    within ``same_chi2`` of another in its own metric (``same_chi2`` times the trace of its
+    covariance, which bounds the largest eigenvalue), so most pairs are passed over before
+    the quadratic forms.
     """
     K = rank.shape[0]
     keep = np.empty(K, np.int64)
