@@ -1,4 +1,4 @@
-"""Figures of solutions (omniloc.plot): what is drawn, where it is saved, bad input."""
+"""Figures (omniloc.plot): what is drawn, where it is saved, bad input."""
 
 from __future__ import annotations
 
@@ -8,8 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from omniloc.errors import InputError
-from omniloc.plot import plot_localization, plot_solutions_grid
+from omniloc import vision
+from omniloc.errors import InputError, VisionError
+from omniloc.plot import plot_detections, plot_localization, plot_solutions_grid, vision_demo
 from omniloc.search import localize
 from omniloc.simulate import DEMO_POSE, DEMO_VISIBLE, demo_room, observe
 
@@ -81,3 +82,23 @@ def test_grid_shows_each_runs_best(tmp_path: Path) -> None:
     assert [_rays(ax) for ax in fig.get_axes()] == [5, 6]
     assert (tmp_path / "grid.png").read_bytes()[:8] == PNG_MAGIC
     assert math.isfinite(fig.get_axes()[0].get_xlim()[0])
+
+
+def test_plot_detections_and_demo(tmp_path: Path) -> None:
+    demo_image = vision.render_omni_image(vision.demo_scene(), vision.DEMO_POSE, rng=1)
+    det = vision.extract_bearings(demo_image)
+    out = tmp_path / "det.png"
+    fig = plot_detections(demo_image, det, out)
+    assert out.stat().st_size > 10_000
+    assert len(fig.axes) == 2
+    from matplotlib.figure import Figure
+
+    ax = Figure().subplots()
+    plot_detections(demo_image, det, ax)
+    assert len(ax.lines) >= len(det)
+    with pytest.raises(VisionError, match="EdgeDetections"):
+        plot_detections(demo_image, det.bearings, out)  # type: ignore[arg-type]
+    text = vision_demo(tmp_path / "demo", rng=0)
+    assert (tmp_path / "demo" / "vision.png").exists()
+    assert "14 found within 0.5 deg" in text
+    assert "median bearing error" in text

@@ -1,4 +1,4 @@
-"""Tests for omniloc.vision.bearings (and the vision plots): image -> bearings."""
+"""Tests for omniloc.vision.bearings: image -> bearings."""
 
 from __future__ import annotations
 
@@ -23,11 +23,9 @@ from omniloc.vision import (
     demo_scene,
     extract_bearings,
     load_image,
-    plot_detections,
     render_omni_image,
     true_features,
     unwrap_panorama,
-    vision_demo,
 )
 
 TOL = np.deg2rad(0.5)
@@ -215,22 +213,3 @@ def test_end_to_end_localization(demo_image: np.ndarray) -> None:
     pose = result.best.pose
     assert np.hypot(pose.x - DEMO_POSE[0], pose.y - DEMO_POSE[1]) < 0.1
     assert abs(float(angdiff(pose.theta, DEMO_POSE[2]))) < np.deg2rad(1.0)
-
-
-def test_plot_detections_and_demo(tmp_path: Path, demo_image: np.ndarray) -> None:
-    det = extract_bearings(demo_image)
-    out = tmp_path / "det.png"
-    fig = plot_detections(demo_image, det, out)
-    assert out.stat().st_size > 10_000
-    assert len(fig.axes) == 2
-    from matplotlib.figure import Figure
-
-    ax = Figure().subplots()
-    plot_detections(demo_image, det, ax)
-    assert len(ax.lines) >= len(det)
-    with pytest.raises(VisionError, match="EdgeDetections"):
-        plot_detections(demo_image, det.bearings, out)  # type: ignore[arg-type]
-    text = vision_demo(tmp_path / "demo", rng=0)
-    assert (tmp_path / "demo" / "vision.png").exists()
-    assert "14 found within 0.5 deg" in text
-    assert "median bearing error" in text

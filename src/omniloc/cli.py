@@ -224,7 +224,7 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         exhaustive=not args.first_fit,
     )
     if args.plot is not None:
-        from .plot import plot_localization
+        from .plot.scene import plot_localization
 
         plot_localization(result, bearings, args.plot)
     if args.json:
@@ -295,7 +295,7 @@ def _cmd_bearings(args: argparse.Namespace) -> int:
         mirrored=args.mirrored,
     )
     if args.plot is not None:
-        from .vision import plot_detections
+        from .plot.vision import plot_detections
 
         plot_detections(image, det, args.plot)
     cal = det.calibration
@@ -322,7 +322,7 @@ def _cmd_bearings(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    from .plot import plot_localization
+    from .plot.scene import plot_localization
     from .pose import predict_bearings
     from .search import localize
     from .simulate import DEMO_POSE, demo_room, observe, paper_experiment
@@ -392,7 +392,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
             f"{res.stats.elapsed_s * 1e3:.1f} ms"
         )
     if not args.no_vision:
-        from .vision import vision_demo
+        from .plot.vision import vision_demo
 
         print()
         print("Vision front end (rendered conic-mirror image -> bearings):")
@@ -404,8 +404,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _demo_image_to_pose() -> None:
     """The whole chain on the vision demo's room: image -> bearings -> pose."""
     from .search import localize
-    from .vision import DEMO_POSE, demo_scene, extract_bearings, render_omni_image
-    from .vision.plot import DEMO_CAMERA
+    from .vision import DEMO_CAMERA, DEMO_POSE, demo_scene, extract_bearings, render_omni_image
 
     scene = demo_scene()
     image = render_omni_image(scene, DEMO_POSE, DEMO_CAMERA, rng=0)

@@ -3,11 +3,10 @@
 Vertical edges of the room (door frames, wall corners, poles) are radial lines in the image
 of a camera looking at a conic mirror along its axis, so their image angles are bearings
 (seed paper, section 1). This package finds the mirror rim (:func:`calibrate_mirror`),
-extracts the bearings of radial edges and poles (:func:`extract_bearings`), renders synthetic
-images with known truth (:func:`render_omni_image`, :func:`true_features`) and plots the
-result (:func:`plot_detections`). Conventions are in ``docs/vision.md``.
-
-matplotlib is imported only inside the plotting functions.
+extracts the bearings of radial edges and poles (:func:`extract_bearings`) and renders
+synthetic images with known truth (:func:`render_omni_image`, :func:`true_features`). It knows
+nothing of the search and draws nothing: the figures are in :mod:`omniloc.plot.vision`.
+Conventions are in ``docs/vision.md``.
 """
 
 from __future__ import annotations
@@ -20,8 +19,8 @@ from omniloc.vision.bearings import (
     unwrap_panorama,
 )
 from omniloc.vision.calibrate import MirrorCalibration, calibrate_mirror
-from omniloc.vision.plot import plot_conventions, plot_detections, vision_demo
 from omniloc.vision.render import (
+    DEMO_CAMERA,
     DEMO_POSE,
     OmniCamera,
     OmniScene,
@@ -35,6 +34,7 @@ from omniloc.vision.render import (
 )
 
 __all__ = [
+    "DEMO_CAMERA",
     "DEMO_POSE",
     "EdgeDetections",
     "MirrorCalibration",
@@ -48,11 +48,8 @@ __all__ = [
     "demo_scene",
     "extract_bearings",
     "load_image",
-    "plot_conventions",
-    "plot_detections",
     "random_scene",
     "render_omni_image",
     "true_features",
     "unwrap_panorama",
-    "vision_demo",
 ]

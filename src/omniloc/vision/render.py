@@ -27,6 +27,7 @@ from omniloc.angles import wrap
 from omniloc.errors import VisionError
 
 __all__ = [
+    "DEMO_CAMERA",
     "DEMO_POSE",
     "OmniCamera",
     "OmniScene",
@@ -643,3 +644,10 @@ def random_scene(
             if np.all(clear >= min_separation):
                 return scene, (x, y, theta)
     raise VisionError("could not draw a room and pose with well-separated landmarks")
+
+
+#: Camera of the vision demo (:func:`omniloc.plot.vision_demo`): slightly elliptical,
+#: off-centre, with a rotated forward axis.
+DEMO_CAMERA = OmniCamera(
+    center=(324.6, 236.2), aspect=1.035, radius=212.0, forward=np.deg2rad(25.0)
+)

@@ -1,12 +1,10 @@
-"""Monte Carlo sweeps on synthetic scenes, and correspondence-free evaluation on real data.
+"""Monte Carlo sweeps on synthetic scenes.
 
-* :func:`run_sweep` -- a grid of conditions (noise, spurious and missed rates, number of
-  observations, map size and kind); per trial: draw a map and a pose, observe, run
-  :func:`~omniloc.search.localize`, and compare with the truth, with the linear and refined
-  estimates from the true correspondences, and with the Cramer-Rao bound
-  (:func:`~omniloc.pose.crlb`).
-* :func:`evaluate_dataset` -- the Roh and MRCLAM recordings with correspondences hidden.
-* :func:`save_report` -- CSV + JSON + PNG figures for either result.
+:func:`run_sweep` runs a grid of conditions (noise, spurious and missed rates, number of
+observations, map size and kind); per trial it draws a map and a pose, observes, runs
+:func:`~omniloc.search.localize`, and compares with the truth, with the linear and refined
+estimates from the true correspondences, and with the Cramer-Rao bound
+(:func:`~omniloc.pose.crlb`).
 
 Success of a trial is defined once, here: the BEST solution lies within ``success_pos_m``
 (0.1 m) and ``success_heading_deg`` (1 degree) of the true pose.
@@ -14,40 +12,46 @@ Success of a trial is defined once, here: the BEST solution lies within ``succes
 
 from __future__ import annotations
 
-import csv
 import itertools
 import json
 import math
-import sys
 import time
-from collections.abc import Iterable, Sequence
-from dataclasses import asdict, dataclass, field, fields, replace
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .errors import InputError, OmnilocError
-from .maps import LandmarkMap
-from .pose import Pose, crlb, estimate_pose, refine_pose
-from .search import LocalizationResult, localize
-from .simulate import make_map, observe, random_pose, visible_landmarks
+from ..errors import InputError
+from ..maps import LandmarkMap
+from ..pose import Pose
+from ..search import localize
+from ..simulate import make_map, observe, random_pose, visible_landmarks
+from .common import (
+    NAN,
+    jsonable,
+    known_pairs_errors,
+    matching_solutions,
+    progress_bar,
+    rms,
+    text_table,
+    write_records_csv,
+)
 
 __all__ = [
-    "DatasetResult",
-    "DatasetTrial",
+    "Condition",
+    "ConditionRow",
     "SweepConfig",
     "SweepResult",
     "Trial",
-    "evaluate_dataset",
     "run_sweep",
-    "save_report",
+    "sensor_range",
 ]
 
 FloatArray = NDArray[np.float64]
 RngLike = np.random.Generator | int | None
-NAN = float("nan")
 
 #: Sigma handed to the search when the simulated noise is exactly zero (radians): a tiny
 #: positive value keeps the chi-square gate meaningful for round-off.
@@ -301,12 +305,6 @@ class ConditionRow:
     time_p95_s: float
 
 
-def _rms(x: Iterable[float]) -> float:
-    a = np.asarray(list(x), dtype=np.float64)
-    a = a[np.isfinite(a)]
-    return float(np.sqrt(np.mean(a * a))) if a.size else NAN
-
-
 def _aggregate(cond: Condition, trials: Sequence[Trial]) -> ConditionRow:
     t = np.array([r.time_s for r in trials])
     return ConditionRow(
@@ -316,15 +314,15 @@ def _aggregate(cond: Condition, trials: Sequence[Trial]) -> ConditionRow:
         in_solutions_rate=float(np.mean([r.in_solutions for r in trials])),
         ambiguous_rate=float(np.mean([r.ambiguous for r in trials])),
         complete_rate=float(np.mean([r.complete for r in trials])),
-        pos_rmse_m=_rms(r.pos_err_m for r in trials),
-        heading_rmse_deg=_rms(r.heading_err_deg for r in trials),
-        pos_rmse_success_m=_rms(r.pos_err_m for r in trials if r.success),
-        refined_pos_rmse_m=_rms(r.refined_pos_err_m for r in trials),
-        refined_heading_rmse_deg=_rms(r.refined_heading_err_deg for r in trials),
-        linear_pos_rmse_m=_rms(r.linear_pos_err_m for r in trials),
-        linear_heading_rmse_deg=_rms(r.linear_heading_err_deg for r in trials),
-        crlb_pos_m=_rms(r.crlb_pos_m for r in trials),
-        crlb_heading_deg=_rms(r.crlb_heading_deg for r in trials),
+        pos_rmse_m=rms(r.pos_err_m for r in trials),
+        heading_rmse_deg=rms(r.heading_err_deg for r in trials),
+        pos_rmse_success_m=rms(r.pos_err_m for r in trials if r.success),
+        refined_pos_rmse_m=rms(r.refined_pos_err_m for r in trials),
+        refined_heading_rmse_deg=rms(r.refined_heading_err_deg for r in trials),
+        linear_pos_rmse_m=rms(r.linear_pos_err_m for r in trials),
+        linear_heading_rmse_deg=rms(r.linear_heading_err_deg for r in trials),
+        crlb_pos_m=rms(r.crlb_pos_m for r in trials),
+        crlb_heading_deg=rms(r.crlb_heading_deg for r in trials),
         time_median_s=float(np.median(t)),
         time_p95_s=float(np.percentile(t, 95)),
     )
@@ -333,41 +331,6 @@ def _aggregate(cond: Condition, trials: Sequence[Trial]) -> ConditionRow:
 # --------------------------------------------------------------------------------------------
 # Results
 # --------------------------------------------------------------------------------------------
-
-
-def _fmt(v: Any) -> str:
-    if isinstance(v, float):
-        return "nan" if not math.isfinite(v) else f"{v:.4g}"
-    return str(v)
-
-
-def _write_csv(path: Path, records: Sequence[Any]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
-        if not records:
-            return
-        w = csv.writer(fh)
-        names = [f.name for f in fields(records[0])]
-        w.writerow(names)
-        for r in records:
-            w.writerow([getattr(r, n) for n in names])
-
-
-def _jsonable(v: Any) -> Any:
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return v
-
-
-def _table(records: Sequence[Any], cols: Sequence[tuple[str, str]]) -> str:
-    head = [h for _, h in cols]
-    body = [[_fmt(getattr(r, c)) for c, _ in cols] for r in records]
-    widths = [
-        max(len(h), *(len(b[i]) for b in body)) if body else len(h) for i, h in enumerate(head)
-    ]
-    lines = ["  ".join(h.rjust(w) for h, w in zip(head, widths, strict=True))]
-    lines += ["  ".join(c.rjust(w) for c, w in zip(b, widths, strict=True)) for b in body]
-    return "\n".join(lines)
 
 
 @dataclass(frozen=True)
@@ -381,17 +344,17 @@ class SweepResult:
 
     def to_csv(self, path: str | Path, *, trials_path: str | Path | None = None) -> None:
         """Write the per-condition rows (and, if asked, the trials) as CSV."""
-        _write_csv(Path(path), self.rows)
+        write_records_csv(Path(path), self.rows)
         if trials_path is not None:
-            _write_csv(Path(trials_path), self.trials)
+            write_records_csv(Path(trials_path), self.trials)
 
     def to_json(self, path: str | Path) -> None:
         """Write config, rows and trials as JSON (NaN as null)."""
         data = {
             "config": asdict(self.config),
             "elapsed_s": self.elapsed_s,
-            "rows": [{k: _jsonable(v) for k, v in asdict(r).items()} for r in self.rows],
-            "trials": [{k: _jsonable(v) for k, v in asdict(t).items()} for t in self.trials],
+            "rows": [{k: jsonable(v) for k, v in asdict(r).items()} for r in self.rows],
+            "trials": [{k: jsonable(v) for k, v in asdict(t).items()} for t in self.trials],
         }
         p = Path(path)
         p.parent.mkdir(parents=True, exist_ok=True)
@@ -423,53 +386,13 @@ class SweepResult:
         return (
             f"sweep {self.config.name}: {len(self.trials)} trials in {self.elapsed_s:.1f} s; "
             f"success = best within {self.config.success_pos_m} m and "
-            f"{self.config.success_heading_deg} deg\n" + _table(self.rows, cols)
+            f"{self.config.success_heading_deg} deg\n" + text_table(self.rows, cols)
         )
 
 
 # --------------------------------------------------------------------------------------------
 # One trial
 # --------------------------------------------------------------------------------------------
-
-
-def _known_pairs(
-    lm: LandmarkMap,
-    bearings: FloatArray,
-    assignment: Sequence[int | None],
-    pose: Pose,
-    sigma: float,
-) -> tuple[float, float, float, float, float, float]:
-    """Errors of the linear and refined estimates from the true pairs, and the CRLB."""
-    keep = [i for i, a in enumerate(assignment) if a is not None]
-    if len(keep) < 3:
-        return (NAN,) * 6
-    L = lm.xy[[int(a) for a in assignment if a is not None]]
-    b = bearings[keep]
-    out = [NAN] * 6
-    try:
-        lin = estimate_pose(L, b)
-        d = lin.distance_to(pose)
-        out[0], out[1] = d[0], math.degrees(d[1])
-        ref, _ = refine_pose(L, b)
-        d = ref.distance_to(pose)
-        out[2], out[3] = d[0], math.degrees(d[1])
-    except OmnilocError:
-        pass
-    try:
-        # The bound scales linearly with sigma; sigma = 0 gives a zero bound.
-        C = crlb(L, pose, 1.0)
-        out[4] = sigma * math.sqrt(max(C[0, 0] + C[1, 1], 0.0))
-        out[5] = math.degrees(sigma * math.sqrt(max(C[2, 2], 0.0)))
-    except OmnilocError:
-        pass
-    return tuple(out)  # type: ignore[return-value]
-
-
-def _match(res: LocalizationResult, pose: Pose, pos_tol: float, hdg_tol: float) -> list[bool]:
-    return [
-        d[0] <= pos_tol and d[1] <= hdg_tol
-        for d in (s.pose.distance_to(pose) for s in res.solutions)
-    ]
 
 
 def sensor_range(lm: LandmarkMap, n_true: int) -> float:
@@ -530,7 +453,7 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
         rng=gen,
     )
     n_true = len(scene.assignment) - scene.n_spurious
-    known = _known_pairs(lm, scene.bearings, scene.assignment, pose, sigma)
+    known = known_pairs_errors(lm, scene.bearings, scene.assignment, pose, sigma)
     pos_tol, hdg_tol = cfg.success_pos_m, math.radians(cfg.success_heading_deg)
     base = dict(
         **asdict(cond),
@@ -571,7 +494,7 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
         **search_kw,
     )
     dt = time.perf_counter() - t0
-    good = _match(res, pose, pos_tol, hdg_tol)
+    good = matching_solutions(res, pose, pos_tol, hdg_tol)
     best = res.best
     err = best.pose.distance_to(pose) if best is not None else (NAN, NAN)
     return Trial(
@@ -591,12 +514,6 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
 def _run_chunk(args: tuple[SweepConfig, list[tuple[Condition, int, int]]]) -> list[Trial]:
     cfg, jobs = args
     return [_run_trial(cfg, c, k, s) for c, k, s in jobs]
-
-
-def _progress(total: int, enabled: bool, desc: str) -> Any:
-    from tqdm import tqdm
-
-    return tqdm(total=total, desc=desc, disable=not (enabled and sys.stderr.isatty()))
 
 
 def run_sweep(
@@ -627,7 +544,7 @@ def run_sweep(
     jobs = [(c, k, int(seeds[i, k])) for i, c in enumerate(conds) for k in range(config.trials)]
     t0 = time.perf_counter()
     trials: list[Trial] = []
-    bar = _progress(len(jobs), progress, f"sweep {config.name}")
+    bar = progress_bar(len(jobs), progress, f"sweep {config.name}")
     try:
         if workers <= 1:
             for c, k, s in jobs:
@@ -648,313 +565,3 @@ def run_sweep(
     for i, c in enumerate(conds):
         rows.append(_aggregate(c, trials[i * config.trials : (i + 1) * config.trials]))
     return SweepResult(config, rows, trials, time.perf_counter() - t0)
-
-
-# --------------------------------------------------------------------------------------------
-# Real data
-# --------------------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True)
-class DatasetTrial:
-    """One real sample localized without correspondences (errors in metres and degrees)."""
-
-    source: str
-    n_bearings: int
-    n_spurious: int
-    n_solutions: int
-    best_ok: bool
-    in_solutions: bool
-    true_assignment_found: bool
-    ambiguous: bool
-    complete: bool
-    pos_err_m: float
-    heading_err_deg: float
-    oracle_pos_err_m: float
-    oracle_heading_err_deg: float
-    oracle_ok: bool
-    best_near_oracle: bool
-    oracle_in_solutions: bool
-    time_s: float
-
-
-@dataclass(frozen=True)
-class DatasetResult:
-    """What :func:`evaluate_dataset` measured.
-
-    ``best_rate``: the best solution is within tolerance of the ground truth;
-    ``in_solutions_rate``: some solution is; ``assignment_rate``: some solution has exactly
-    the true correspondences (spurious bearings as None); ``oracle_rate``: the refined pose
-    from the TRUE correspondences is within tolerance (what any solver could reach at this
-    tolerance); ``best_near_oracle_rate`` / ``oracle_in_solutions_rate``: the best / some
-    solution is within tolerance of that oracle pose (judges the search alone, not the
-    sensor's biases or the ground truth's placement errors).
-    """
-
-    kind: str
-    options: dict[str, Any]
-    pos_tol_m: float
-    heading_tol_deg: float
-    trials: list[DatasetTrial] = field(repr=False)
-    elapsed_s: float = 0.0
-
-    @property
-    def n(self) -> int:
-        return len(self.trials)
-
-    def _rate(self, name: str) -> float:
-        return float(np.mean([getattr(t, name) for t in self.trials])) if self.trials else NAN
-
-    @property
-    def best_rate(self) -> float:
-        return self._rate("best_ok")
-
-    @property
-    def in_solutions_rate(self) -> float:
-        return self._rate("in_solutions")
-
-    @property
-    def assignment_rate(self) -> float:
-        return self._rate("true_assignment_found")
-
-    @property
-    def ambiguous_rate(self) -> float:
-        return self._rate("ambiguous")
-
-    @property
-    def complete_rate(self) -> float:
-        return self._rate("complete")
-
-    @property
-    def oracle_rate(self) -> float:
-        return self._rate("oracle_ok")
-
-    @property
-    def best_near_oracle_rate(self) -> float:
-        return self._rate("best_near_oracle")
-
-    @property
-    def oracle_in_solutions_rate(self) -> float:
-        return self._rate("oracle_in_solutions")
-
-    @property
-    def time_median_s(self) -> float:
-        return float(np.median([t.time_s for t in self.trials])) if self.trials else NAN
-
-    @property
-    def time_p95_s(self) -> float:
-        return float(np.percentile([t.time_s for t in self.trials], 95)) if self.trials else NAN
-
-    def as_dict(self) -> dict[str, Any]:
-        """Aggregates as a plain dictionary."""
-        return {
-            "kind": self.kind,
-            "n": self.n,
-            "pos_tol_m": self.pos_tol_m,
-            "heading_tol_deg": self.heading_tol_deg,
-            "best_rate": self.best_rate,
-            "in_solutions_rate": self.in_solutions_rate,
-            "assignment_rate": self.assignment_rate,
-            "ambiguous_rate": self.ambiguous_rate,
-            "complete_rate": self.complete_rate,
-            "oracle_rate": self.oracle_rate,
-            "best_near_oracle_rate": self.best_near_oracle_rate,
-            "oracle_in_solutions_rate": self.oracle_in_solutions_rate,
-            "time_median_s": self.time_median_s,
-            "time_p95_s": self.time_p95_s,
-            "elapsed_s": self.elapsed_s,
-            "options": self.options,
-        }
-
-    def to_csv(self, path: str | Path) -> None:
-        """Write the per-sample records as CSV."""
-        _write_csv(Path(path), self.trials)
-
-    def to_json(self, path: str | Path) -> None:
-        """Write aggregates and per-sample records as JSON (NaN as null)."""
-        data = {k: _jsonable(v) for k, v in self.as_dict().items()}
-        data["trials"] = [{k: _jsonable(v) for k, v in asdict(t).items()} for t in self.trials]
-        p = Path(path)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        p.write_text(json.dumps(data, indent=1))
-
-    def summary(self) -> str:
-        """One plain-text paragraph of the aggregates."""
-        d = self.as_dict()
-        return (
-            f"{self.kind}: {d['n']} samples in {self.elapsed_s:.1f} s, tolerance "
-            f"{self.pos_tol_m} m / {self.heading_tol_deg} deg\n"
-            f"  best solution correct   {d['best_rate']:.3f}\n"
-            f"  true pose among sols    {d['in_solutions_rate']:.3f}\n"
-            f"  true assignment found   {d['assignment_rate']:.3f}\n"
-            f"  ambiguity reported      {d['ambiguous_rate']:.3f}\n"
-            f"  search complete         {d['complete_rate']:.3f}\n"
-            f"  oracle within tolerance {d['oracle_rate']:.3f}\n"
-            f"  best near oracle pose   {d['best_near_oracle_rate']:.3f}\n"
-            f"  oracle pose among sols  {d['oracle_in_solutions_rate']:.3f}\n"
-            f"  time median / p95       {d['time_median_s']:.3f} s / {d['time_p95_s']:.3f} s"
-        )
-
-
-#: Solver options and tolerances per dataset (see docs/evaluation.md for the reasons).
-DATASET_DEFAULTS: dict[str, dict[str, Any]] = {
-    "roh": {
-        "options": {"sigma": float(np.deg2rad(2.0)), "method": "robust", "timeout_s": 5.0},
-        "pos_tol_m": 0.3,
-        "heading_tol_deg": 10.0,
-    },
-    "mrclam": {
-        "options": {
-            "sigma": float(np.deg2rad(0.5)),
-            "fov": float(np.deg2rad(67.0)),
-            "max_range": 8.0,
-            "timeout_s": 5.0,
-        },
-        "pos_tol_m": 0.3,
-        "heading_tol_deg": 5.0,
-    },
-}
-
-
-def _oracle_pose(lm: LandmarkMap, s: Any) -> Pose:
-    """ML pose from the sample's TRUE correspondences (ground truth if that fails)."""
-    pose: Pose = s.pose
-    keep = [i for i, a in enumerate(s.assignment) if a is not None]
-    try:
-        rows = [int(a) for a in s.assignment if a is not None]
-        return refine_pose(lm.xy[rows], s.bearings[keep])[0]
-    except OmnilocError:
-        return pose
-
-
-def evaluate_dataset(
-    kind: str,
-    path: str | Path,
-    *,
-    max_samples: int | None = None,
-    rng: RngLike = 0,
-    progress: bool = True,
-    options: dict[str, Any] | None = None,
-    pos_tol_m: float | None = None,
-    heading_tol_deg: float | None = None,
-    include_robots: bool = True,
-) -> DatasetResult:
-    """Correspondence-free localization on a real recording.
-
-    Parameters
-    ----------
-    kind : {"roh", "mrclam"}
-    path : str or Path
-        The dataset folder.
-    max_samples : int, optional
-        Use the first samples only.
-    rng : Generator, int or None
-        Shuffles the bearings of each sample.
-    options : dict, optional
-        Overrides of the :func:`~omniloc.search.localize` options in
-        :data:`DATASET_DEFAULTS`. For MRCLAM ``max_spurious`` is the number of robot
-        detections in the frame unless given here.
-    pos_tol_m, heading_tol_deg : float, optional
-        A solution is correct within these of the ground truth.
-    include_robots : bool
-        MRCLAM: add the other robots' bearings as spurious observations.
-
-    Returns
-    -------
-    DatasetResult
-    """
-    from .datasets import load_mrclam, load_roh
-
-    if kind not in DATASET_DEFAULTS:
-        raise InputError(f"dataset kind must be 'roh' or 'mrclam', got {kind!r}")
-    if max_samples is not None and max_samples < 1:
-        raise InputError(f"max_samples must be >= 1, got {max_samples}")
-    dflt = DATASET_DEFAULTS[kind]
-    opts: dict[str, Any] = {**dflt["options"], **(options or {})}
-    ptol = float(dflt["pos_tol_m"] if pos_tol_m is None else pos_tol_m)
-    htol = float(dflt["heading_tol_deg"] if heading_tol_deg is None else heading_tol_deg)
-    if kind == "roh":
-        ds_r = load_roh(path)
-        lm = ds_r.landmarks
-        n_total = len(ds_r) if max_samples is None else min(len(ds_r), max_samples)
-        samples = ds_r.samples(rng, max_samples=max_samples)
-    else:
-        ds_m = load_mrclam(path, include_robots=include_robots)
-        lm = ds_m.landmarks
-        n_total = len(ds_m) if max_samples is None else min(len(ds_m), max_samples)
-        samples = ds_m.samples(rng, max_samples=max_samples)
-    t_all = time.perf_counter()
-    out: list[DatasetTrial] = []
-    bar = _progress(n_total, progress, f"dataset {kind}")
-    try:
-        for s in samples:
-            kw = dict(opts)
-            kw.setdefault("max_spurious", s.n_spurious)
-            t0 = time.perf_counter()
-            res = localize(lm, s.bearings, **kw)
-            dt = time.perf_counter() - t0
-            good = _match(res, s.pose, ptol, math.radians(htol))
-            best = res.best
-            err = best.pose.distance_to(s.pose) if best is not None else (NAN, NAN)
-            known = _known_pairs(lm, s.bearings, s.assignment, s.pose, 1.0)
-            near = _match(res, _oracle_pose(lm, s), ptol, math.radians(htol))
-            out.append(
-                DatasetTrial(
-                    source=s.source,
-                    n_bearings=int(s.bearings.size),
-                    n_spurious=s.n_spurious,
-                    n_solutions=len(res),
-                    best_ok=bool(good) and good[0],
-                    in_solutions=any(good),
-                    true_assignment_found=any(
-                        sol.assignment == s.assignment for sol in res.solutions
-                    ),
-                    ambiguous=res.ambiguous,
-                    complete=res.complete,
-                    pos_err_m=err[0],
-                    heading_err_deg=math.degrees(err[1]),
-                    oracle_pos_err_m=known[2],
-                    oracle_heading_err_deg=known[3],
-                    oracle_ok=bool(known[2] <= ptol and known[3] <= htol),
-                    best_near_oracle=bool(near) and near[0],
-                    oracle_in_solutions=any(near),
-                    time_s=dt,
-                )
-            )
-            bar.update(1)
-    finally:
-        bar.close()
-    return DatasetResult(kind, opts, ptol, htol, out, time.perf_counter() - t_all)
-
-
-# --------------------------------------------------------------------------------------------
-# Report
-# --------------------------------------------------------------------------------------------
-
-
-def save_report(result: SweepResult | DatasetResult, out_dir: str | Path) -> list[Path]:
-    """Write CSV, JSON and PNG figures of a result into ``out_dir``; return the paths.
-
-    A sweep gives ``<name>_rows.csv``, ``<name>_trials.csv``, ``<name>.json``,
-    ``<name>_success.png`` and ``<name>_rmse.png``; a dataset gives ``<kind>.csv``,
-    ``<kind>.json`` and ``<kind>_errors.png``.
-    """
-    from . import plot_eval
-
-    d = Path(out_dir)
-    d.mkdir(parents=True, exist_ok=True)
-    if isinstance(result, SweepResult):
-        name = result.config.name
-        paths = [d / f"{name}_rows.csv", d / f"{name}_trials.csv", d / f"{name}.json"]
-        result.to_csv(paths[0], trials_path=paths[1])
-        result.to_json(paths[2])
-        paths.append(plot_eval.plot_success_vs_noise(result, d / f"{name}_success.png"))
-        paths.append(plot_eval.plot_rmse_vs_crlb(result, d / f"{name}_rmse.png"))
-        return paths
-    if isinstance(result, DatasetResult):
-        paths = [d / f"{result.kind}.csv", d / f"{result.kind}.json"]
-        result.to_csv(paths[0])
-        result.to_json(paths[1])
-        paths.append(plot_eval.plot_dataset_errors(result, d / f"{result.kind}_errors.png"))
-        return paths
-    raise InputError(f"save_report takes a SweepResult or a DatasetResult, got {type(result)}")

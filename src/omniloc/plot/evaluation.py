@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 if TYPE_CHECKING:
-    from .evaluate import DatasetResult, SweepResult
+    from ..evaluate import DatasetResult, SweepResult
 
 __all__ = ["plot_dataset_errors", "plot_rmse_vs_crlb", "plot_success_vs_noise"]
 

@@ -15,11 +15,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from omniloc.angles import wrap
-from omniloc.errors import VisionError
-from omniloc.vision.bearings import EdgeDetections, extract_bearings, unwrap_panorama
-from omniloc.vision.calibrate import MirrorCalibration
-from omniloc.vision.render import (
+from ..angles import wrap
+from ..errors import VisionError
+from ..vision.bearings import EdgeDetections, extract_bearings, unwrap_panorama
+from ..vision.calibrate import MirrorCalibration
+from ..vision.render import (
+    DEMO_CAMERA,
     DEMO_POSE,
     OmniCamera,
     OmniScene,
@@ -35,11 +36,6 @@ if TYPE_CHECKING:
 __all__ = ["plot_conventions", "plot_detections", "vision_demo"]
 
 KIND_COLORS = {"edge": "tab:orange", "pole": "tab:cyan"}
-
-#: Camera used by :func:`vision_demo`: slightly elliptical, off-centre, rotated forward axis.
-DEMO_CAMERA = OmniCamera(
-    center=(324.6, 236.2), aspect=1.035, radius=212.0, forward=np.deg2rad(25.0)
-)
 
 
 def _new_figure(nrows: int, figsize: tuple[float, float]) -> tuple[Figure, list[Axes]]:
@@ -286,7 +282,7 @@ def vision_demo(
     """
     import cv2
 
-    from omniloc.angles import angdiff
+    from ..angles import angdiff
 
     scn = demo_scene() if scene is None else scene
     p = DEMO_POSE if pose is None else pose

@@ -1,7 +1,7 @@
 """Figures of maps, bearings and solutions (like the seed paper's Figs. 4-6).
 
-The only module of the core that imports matplotlib, and only inside its functions, with the
-object-oriented API (no pyplot state), so it works headless and in threads.
+matplotlib is imported only inside the functions, with the object-oriented API (no pyplot
+state), so they work headless and in threads.
 """
 
 from __future__ import annotations
@@ -13,15 +13,15 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .errors import InputError
-from .maps import LandmarkMap, as_landmark_map
-from .pose import Pose
+from ..errors import InputError
+from ..maps import LandmarkMap, as_landmark_map
+from ..pose import Pose
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-    from .search import LocalizationResult
+    from ..search import LocalizationResult
 
 __all__ = ["plot_localization", "plot_solutions_grid"]
 

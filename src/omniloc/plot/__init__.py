@@ -1,0 +1,28 @@
+"""Figures: the only package of omniloc that imports matplotlib.
+
+matplotlib is imported inside each function, and figures are plain
+:class:`matplotlib.figure.Figure` objects rendered with the Agg canvas: no pyplot state, safe
+without a display and in threads.
+
+* :mod:`.scene` -- maps, bearings and solutions (like the seed paper's Figs. 4-6);
+* :mod:`.evaluation` -- figures of Monte Carlo sweeps and real-data runs;
+* :mod:`.vision` -- the vision front end's detections, its conventions, and the vision demo.
+"""
+
+from __future__ import annotations
+
+from .evaluation import plot_dataset_errors, plot_rmse_vs_crlb, plot_success_vs_noise
+from .scene import draw_scene, plot_localization, plot_solutions_grid
+from .vision import plot_conventions, plot_detections, vision_demo
+
+__all__ = [
+    "draw_scene",
+    "plot_conventions",
+    "plot_dataset_errors",
+    "plot_detections",
+    "plot_localization",
+    "plot_rmse_vs_crlb",
+    "plot_solutions_grid",
+    "plot_success_vs_noise",
+    "vision_demo",
+]

@@ -1,0 +1,427 @@
+"""The bearing sensor: noise, field of view, range limits, detection and clutter.
+
+Every part of omniloc that needs to know what the sensor does reads it from one
+:class:`SensorModel`: the search (its gates and the ranges it prunes by), the scoring of
+interpretations (the likelihood of a frame), the tracker (the same likelihood over time) and
+the simulation (what a robot at a pose would see). Each derived value -- the gate, the range
+limits the search applies, the margins of "plainly visible", the clutter density -- is
+computed here and only here.
+
+The likelihood of a frame
+-------------------------
+For a pose and an assignment of the bearings to landmarks (or to clutter), the log-likelihood
+ratio against "every bearing is clutter" is the standard one of multiple-hypothesis tracking
+(Reid 1979; Bar-Shalom & Li 1995; Cox & Leonard 1994), summed over the frame:
+
+* a matched bearing: ``ln p_detect - nu^2 / (2 S) - ln sqrt(2 pi S)``, where ``nu`` is the
+  innovation (predicted - measured) and ``S`` its variance;
+* an unmatched bearing: ``ln(clutter / W)``, the clutter density (expected spurious bearings
+  per frame over the width ``W`` of the field of view, per radian);
+* a landmark plainly visible from the pose but not observed: ``ln(1 - p_detect)``.
+
+See :mod:`omniloc.search.scoring` for how interpretations are turned into a posterior.
+
+Estimating the parameters from a recording
+------------------------------------------
+With ground truth (or the poses of a confident run): ``sigma`` is the robust spread of the
+bearing residuals of matched landmarks (1.4826 x their median absolute deviation);
+``p_detect`` is, over all frames, the number of landmark detections divided by the number of
+landmarks plainly visible from the true pose (:meth:`SensorModel.plainly_visible`);
+``clutter`` is the mean number of bearings per frame that match no landmark. The values for
+the recordings in ``shared/data`` are in :data:`omniloc.evaluate.DATASET_DEFAULTS`.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.special import chdtri, ndtri
+
+from .angles import TWO_PI, wrap
+from .errors import InputError
+from .pose import Pose
+
+__all__ = [
+    "DEFAULT_THRESHOLD",
+    "IMPLAUSIBLE_NOISE",
+    "RANGE_SLACK",
+    "SensorModel",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: The paper's fixed gate (rule ii) when no noise level is given: 1 degree.
+DEFAULT_THRESHOLD = float(np.deg2rad(1.0))
+
+#: Relative slack of the range limits as the search applies them: a hypothesis's pose is an
+#: estimate, and a landmark 19.9 m away must not fall out of a 20 m range by 0.2 m of error.
+RANGE_SLACK = 0.05
+
+#: "Plainly visible" (negative evidence): this far inside the range limits ...
+VISIBLE_RANGE_MARGIN = 0.05
+#: ... and this many noise standard deviations inside the field of view, and twice that away
+#: from every reported bearing (a landmark right behind a reported one may be hidden by it).
+VISIBLE_NOISE_MARGIN = 3.0
+
+#: A bearing noise or gate wider than this (radians, 10 degrees) is almost surely a mistake
+#: (degrees typed for radians): the gate then accepts nearly every pairing and the search
+#: has nothing to prune with. It is refused unless ``allow_wide=True``.
+IMPLAUSIBLE_NOISE = float(np.deg2rad(10.0))
+
+
+def _number(name: str, value: Any, *, lo: float = 0.0, allow_zero: bool = False) -> float:
+    """A finite float >= ``lo`` (> ``lo`` unless ``allow_zero``), or a clear error."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise InputError(f"{name} must be a number, got {type(value).__name__} {value!r}")
+    v = float(value)
+    if not math.isfinite(v) or v < lo or (v == lo and not allow_zero):
+        rel = ">=" if allow_zero else ">"
+        raise InputError(f"{name} must be a finite number {rel} {lo:g}, got {value!r}")
+    return v
+
+
+def _probability(name: str, value: Any) -> float:
+    v = _number(name, value, allow_zero=True)
+    if not 0.0 < v < 1.0:
+        raise InputError(f"{name} must lie strictly between 0 and 1, got {value!r}")
+    return v
+
+
+@functools.lru_cache(maxsize=64)
+def _joint_gates(confidence: float, m: int) -> FloatArray:
+    """By number of matched pairs n = 0..m: the chi-square quantile with n - 3 dof."""
+    dof = np.arange(m + 1) - 3.0
+    with np.errstate(invalid="ignore"):
+        joint = np.where(dof > 0, chdtri(np.maximum(dof, 1.0), 1.0 - confidence), np.inf)
+    joint.setflags(write=False)
+    return np.asarray(joint)
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """What a bearing sensor measures and how well: the model every estimate relies on.
+
+    Parameters
+    ----------
+    sigma : float, optional
+        Standard deviation of the bearing noise, radians. When given, the search gates with a
+        chi-square test on each innovation (its variance includes the pose's uncertainty).
+        When omitted, the search gates with the paper's fixed ``threshold`` and likelihoods
+        use ``threshold / 3``.
+    threshold : float, default 1 degree
+        The paper's rule (ii): the largest accepted ``|predicted - measured|``, radians. Used
+        only when ``sigma`` is None.
+    gate_confidence : float, default 0.99
+        Confidence of the chi-square gates (each bearing, and the joint test of a complete
+        interpretation).
+    fov : float, optional
+        Full field of view, radians (None or 2 pi: omnidirectional), centred on forward.
+    max_range, min_range : float, optional
+        Range limits of detection, metres.
+    p_detect : float, optional
+        Probability that a landmark plainly visible from the pose is detected. None: the
+        sensor says nothing about landmarks it did not report (no negative evidence), and a
+        matched bearing is scored as if ``p_detect`` were :attr:`DETECT_UNKNOWN`.
+    clutter : float, optional
+        Expected number of spurious bearings per frame (things not on the map), spread
+        uniformly over the field of view. None: the search's ``max_spurious`` is taken as the
+        expected count, with at least :attr:`CLUTTER_UNKNOWN`.
+    allow_wide : bool, default False
+        Accept a ``sigma`` or ``threshold`` above :data:`IMPLAUSIBLE_NOISE` (10 degrees).
+
+    Raises
+    ------
+    InputError
+        A value that is not a finite number in its range (the message names it), ``min_range
+        >= max_range``, or an implausibly wide noise without ``allow_wide``.
+
+    Examples
+    --------
+    >>> s = SensorModel(sigma=np.deg2rad(0.5), fov=np.deg2rad(65), max_range=8.0)
+    >>> round(float(np.rad2deg(s.gate_width)), 3)
+    1.288
+    >>> s.half_fov is not None, s.reach_max
+    (True, 8.4)
+    """
+
+    sigma: float | None = None
+    threshold: float = DEFAULT_THRESHOLD
+    gate_confidence: float = 0.99
+    fov: float | None = None
+    max_range: float | None = None
+    min_range: float | None = None
+    p_detect: float | None = None
+    clutter: float | None = None
+    allow_wide: bool = field(default=False, repr=False)
+
+    #: p_detect assumed for the likelihood of a match when the sensor does not say.
+    DETECT_UNKNOWN = 0.5
+    #: Expected clutter per frame assumed when neither ``clutter`` nor a spurious count says.
+    CLUTTER_UNKNOWN = 0.5
+
+    def __post_init__(self) -> None:
+        set_ = object.__setattr__
+        if self.sigma is not None:
+            set_(self, "sigma", _number("sigma", self.sigma))
+        set_(self, "threshold", _number("threshold", self.threshold, allow_zero=True))
+        set_(self, "gate_confidence", _probability("gate_confidence", self.gate_confidence))
+        if self.fov is not None:
+            fov = _number("fov", self.fov)
+            if fov > TWO_PI + 1e-9:
+                raise InputError(f"fov is a full angle in radians, at most 2*pi, got {fov}")
+            set_(self, "fov", min(fov, TWO_PI))
+        if self.max_range is not None:
+            set_(self, "max_range", _number("max_range", self.max_range))
+        if self.min_range is not None:
+            set_(self, "min_range", _number("min_range", self.min_range, allow_zero=True))
+        if (
+            self.max_range is not None
+            and self.min_range is not None
+            and self.min_range >= self.max_range
+        ):
+            raise InputError(
+                f"min_range ({self.min_range}) must be smaller than max_range ({self.max_range})"
+            )
+        if self.p_detect is not None:
+            set_(self, "p_detect", _probability("p_detect", self.p_detect))
+        if self.clutter is not None:
+            set_(self, "clutter", _number("clutter", self.clutter, allow_zero=True))
+        if not isinstance(self.allow_wide, (bool, np.bool_)):
+            raise InputError(f"allow_wide must be True or False, got {self.allow_wide!r}")
+        wide = self.sigma if self.sigma is not None else self.threshold
+        if wide > IMPLAUSIBLE_NOISE and not self.allow_wide:
+            name = "sigma" if self.sigma is not None else "threshold"
+            raise InputError(
+                f"{name}={wide:.4g} rad ({math.degrees(wide):.1f} deg) is implausibly wide for a "
+                "bearing sensor (above 10 deg): angles are in radians (did you pass degrees?); "
+                "pass allow_wide=True if you mean it"
+            )
+
+    # ---- construction ------------------------------------------------------------------------
+    @classmethod
+    def from_options(
+        cls,
+        *,
+        sigma: float | None = None,
+        threshold: float = DEFAULT_THRESHOLD,
+        confidence: float = 0.99,
+        fov: float | None = None,
+        max_range: float | None = None,
+        min_range: float | None = None,
+        p_miss: float | None = None,
+        p_detect: float | None = None,
+        clutter: float | None = None,
+        allow_wide: bool = False,
+    ) -> SensorModel:
+        """A model from :func:`~omniloc.localize`'s keyword arguments (``p_miss`` is
+        ``1 - p_detect``; ``confidence`` the gate's)."""
+        if p_miss is not None:
+            if p_detect is not None:
+                raise InputError("give p_miss or p_detect, not both (p_miss = 1 - p_detect)")
+            p_detect = 1.0 - _probability("p_miss", p_miss)
+        if isinstance(confidence, bool) or not isinstance(
+            confidence, (int, float, np.integer, np.floating)
+        ):
+            raise InputError(f"confidence must be a number, got {confidence!r}")
+        if not 0.0 < float(confidence) < 1.0:
+            raise InputError(f"confidence must lie strictly between 0 and 1, got {confidence!r}")
+        return cls(
+            sigma=sigma,
+            threshold=threshold,
+            gate_confidence=float(confidence),
+            fov=fov,
+            max_range=max_range,
+            min_range=min_range,
+            p_detect=p_detect,
+            clutter=clutter,
+            allow_wide=allow_wide,
+        )
+
+    def replace(self, **changes: Any) -> SensorModel:
+        """A copy with some fields changed (validated again)."""
+        return replace(self, **changes)
+
+    # ---- noise and gates ---------------------------------------------------------------------
+    @property
+    def noise(self) -> float:
+        """Bearing noise standard deviation used for likelihoods and covariances, radians:
+        ``sigma``, or ``threshold / 3`` when only a threshold is known."""
+        return self.sigma if self.sigma is not None else self.threshold / 3.0
+
+    @property
+    def p_miss(self) -> float | None:
+        """``1 - p_detect`` (None when the detection probability is not known)."""
+        return None if self.p_detect is None else 1.0 - self.p_detect
+
+    @property
+    def gate_chi2(self) -> float:
+        """The one-degree-of-freedom chi-square gate at :attr:`gate_confidence`."""
+        return float(ndtri(0.5 + 0.5 * self.gate_confidence) ** 2)
+
+    def joint_chi2(self, m: int) -> FloatArray:
+        """By number of matched pairs n = 0..m, the joint test's chi-square quantile with
+        n - 3 degrees of freedom (inf for n <= 3: three pairs always fit exactly)."""
+        return _joint_gates(self.gate_confidence, int(m))
+
+    @property
+    def gate_width(self) -> float:
+        """Half-width of a bearing's gate when the pose is known exactly, radians."""
+        if self.sigma is None:
+            return self.threshold
+        return math.sqrt(self.gate_chi2) * self.sigma
+
+    # ---- visibility --------------------------------------------------------------------------
+    @property
+    def half_fov(self) -> float | None:
+        """Half the field of view, radians; None for an omnidirectional sensor."""
+        if self.fov is None or self.fov >= TWO_PI - 1e-9:
+            return None
+        return 0.5 * self.fov
+
+    @property
+    def fov_width(self) -> float:
+        """Width of the field of view, radians (2 pi when omnidirectional)."""
+        half = self.half_fov
+        return TWO_PI if half is None else 2.0 * half
+
+    @property
+    def reach_max(self) -> float | None:
+        """``max_range`` as the search applies it: RANGE_SLACK wider."""
+        return None if self.max_range is None else self.max_range * (1.0 + RANGE_SLACK)
+
+    @property
+    def reach_min(self) -> float | None:
+        """``min_range`` as the search applies it: RANGE_SLACK narrower."""
+        return None if self.min_range is None else self.min_range / (1.0 + RANGE_SLACK)
+
+    @property
+    def plain_max(self) -> float | None:
+        """Farthest a landmark can be and still count as plainly visible, metres."""
+        return None if self.max_range is None else (1.0 - VISIBLE_RANGE_MARGIN) * self.max_range
+
+    @property
+    def plain_min(self) -> float | None:
+        """Nearest a landmark can be and still count as plainly visible, metres."""
+        return None if self.min_range is None else (1.0 + VISIBLE_RANGE_MARGIN) * self.min_range
+
+    @property
+    def plain_margin(self) -> float:
+        """Angular margin of "plainly visible": this far inside the field of view, twice
+        this away from every reported bearing, radians."""
+        return VISIBLE_NOISE_MARGIN * self.noise
+
+    @property
+    def limits_visibility(self) -> bool:
+        """Whether the sensor's range or field of view limits what it can see."""
+        return self.max_range is not None or self.min_range is not None or self.half_fov is not None
+
+    def visible(self, landmarks_xy: ArrayLike, pose: Pose | ArrayLike) -> NDArray[np.bool_]:
+        """Which landmarks lie within the range limits and the field of view of a pose.
+
+        Parameters
+        ----------
+        landmarks_xy : array_like, shape (N, 2)
+            Landmark positions, metres.
+        pose : Pose or array_like, shape (3,)
+            ``(x, y, theta)``.
+
+        Returns
+        -------
+        ndarray of bool, shape (N,)
+            A landmark at the pose's own position is never visible.
+        """
+        L, p = _landmarks_pose(landmarks_xy, pose)
+        d = L - p[:2]
+        r2 = d[:, 0] ** 2 + d[:, 1] ** 2
+        ok = r2 > 1e-18
+        if self.max_range is not None:
+            ok &= r2 <= self.max_range**2
+        if self.min_range is not None:
+            ok &= r2 >= self.min_range**2
+        half = self.half_fov
+        if half is not None:
+            b = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - p[2]))
+            ok &= np.abs(b) <= half
+        return np.asarray(ok)
+
+    def plainly_visible(
+        self, landmarks_xy: ArrayLike, pose: Pose | ArrayLike, bearings: ArrayLike = ()
+    ) -> NDArray[np.bool_]:
+        """Which landmarks the sensor should plainly see from a pose: inside the range limits
+        by :data:`VISIBLE_RANGE_MARGIN`, inside the field of view by :attr:`plain_margin`,
+        and more than twice that away from every reported bearing (not hidden behind one).
+
+        These are the landmarks whose absence is evidence against the pose (negative
+        evidence), and what ``p_detect`` is the detection rate of.
+        """
+        L, p = _landmarks_pose(landmarks_xy, pose)
+        d = L - p[:2]
+        r2 = d[:, 0] ** 2 + d[:, 1] ** 2
+        ok = r2 > 1e-18
+        if self.plain_max is not None:
+            ok &= r2 <= self.plain_max**2
+        if self.plain_min is not None:
+            ok &= r2 >= self.plain_min**2
+        pred = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - p[2]))
+        half = self.half_fov
+        margin = self.plain_margin
+        if half is not None:
+            ok &= np.abs(pred) <= half - margin
+        b = np.asarray(bearings, dtype=np.float64).reshape(-1)
+        if b.size:
+            sep = np.abs(np.asarray(wrap(pred[:, None] - b[None, :])))
+            ok &= sep.min(axis=1) > 2.0 * margin
+        return np.asarray(ok)
+
+    # ---- the likelihood of a frame -----------------------------------------------------------
+    def clutter_rate(self, max_spurious: int = 0) -> float:
+        """Expected spurious bearings per frame: :attr:`clutter`, or when it is not given the
+        number the caller allows for (``max_spurious``), at least CLUTTER_UNKNOWN."""
+        if self.clutter is not None:
+            return self.clutter
+        return max(float(max_spurious), self.CLUTTER_UNKNOWN)
+
+    def log_clutter_density(self, max_spurious: int = 0) -> float:
+        """ln of the clutter density per radian: an unmatched bearing's log-likelihood."""
+        rate = self.clutter_rate(max_spurious)
+        return math.log(max(rate, 1e-300) / self.fov_width)
+
+    @property
+    def log_detect(self) -> float:
+        """``ln p_detect`` (of :attr:`DETECT_UNKNOWN` when unknown)."""
+        return math.log(self.DETECT_UNKNOWN if self.p_detect is None else self.p_detect)
+
+    @property
+    def log_miss(self) -> float:
+        """``ln(1 - p_detect)``: a plainly visible landmark not observed (0 when unknown:
+        then nothing is inferred from what the sensor did not report)."""
+        return 0.0 if self.p_detect is None else math.log1p(-self.p_detect)
+
+    def match_log_likelihood(self, innovation: ArrayLike, variance: ArrayLike) -> FloatArray:
+        """``ln p_detect - nu^2 / (2 S) - ln sqrt(2 pi S)`` for innovations ``nu`` with
+        variances ``S`` (rad^2): a matched bearing's log-likelihood."""
+        nu = np.asarray(innovation, dtype=np.float64)
+        S = np.asarray(variance, dtype=np.float64)
+        return np.asarray(self.log_detect - 0.5 * nu * nu / S - 0.5 * np.log(TWO_PI * S))
+
+
+def _landmarks_pose(
+    landmarks_xy: ArrayLike, pose: Pose | ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    try:
+        L = np.asarray(landmarks_xy, dtype=np.float64)
+        p = pose.as_array() if isinstance(pose, Pose) else np.asarray(pose, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"landmarks_xy and pose must be numeric arrays: {exc}") from exc
+    if L.ndim != 2 or L.shape[1] != 2:
+        raise InputError(f"landmarks_xy must have shape (N, 2), got {L.shape}")
+    if p.shape != (3,):
+        raise InputError(f"pose must have shape (3,), got {p.shape}")
+    if not (np.isfinite(L).all() and np.isfinite(p).all()):
+        raise InputError("landmarks_xy and pose must be finite")
+    return L, p
