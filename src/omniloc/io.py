@@ -37,10 +37,19 @@ from omniloc.errors import InputError, ObservationError
 
 __all__ = [
     "check_bearings",
+    "content_lines",
+    "json_float",
     "load_bearings",
+    "parse_float",
+    "parse_json",
+    "read_text",
+    "real_array",
     "save_bearings",
+    "split_csv_line",
     "to_jsonable",
+    "type_name",
     "write_json",
+    "write_text",
 ]
 
 PathLike = str | os.PathLike[str]
@@ -50,11 +59,11 @@ _TEXT_SEPARATORS = re.compile(r"[\s,]+")
 
 
 # --------------------------------------------------------------------------------------------
-# Shared helpers for reading and writing text files (also used by omniloc.maps)
+# Helpers for reading and writing text files, shared by every file format of omniloc
 # --------------------------------------------------------------------------------------------
 
 
-def _read_text(path: PathLike, error: type[InputError]) -> str:
+def read_text(path: PathLike, error: type[InputError]) -> str:
     """Read a UTF-8 text file, turning every OS or decoding failure into ``error``."""
     src = os.fspath(path)
     try:
@@ -74,7 +83,7 @@ def _read_text(path: PathLike, error: type[InputError]) -> str:
         ) from None
 
 
-def _write_text(path: PathLike, text: str, error: type[InputError]) -> None:
+def write_text(path: PathLike, text: str, error: type[InputError]) -> None:
     """Write ``text`` (already complete in memory) to ``path`` as UTF-8."""
     try:
         with open(path, "w", encoding="utf-8", newline="") as f:
@@ -83,7 +92,7 @@ def _write_text(path: PathLike, text: str, error: type[InputError]) -> None:
         raise error(f"{os.fspath(path)}: cannot write file: {e.strerror or e}") from None
 
 
-def _content_lines(text: str) -> list[tuple[int, str]]:
+def content_lines(text: str) -> list[tuple[int, str]]:
     """Return ``(line_number, line)`` for every line that is neither blank nor a comment.
 
     Line numbers count from 1 and only ``\\n`` ends a line, as in any text editor.
@@ -97,7 +106,7 @@ def _content_lines(text: str) -> list[tuple[int, str]]:
     return out
 
 
-def _split_csv_line(line: str, where: str, error: type[InputError]) -> list[str]:
+def split_csv_line(line: str, where: str, error: type[InputError]) -> list[str]:
     """Split one CSV line into stripped fields (quotes allowed, no line breaks in fields)."""
     try:
         row = next(csv.reader([line], strict=True))
@@ -106,7 +115,7 @@ def _split_csv_line(line: str, where: str, error: type[InputError]) -> list[str]
     return [field.strip() for field in row]
 
 
-def _parse_json(text: str, src: str, error: type[InputError]) -> Any:
+def parse_json(text: str, src: str, error: type[InputError]) -> Any:
     """``json.loads`` with syntax errors reported as ``error`` naming file, line and column."""
     try:
         return json.loads(text)
@@ -116,7 +125,7 @@ def _parse_json(text: str, src: str, error: type[InputError]) -> Any:
         raise error(f"{src}: invalid JSON: nested too deeply") from None
 
 
-def _parse_float(token: str, where: str, what: str, error: type[InputError]) -> float:
+def parse_float(token: str, where: str, what: str, error: type[InputError]) -> float:
     """Parse a finite float from text, else raise ``error`` quoting the offending token."""
     try:
         value = float(token)
@@ -127,7 +136,7 @@ def _parse_float(token: str, where: str, what: str, error: type[InputError]) -> 
     return value
 
 
-def _json_float(value: object, where: str, what: str, error: type[InputError]) -> float:
+def json_float(value: object, where: str, what: str, error: type[InputError]) -> float:
     """Accept a JSON number (not a bool, not a string) that is finite."""
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise error(f"{where}: {what} is not a number: {value!r}")
@@ -137,7 +146,7 @@ def _json_float(value: object, where: str, what: str, error: type[InputError]) -
     return out
 
 
-def _type_name(value: object) -> str:
+def type_name(value: object) -> str:
     """JSON-flavoured name of a parsed JSON value's type, for messages."""
     names = {dict: "an object", list: "a list", str: "a string", bool: "a boolean"}
     if value is None:
@@ -161,7 +170,7 @@ def _wrap_keep_in_range(a: NDArray[np.float64]) -> NDArray[np.float64]:
     return out
 
 
-def _real_array(values: ArrayLike, name: str, error: type[InputError]) -> NDArray[np.float64]:
+def real_array(values: ArrayLike, name: str, error: type[InputError]) -> NDArray[np.float64]:
     """Convert to a float64 array, refusing strings, booleans, complex numbers and ragged data."""
     try:
         arr = np.asarray(values)
@@ -228,7 +237,7 @@ def check_bearings(
     ...
     omniloc.errors.ObservationError: 4 bearings but the map has only 3 landmarks
     """
-    arr = _real_array(bearings, name, ObservationError)
+    arr = real_array(bearings, name, ObservationError)
     if arr.ndim != 1:
         raise ObservationError(f"{name} must have shape (m,), got {arr.shape}")
     finite = np.isfinite(arr)
@@ -264,9 +273,9 @@ def _bearings_from_csv(text: str, src: str, degrees: bool) -> tuple[list[float],
     n_fields = 1
     in_degrees = degrees
     header_done = False
-    for lineno, line in _content_lines(text):
+    for lineno, line in content_lines(text):
         where = f"{src} line {lineno}"
-        fields = _split_csv_line(line, where, ObservationError)
+        fields = split_csv_line(line, where, ObservationError)
         if not header_done:
             header_done = True
             if len(fields) == 1 and _looks_numeric(fields[0]):
@@ -291,7 +300,7 @@ def _bearings_from_csv(text: str, src: str, degrees: bool) -> tuple[list[float],
                 continue
         if len(fields) != n_fields:
             raise ObservationError(f"{where}: expected {n_fields} fields, got {len(fields)}")
-        values.append(_parse_float(fields[column], where, "bearing", ObservationError))
+        values.append(parse_float(fields[column], where, "bearing", ObservationError))
     return values, in_degrees
 
 
@@ -304,7 +313,7 @@ def _looks_numeric(token: str) -> bool:
 
 
 def _bearings_from_json(text: str, src: str, degrees: bool) -> tuple[list[float], bool]:
-    data = _parse_json(text, src, ObservationError)
+    data = parse_json(text, src, ObservationError)
     in_degrees = degrees
     if isinstance(data, dict):
         if "bearings" not in data:
@@ -322,16 +331,16 @@ def _bearings_from_json(text: str, src: str, degrees: bool) -> tuple[list[float]
         items = data["bearings"]
         if not isinstance(items, list):
             raise ObservationError(
-                f"{src}: 'bearings' must be a list of numbers, got {_type_name(items)}"
+                f"{src}: 'bearings' must be a list of numbers, got {type_name(items)}"
             )
     elif isinstance(data, list):
         items = data
     else:
         raise ObservationError(
             f"{src}: expected a list of numbers or an object with a 'bearings' list; "
-            f"got {_type_name(data)}"
+            f"got {type_name(data)}"
         )
-    values = [_json_float(v, src, f"bearings[{k}]", ObservationError) for k, v in enumerate(items)]
+    values = [json_float(v, src, f"bearings[{k}]", ObservationError) for k, v in enumerate(items)]
     return values, in_degrees
 
 
@@ -344,7 +353,7 @@ def _bearings_from_text(text: str, src: str) -> list[float]:
         where = f"{src} line {lineno}"
         for token in _TEXT_SEPARATORS.split(line):
             if token:
-                values.append(_parse_float(token, where, "bearing", ObservationError))
+                values.append(parse_float(token, where, "bearing", ObservationError))
     return values
 
 
@@ -381,7 +390,7 @@ def load_bearings(path: PathLike, *, degrees: bool = False) -> NDArray[np.float6
     array([  0.,  90., -90.])
     """
     src = os.fspath(path)
-    text = _read_text(path, ObservationError)
+    text = read_text(path, ObservationError)
     suffix = Path(src).suffix.lower()
     in_degrees = degrees
     if suffix == ".csv":
@@ -451,7 +460,7 @@ def save_bearings(path: PathLike, bearings: ArrayLike, *, degrees: bool = False)
     else:
         unit_word = "degrees (load with degrees=True)" if degrees else "radians"
         text = f"# bearings in {unit_word}\n" + "".join(f"{_float_text(v)}\n" for v in arr)
-    _write_text(path, text, ObservationError)
+    write_text(path, text, ObservationError)
 
 
 # --------------------------------------------------------------------------------------------
@@ -531,4 +540,4 @@ def write_json(path: PathLike, obj: Any, *, indent: int | None = 2) -> None:
     '{"bearings": [0.5, 1.5]}\\n'
     """
     text = json.dumps(to_jsonable(obj), indent=indent, allow_nan=False) + "\n"
-    _write_text(path, text, InputError)
+    write_text(path, text, InputError)

@@ -39,15 +39,15 @@ from scipy.spatial import cKDTree
 from omniloc.errors import MapError
 from omniloc.io import (
     PathLike,
-    _content_lines,
-    _json_float,
-    _parse_float,
-    _parse_json,
-    _read_text,
-    _real_array,
-    _split_csv_line,
-    _type_name,
-    _write_text,
+    content_lines,
+    json_float,
+    parse_float,
+    parse_json,
+    read_text,
+    real_array,
+    split_csv_line,
+    type_name,
+    write_text,
 )
 
 __all__ = ["COINCIDENCE_TOLERANCE", "LandmarkId", "LandmarkMap", "as_landmark_map"]
@@ -193,7 +193,7 @@ class LandmarkMap:
         self.__post_init__()
 
     def __post_init__(self) -> None:
-        xy = _real_array(self.xy, "landmarks_xy", MapError)
+        xy = real_array(self.xy, "landmarks_xy", MapError)
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise MapError(f"landmarks_xy must have shape (N, 2), got {xy.shape}")
         n = xy.shape[0]
@@ -432,13 +432,13 @@ class LandmarkMap:
         omniloc.errors.MapError: ...map.csv line 3: x is not a number: 'abc'
         """
         src = os.fspath(path)
-        text = _read_text(path, MapError)
-        lines = _content_lines(text)
+        text = read_text(path, MapError)
+        lines = content_lines(text)
         if not lines:
             raise MapError(f"{src}: file is empty (expected a header with columns id, x, y)")
         header_line, header_text = lines[0]
         where = f"{src} line {header_line}"
-        header = [h.lower() for h in _split_csv_line(header_text, where, MapError)]
+        header = [h.lower() for h in split_csv_line(header_text, where, MapError)]
         missing = [c for c in _REQUIRED_COLUMNS if c not in header]
         if missing:
             found = ", ".join(repr(h) for h in header)
@@ -459,7 +459,7 @@ class LandmarkMap:
         line_numbers: list[int] = []
         for lineno, line in lines[1:]:
             where = f"{src} line {lineno}"
-            fields = _split_csv_line(line, where, MapError)
+            fields = split_csv_line(line, where, MapError)
             if len(fields) != width:
                 raise MapError(
                     f"{where}: expected {width} fields ({', '.join(header)}), got {len(fields)}"
@@ -469,8 +469,8 @@ class LandmarkMap:
             raw_ids.append(fields[c_id])
             coords.append(
                 (
-                    _parse_float(fields[c_x], where, "x", MapError),
-                    _parse_float(fields[c_y], where, "y", MapError),
+                    parse_float(fields[c_x], where, "x", MapError),
+                    parse_float(fields[c_y], where, "y", MapError),
                 )
             )
             if c_name is not None:
@@ -504,12 +504,12 @@ class LandmarkMap:
         LandmarkMap(n=3, ids=('a', 'b', 'c'), bounds=(0, 0, 5, 4))
         """
         src = os.fspath(path)
-        data = _parse_json(_read_text(path, MapError), src, MapError)
+        data = parse_json(read_text(path, MapError), src, MapError)
         if isinstance(data, dict) and "landmarks" in data:
             entries = data["landmarks"]
             if not isinstance(entries, list):
                 raise MapError(
-                    f"{src}: 'landmarks' must be a list of objects, got {_type_name(entries)}"
+                    f"{src}: 'landmarks' must be a list of objects, got {type_name(entries)}"
                 )
             return cls._from_json_entries(src, entries)
         if isinstance(data, list):
@@ -519,7 +519,7 @@ class LandmarkMap:
         got = (
             f"an object with keys {', '.join(repr(k) for k in data) or 'none'}"
             if isinstance(data, dict)
-            else _type_name(data)
+            else type_name(data)
         )
         raise MapError(
             f"{src}: expected a list of landmarks, an object with a 'landmarks' list or an "
@@ -535,23 +535,21 @@ class LandmarkMap:
         for k, entry in enumerate(entries):
             where = f"{src}: landmarks[{k}]"
             if not isinstance(entry, dict):
-                raise MapError(
-                    f"{where}: expected an object with id, x, y; got {_type_name(entry)}"
-                )
+                raise MapError(f"{where}: expected an object with id, x, y; got {type_name(entry)}")
             missing = [key for key in _REQUIRED_COLUMNS if key not in entry]
             if missing:
                 raise MapError(f"{where}: missing {', '.join(repr(m) for m in missing)}")
             raw_ids.append(_json_id(entry["id"], where))
             coords.append(
                 (
-                    _json_float(entry["x"], where, "x", MapError),
-                    _json_float(entry["y"], where, "y", MapError),
+                    json_float(entry["x"], where, "x", MapError),
+                    json_float(entry["y"], where, "y", MapError),
                 )
             )
             if has_names:
                 name = entry.get("name", "")
                 if not isinstance(name, str):
-                    raise MapError(f"{where}: name must be a string, got {_type_name(name)}")
+                    raise MapError(f"{where}: name must be a string, got {type_name(name)}")
                 names.append(name)
 
         def place(i: int, j: int) -> str:
@@ -565,7 +563,7 @@ class LandmarkMap:
     def _from_json_xy(cls, src: str, data: dict[str, Any]) -> LandmarkMap:
         rows = data["xy"]
         if not isinstance(rows, list):
-            raise MapError(f"{src}: 'xy' must be a list of [x, y] pairs, got {_type_name(rows)}")
+            raise MapError(f"{src}: 'xy' must be a list of [x, y] pairs, got {type_name(rows)}")
         coords: list[tuple[float, float]] = []
         for k, row in enumerate(rows):
             where = f"{src}: xy[{k}]"
@@ -573,15 +571,15 @@ class LandmarkMap:
                 raise MapError(f"{where}: expected a pair [x, y], got {json.dumps(row)}")
             coords.append(
                 (
-                    _json_float(row[0], where, "x", MapError),
-                    _json_float(row[1], where, "y", MapError),
+                    json_float(row[0], where, "x", MapError),
+                    json_float(row[1], where, "y", MapError),
                 )
             )
         ids: tuple[LandmarkId, ...] | None = None
         if data.get("ids") is not None:
             raw = data["ids"]
             if not isinstance(raw, list):
-                raise MapError(f"{src}: 'ids' must be a list, got {_type_name(raw)}")
+                raise MapError(f"{src}: 'ids' must be a list, got {type_name(raw)}")
             if len(raw) != len(coords):
                 raise MapError(f"{src}: 'ids' has {len(raw)} entries but 'xy' has {len(coords)}")
             ids = _ids_from_file([_json_id(v, f"{src}: ids[{k}]") for k, v in enumerate(raw)])
@@ -589,12 +587,12 @@ class LandmarkMap:
         if data.get("names") is not None:
             raw = data["names"]
             if not isinstance(raw, list):
-                raise MapError(f"{src}: 'names' must be a list, got {_type_name(raw)}")
+                raise MapError(f"{src}: 'names' must be a list, got {type_name(raw)}")
             if len(raw) != len(coords):
                 raise MapError(f"{src}: 'names' has {len(raw)} entries but 'xy' has {len(coords)}")
             for k, name in enumerate(raw):
                 if not isinstance(name, str):
-                    raise MapError(f"{src}: names[{k}] must be a string, got {_type_name(name)}")
+                    raise MapError(f"{src}: names[{k}] must be a string, got {type_name(name)}")
             names = raw
 
         def place(i: int, j: int) -> str:
@@ -680,7 +678,7 @@ class LandmarkMap:
         for row, lid in enumerate(self.ids):
             x, y = (float(v) for v in self.xy[row])
             writer.writerow([lid, x, y] + ([self.names[row]] if self.names is not None else []))
-        _write_text(path, buf.getvalue(), MapError)
+        write_text(path, buf.getvalue(), MapError)
 
     def to_json(self, path: PathLike) -> None:
         """Write the map as ``{"landmarks": [{"id": ..., "x": ..., "y": ...}, ...]}``.
@@ -700,7 +698,7 @@ class LandmarkMap:
                 entry["name"] = self.names[row]
             entries.append("  " + json.dumps(entry))
         text = '{"landmarks": [\n' + ",\n".join(entries) + "\n]}\n"
-        _write_text(path, text, MapError)
+        write_text(path, text, MapError)
 
 
 def _ids_from_file(raw: Sequence[int | str]) -> tuple[LandmarkId, ...]:

@@ -1,0 +1,363 @@
+"""Recordings over time: odometry, frames of bearings, ground-truth tracks; their files.
+
+File formats (CSV, a header line, ``#`` comments and blank lines allowed; every error names
+the file and the line):
+
+odometry
+    ``t,v,w``: time (s), forward velocity (m/s), turn rate (rad/s). Each row holds until the
+    next (as recorded by MRCLAM's robots). Times must not decrease; of rows with equal times
+    (a logger's duplicates) the last one holds.
+frames
+    Either the generic ``t,bearing`` (one row per bearing, radians, or degrees with
+    ``degrees=True`` or a ``bearing_deg`` column; rows with equal ``t`` form one frame; a frame
+    may be empty only in the MRCLAM format), or the ``robotR_frames.csv`` files of MRCLAM as
+    they are (the ``landmarks`` and ``robot_detections`` columns, ``id:bearing:range;...``;
+    the ids are dropped: every detection, robots included, is a bearing of the frame).
+ground truth
+    ``t,x,y,theta[,gap]``: the true pose (metres, radians) at times t; ``gap`` (s) is the
+    interval between the measurements around the sample (large gaps: unreliable).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..angles import wrap
+from ..errors import InputError
+from ..io import PathLike, content_lines, parse_float, read_text, split_csv_line
+from ..pose import Pose
+
+__all__ = [
+    "Frame",
+    "GroundTruth",
+    "Odometry",
+    "load_frames",
+    "load_groundtruth",
+    "load_odometry",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+def _float_array(name: str, values: object) -> FloatArray:
+    try:
+        a = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be an array of real numbers: {exc}") from exc
+    if a.ndim != 1:
+        raise InputError(f"{name} must have shape (n,), got {a.shape}")
+    bad = np.flatnonzero(~np.isfinite(a))
+    if bad.size:
+        raise InputError(f"{name}[{int(bad[0])}] is not finite: {a[bad[0]]!r}")
+    a = a.copy()
+    a.setflags(write=False)
+    return a
+
+
+def _check_times(
+    what: str, t: FloatArray, *, strict: bool = True, lines: list[int] | None = None
+) -> None:
+    """Times must increase (strictly, or not decrease); ``lines`` names file lines."""
+    d = np.diff(t)
+    bad = np.flatnonzero(d <= 0 if strict else d < 0)
+    if bad.size:
+        k = int(bad[0]) + 1
+        order = "increase strictly" if strict else "not decrease"
+        at = f"{what}:{lines[k]}" if lines is not None else f"{what} row {k}"
+        raise InputError(f"{at}: times must {order} (t={float(t[k])!r} after {float(t[k - 1])!r})")
+
+
+@dataclass(frozen=True)
+class Odometry:
+    """Recorded odometry: forward velocity and turn rate, each holding until the next row.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Times, seconds, not decreasing (of equal times the last row holds).
+    v : array_like, shape (n,)
+        Forward velocity, m/s.
+    w : array_like, shape (n,)
+        Turn rate, rad/s (counter-clockwise positive).
+    """
+
+    t: FloatArray
+    v: FloatArray
+    w: FloatArray
+
+    def __post_init__(self) -> None:
+        t = _float_array("odometry t", self.t)
+        v = _float_array("odometry v", self.v)
+        w = _float_array("odometry w", self.w)
+        if not (t.shape == v.shape == w.shape):
+            raise InputError(
+                f"odometry t, v and w must have one value per row: got {t.size}, {v.size}, {w.size}"
+            )
+        if t.size == 0:
+            raise InputError("odometry has no rows")
+        _check_times("odometry", t, strict=False)
+        # Rows with equal times (a logger's duplicates): the last one holds from then on.
+        last = np.concatenate([t[1:] > t[:-1], [True]])
+        if not last.all():
+            t, v, w = t[last], v[last], w[last]
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "v", v)
+        object.__setattr__(self, "w", w)
+
+    def __len__(self) -> int:
+        return int(self.t.size)
+
+    def between(self, t0: float, t1: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The constant-velocity pieces that cover ``[t0, t1]``: durations (s), v and w.
+
+        Before the first row the robot is taken to stand still; the last row holds forever.
+        """
+        if not t1 >= t0:
+            raise InputError(f"between(t0, t1) needs t1 >= t0, got {t0!r} and {t1!r}")
+        lo = int(np.searchsorted(self.t, t0, side="right"))
+        hi = int(np.searchsorted(self.t, t1, side="right"))
+        # Breakpoints inside (t0, t1) and the value holding on each piece.
+        cuts = np.concatenate([[t0], self.t[lo:hi], [t1]])
+        idx = np.arange(lo - 1, hi)
+        v = np.where(idx >= 0, self.v[np.maximum(idx, 0)], 0.0)
+        w = np.where(idx >= 0, self.w[np.maximum(idx, 0)], 0.0)
+        return np.diff(cuts), v, w
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The bearings reported at one time (radians, robot frame, in no particular order).
+
+    ``truth`` optionally holds, for evaluation only, the true landmark row of each bearing
+    (None for clutter); a localizer never reads it.
+    """
+
+    t: float
+    bearings: FloatArray
+    truth: tuple[int | None, ...] | None = field(default=None, compare=False, repr=False)
+
+    def __post_init__(self) -> None:
+        t = float(self.t)
+        if not math.isfinite(t):
+            raise InputError(f"frame time must be finite, got {self.t!r}")
+        b = _float_array("frame bearings", self.bearings)
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "bearings", np.asarray(wrap(b), dtype=np.float64).reshape(-1))
+        if self.truth is not None and len(self.truth) != b.size:
+            raise InputError(
+                f"frame truth must give one landmark per bearing: {len(self.truth)} for {b.size}"
+            )
+
+
+@dataclass(frozen=True)
+class GroundTruth:
+    """A true trajectory sampled in time; :meth:`at` interpolates it.
+
+    Parameters
+    ----------
+    t, x, y, theta : array_like, shape (n,)
+        Times (s, strictly increasing) and poses (m, rad).
+    gap : array_like, shape (n,), optional
+        Seconds between the measurements around each sample (0 when not known).
+    """
+
+    t: FloatArray
+    x: FloatArray
+    y: FloatArray
+    theta: FloatArray
+    gap: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        arrs = {
+            k: _float_array(f"ground truth {k}", getattr(self, k)) for k in "t x y theta".split()
+        }
+        gap = (
+            np.zeros_like(arrs["t"])
+            if self.gap is None
+            else _float_array("ground truth gap", self.gap)
+        )
+        if len({a.size for a in (*arrs.values(), gap)}) != 1:
+            raise InputError("ground truth t, x, y, theta and gap must have one value per row")
+        if arrs["t"].size < 2:
+            raise InputError("ground truth needs at least 2 samples")
+        _check_times("ground truth", arrs["t"])
+        for k, a in arrs.items():
+            object.__setattr__(self, k, a)
+        object.__setattr__(self, "gap", gap)
+
+    @property
+    def span(self) -> tuple[float, float]:
+        """First and last time, seconds."""
+        return float(self.t[0]), float(self.t[-1])
+
+    def at(self, t: float | FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Poses (k, 3) interpolated at times ``t`` (headings along the shorter arc) and the
+        gap (k,) of the sample nearest each; NaN poses outside the track's span."""
+        tq = np.atleast_1d(np.asarray(t, dtype=np.float64))
+        th = np.unwrap(self.theta)
+        out = np.stack(
+            [
+                np.interp(tq, self.t, self.x),
+                np.interp(tq, self.t, self.y),
+                np.asarray(wrap(np.interp(tq, self.t, th))),
+            ],
+            axis=1,
+        )
+        outside = (tq < self.t[0]) | (tq > self.t[-1])
+        out[outside] = np.nan
+        k = np.clip(np.searchsorted(self.t, tq), 0, self.t.size - 1)
+        gap = self.gap if self.gap is not None else np.zeros_like(self.t)
+        return out, np.asarray(gap[k])
+
+    def pose_at(self, t: float) -> Pose:
+        """The interpolated pose at one time (an error outside the track's span)."""
+        p, _ = self.at(t)
+        if not np.isfinite(p).all():
+            lo, hi = self.span
+            raise InputError(f"t={t!r} is outside the ground truth's span [{lo}, {hi}]")
+        return Pose.from_array(p[0])
+
+
+# --------------------------------------------------------------------------------------------
+# Files
+# --------------------------------------------------------------------------------------------
+
+
+def _table(path: PathLike, what: str) -> tuple[str, list[str], list[tuple[int, list[str]]]]:
+    """The header (lower case) and the data rows, with their line numbers, of a CSV file."""
+    src = str(path)
+    lines = content_lines(read_text(path, InputError))
+    if not lines:
+        raise InputError(f"{src}: empty {what} file")
+    n0, head = lines[0]
+    header = [h.lower() for h in split_csv_line(head, f"{src}:{n0}", InputError)]
+    rows = []
+    for n, line in lines[1:]:
+        cells = split_csv_line(line, f"{src}:{n}", InputError)
+        if len(cells) != len(header):
+            raise InputError(
+                f"{src}:{n}: expected {len(header)} fields ({','.join(header)}), got {len(cells)}"
+            )
+        rows.append((n, cells))
+    return src, header, rows
+
+
+def _columns(
+    src: str, header: list[str], rows: list[tuple[int, list[str]]], names: tuple[str, ...]
+) -> list[FloatArray]:
+    missing = [c for c in names if c not in header]
+    if missing:
+        raise InputError(f"{src}:1: missing column(s) {missing}; the header is {header}")
+    out = []
+    for c in names:
+        k = header.index(c)
+        out.append(np.array([parse_float(r[k], f"{src}:{n}", c, InputError) for n, r in rows]))
+    return out
+
+
+def load_odometry(path: PathLike) -> Odometry:
+    """Read an odometry file (``t,v,w``; see the module's documentation).
+
+    Raises
+    ------
+    InputError
+        Unreadable file, missing columns, a value that is not a finite number, times that do
+        not increase (file and line named).
+    """
+    src, header, rows = _table(path, "odometry")
+    t, v, w = _columns(src, header, rows, ("t", "v", "w"))
+    if t.size == 0:
+        raise InputError(f"{src}: no odometry rows")
+    _check_times(src, t, strict=False, lines=[n for n, _ in rows])
+    return Odometry(t, v, w)
+
+
+def load_groundtruth(path: PathLike) -> GroundTruth:
+    """Read a ground-truth track (``t,x,y,theta[,gap]``)."""
+    src, header, rows = _table(path, "ground truth")
+    t, x, y, th = _columns(src, header, rows, ("t", "x", "y", "theta"))
+    gap = _columns(src, header, rows, ("gap",))[0] if "gap" in header else None
+    _check_times(src, t, lines=[n for n, _ in rows])
+    return GroundTruth(t, x, y, th, gap)
+
+
+def _detections(text: str, where: str, what: str) -> list[tuple[str, float]]:
+    out: list[tuple[str, float]] = []
+    for item in filter(None, (s.strip() for s in text.split(";"))):
+        parts = item.split(":")
+        if len(parts) < 2 or not parts[0].strip():
+            raise InputError(f"{where}: {what} entry {item!r} is not 'id:bearing:range'")
+        out.append((parts[0].strip(), parse_float(parts[1], where, f"{what} bearing", InputError)))
+    return out
+
+
+def load_frames(
+    path: PathLike, *, degrees: bool = False, landmark_ids: dict[str, int] | None = None
+) -> list[Frame]:
+    """Read frames of bearings, in time order (see the module's documentation for formats).
+
+    Parameters
+    ----------
+    path : str or path-like
+        A generic ``t,bearing`` file or an MRCLAM ``robotR_frames.csv``.
+    degrees : bool
+        The generic file's bearings are in degrees (a ``bearing_deg`` column says so too).
+    landmark_ids : dict, optional
+        MRCLAM only: map from a landmark id (as written in the file) to its row in the map,
+        to fill :attr:`Frame.truth` for evaluation (other robots' detections are None). The
+        bearings are the same either way.
+
+    Returns
+    -------
+    list of Frame
+        In time order; a generic file's frames each hold the rows sharing one ``t``.
+    """
+    src, header, rows = _table(path, "frames")
+    if "landmarks" in header and "robot_detections" in header:
+        return _mrclam_frames(src, header, rows, landmark_ids)
+    col = next((c for c in ("bearing", "bearing_rad", "bearing_deg") if c in header), None)
+    if col is None or "t" not in header:
+        raise InputError(
+            f"{src}:1: a frames file needs columns t and bearing (or bearing_deg), or the "
+            f"MRCLAM columns landmarks and robot_detections; the header is {header}"
+        )
+    if col == "bearing_rad" and degrees:
+        raise InputError(f"{src}:1: the column says radians (bearing_rad) but degrees=True")
+    t, b = _columns(src, header, rows, ("t", col))
+    _check_times(src, t, strict=False, lines=[n for n, _ in rows])
+    if degrees or col == "bearing_deg":
+        b = np.deg2rad(b)
+    frames = []
+    starts = np.flatnonzero(np.concatenate([[True], np.diff(t) > 0]))
+    for s, e in zip(starts, [*starts[1:], t.size], strict=True):
+        frames.append(Frame(float(t[s]), b[s:e]))
+    return frames
+
+
+def _mrclam_frames(
+    src: str,
+    header: list[str],
+    rows: list[tuple[int, list[str]]],
+    landmark_ids: dict[str, int] | None,
+) -> list[Frame]:
+    (t,) = _columns(src, header, rows, ("t",))
+    _check_times(src, t, strict=False, lines=[n for n, _ in rows])
+    k_lm, k_rb = header.index("landmarks"), header.index("robot_detections")
+    frames = []
+    for (n, r), tt in zip(rows, t, strict=True):
+        where = f"{src}:{n}"
+        lms = _detections(r[k_lm], where, "landmark")
+        rbs = _detections(r[k_rb], where, "robot detection")
+        bearings = [b for _, b in lms] + [b for _, b in rbs]
+        truth: tuple[int | None, ...] | None = None
+        if landmark_ids is not None:
+            unknown = [i for i, _ in lms if i not in landmark_ids]
+            if unknown:
+                raise InputError(f"{where}: landmark id {unknown[0]!r} is not in the map")
+            truth = tuple([landmark_ids[i] for i, _ in lms] + [None] * len(rbs))
+        frames.append(Frame(float(tt), np.asarray(bearings, dtype=np.float64), truth))
+    return frames

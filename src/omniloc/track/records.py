@@ -1,0 +1,130 @@
+"""What a localizer over time reports after each frame: a state, a pose, its hypotheses.
+
+Every localizer over time in omniloc -- the :class:`~omniloc.track.Tracker` and the
+baselines it is compared with (``benchmarks/track_baselines.py``) -- reports a
+:class:`TrackEstimate` per frame, and :mod:`omniloc.evaluate.tracking` scores sequences of them
+with one piece of code.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InputError
+from ..pose import Pose
+
+__all__ = ["Hypothesis", "TrackEstimate", "TrackState"]
+
+FloatArray = NDArray[np.float64]
+
+
+class TrackState(str, enum.Enum):
+    """The state a localizer over time reports after a frame.
+
+    ``lost``
+        No pose is supported by the evidence (at wake-up, or after the evidence rejected
+        every hypothesis).
+    ``ambiguous``
+        Several poses compete (see :attr:`TrackEstimate.hypotheses`); none holds the share of
+        the posterior mass that ``localized`` requires.
+    ``localized``
+        One hypothesis holds at least the required share of the mass: its pose can be used.
+    """
+
+    LOST = "lost"
+    AMBIGUOUS = "ambiguous"
+    LOCALIZED = "localized"
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """One competing pose: its estimate, covariance and posterior weight.
+
+    Attributes
+    ----------
+    pose : Pose
+    covariance : ndarray, shape (3, 3)
+        Covariance of (x, y, theta), m^2 and rad^2.
+    weight : float
+        Posterior weight among the hypotheses reported with it (they sum to 1).
+    """
+
+    pose: Pose
+    covariance: FloatArray = field(repr=False, compare=False)
+    weight: float = 1.0
+
+
+@dataclass(frozen=True)
+class TrackEstimate:
+    """A localizer's report after one frame.
+
+    Attributes
+    ----------
+    t : float
+        Time of the frame, seconds.
+    state : TrackState
+    pose : Pose or None
+        The best hypothesis's pose (None when ``lost``). Only a ``localized`` pose is
+        meant to be used; an ``ambiguous`` one is the strongest candidate.
+    covariance : ndarray, shape (3, 3), or None
+        Its covariance.
+    hypotheses : tuple of Hypothesis
+        The competing hypotheses, best first (empty when ``lost``).
+    reason : str
+        Why the state is what it is, in a few words (for people and logs).
+    kidnapped : bool
+        True on the frame at which the localizer concluded that the pose it was tracking no
+        longer explains the bearings (a kidnapping, or a tracking failure) and started to
+        relocalize.
+    """
+
+    t: float
+    state: TrackState
+    pose: Pose | None = None
+    covariance: FloatArray | None = field(default=None, repr=False, compare=False)
+    hypotheses: tuple[Hypothesis, ...] = ()
+    reason: str = ""
+    kidnapped: bool = False
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(float(self.t)):
+            raise InputError(f"t must be finite, got {self.t!r}")
+        object.__setattr__(self, "state", TrackState(self.state))
+        if self.state is not TrackState.LOST and self.pose is None:
+            raise InputError(f"a {self.state.value} estimate needs a pose")
+
+    @property
+    def localized(self) -> bool:
+        """Whether the state is ``localized``."""
+        return self.state is TrackState.LOCALIZED
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain-JSON dictionary: ``t``, ``state``, ``reason``, ``kidnapped`` and, unless
+        lost, ``x``, ``y``, ``theta``, ``covariance`` (3x3 nested lists) and
+        ``hypotheses`` (each ``x``, ``y``, ``theta``, ``weight``, ``covariance``)."""
+        out: dict[str, object] = {
+            "t": float(self.t),
+            "state": self.state.value,
+            "reason": self.reason,
+            "kidnapped": bool(self.kidnapped),
+        }
+        if self.pose is not None:
+            out.update(x=self.pose.x, y=self.pose.y, theta=self.pose.theta)
+            cov = self.covariance
+            out["covariance"] = None if cov is None else np.asarray(cov, float).tolist()
+            out["hypotheses"] = [
+                {
+                    "x": h.pose.x,
+                    "y": h.pose.y,
+                    "theta": h.pose.theta,
+                    "weight": float(h.weight),
+                    "covariance": np.asarray(h.covariance, float).tolist(),
+                }
+                for h in self.hypotheses
+            ]
+        return out
