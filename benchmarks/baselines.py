@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from omniloc.angles import wrap
-from omniloc.pose import SINGULAR_RTOL, Pose, refine_pose
+from omniloc.pose import Pose, poses_from_pairs, refine_pose
 
 __all__ = ["RansacResult", "brute_force", "permutations", "ransac", "triple_poses"]
 
@@ -31,7 +31,8 @@ IntArray = NDArray[np.int64]
 
 
 def triple_poses(L: ArrayLike, b: ArrayLike) -> tuple[FloatArray, NDArray[np.bool_]]:
-    """The paper's linear pose (eqs. 1-6) for K problems of 3 pairs each.
+    """The paper's linear pose (eqs. 1-6) for K problems of 3 pairs each, by omniloc's own
+    :func:`omniloc.pose.poses_from_pairs` (the baselines share its maths, not a copy).
 
     Parameters
     ----------
@@ -51,36 +52,12 @@ def triple_poses(L: ArrayLike, b: ArrayLike) -> tuple[FloatArray, NDArray[np.boo
     """
     L = np.asarray(L, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
+    poses, ok, _ = poses_from_pairs(L, b)
+    # estimate_pose also refuses two coincident landmarks that are not the reference.
     scale = np.abs(L - L.mean(axis=1, keepdims=True)).max(axis=(1, 2))
     scale = np.where(scale > 0, scale, 1.0)
-    z = (L[:, 1:, 0] - L[:, :1, 0]) + 1j * (L[:, 1:, 1] - L[:, :1, 1])
-    d12 = np.abs(L[:, 2] - L[:, 1]).max(axis=1)
-    ok = (np.abs(z) > 1e-12 * scale[:, None]).all(axis=1) & (d12 > 1e-12 * scale)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a = np.exp(1j * (b[:, 1:] - b[:, :1])) / z  # eq. (1)
-        bv = 1.0 / z  # eq. (2)
-        ar, ai, br, bi = a.real, a.imag, bv.real, bv.imag
-        aa = ar * ar + ai * ai
-        p00, p01, p11 = ar * ar / aa - 1.0, ar * ai / aa, ai * ai / aa - 1.0  # eq. (3)
-        s00, s01, s11 = p00.sum(1), p01.sum(1), p11.sum(1)
-        t0 = (p00 * br + p01 * bi).sum(1)
-        t1 = (p01 * br + p11 * bi).sum(1)
-        det = s00 * s11 - s01 * s01
-        smax = np.maximum(1.0, np.abs(np.stack([s00, s01, s11])).max(axis=0))
-        ok &= np.abs(det) > SINGULAR_RTOL * smax * smax
-        fx = -(s11 * t0 - s01 * t1) / det  # eq. (4)
-        fy = -(-s01 * t0 + s00 * t1) / det
-        r = (ar * (fx[:, None] + br) + ai * (fy[:, None] + bi)) / aa  # eq. (10)
-        ok &= (r > 0).all(axis=1)
-        f2 = fx * fx + fy * fy
-        ok &= np.isfinite(f2) & (f2 > (1e-12 / scale) ** 2)
-        rx = L[:, 0, 0] - fx / f2  # eq. (5)
-        ry = L[:, 0, 1] + fy / f2
-        theta = np.arctan2(L[:, 0, 1] - ry, L[:, 0, 0] - rx) - b[:, 0]  # eq. (6)
-        # Degenerate triples give nan here; they are masked out by ``ok`` below.
-        poses = np.stack([rx, ry, np.asarray(wrap(theta))], axis=1)
-    ok &= np.isfinite(poses).all(axis=1)
-    return poses, ok
+    ok &= np.abs(L[:, 2] - L[:, 1]).max(axis=1) > 1e-12 * scale
+    return poses, ok & np.isfinite(poses).all(axis=1)
 
 
 def permutations(n: int, m: int) -> IntArray:

@@ -12,9 +12,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from omniloc import InputError, LandmarkMap, _compiled, _seeds, localize
+from omniloc import InputError, LandmarkMap, localize
+from omniloc._kernels import geometry as geo
+from omniloc._kernels import hypotheses as hk
 from omniloc.pose import Pose
-from omniloc.search import Method, Strategy, _choose_strategy, _make_options
+from omniloc.search import Method, Strategy, choose_engine, scoring
+from omniloc.search import hypotheses as hyp_search
+from omniloc.search import seeds as _seeds
+from omniloc.search.neighbours import neighbour_lists
+from omniloc.search.options import Leaves, make_options
 from omniloc.simulate import (
     DEMO_POSE,
     DEMO_VISIBLE,
@@ -142,14 +148,13 @@ def test_pair_limits_without_range_are_infinite() -> None:
 
 def test_neighbour_lists_match_brute_force() -> None:
     lm = random_map(300, size=100.0, rng=3)
-    ptr, idx = lm.neighbours(12.0)
-    xy = lm.neighbour_xy(12.0)
+    ptr, idx, xy = neighbour_lists(lm, 12.0)
     d = np.hypot(*(lm.xy[:, None, :] - lm.xy[None, :, :]).transpose(2, 0, 1))
     for i in range(lm.n):
         want = np.flatnonzero((d[i] <= 12.0) & (np.arange(lm.n) != i))
         assert idx[ptr[i] : ptr[i + 1]].tolist() == want.tolist()
         assert np.array_equal(xy[ptr[i] : ptr[i + 1]], lm.xy[want])
-    assert lm.neighbours(12.0)[1] is idx  # built once per radius
+    assert neighbour_lists(lm, 12.0).idx is idx  # built once per radius
 
 
 # ---- agreement with the tree -----------------------------------------------------------------
@@ -249,12 +254,10 @@ def test_first_fit_counts_the_same_with_and_without_a_node_budget(
 
 def test_chunked_search_equals_one_call(big_map: LandmarkMap, monkeypatch) -> None:
     # The chunks and threads change nothing but the time.
-    import omniloc.search as search
-
     kw = {"sigma": 0.2 * DEG, "max_spurious": 1, "max_range": 15.0, "confidence": 0.9999}
     b, _ = _big_scene(big_map, 1)
     chunked = localize(big_map, b, **kw)
-    monkeypatch.setattr(search, "CHUNK_ANCHORS", 10**6)
+    monkeypatch.setattr(hyp_search, "CHUNK_ANCHORS", 10**6)
     whole = localize(big_map, b, **kw)
     assert [s.assignment for s in chunked.solutions] == [s.assignment for s in whole.solutions]
     assert chunked.stats.triples_solved == whole.stats.triples_solved
@@ -272,38 +275,25 @@ def test_node_budget_stops_the_hypotheses(big_map: LandmarkMap) -> None:
 # ---- options ---------------------------------------------------------------------------------
 
 
-def _opts(m: int = 6, **kw: object) -> Any:
-    base = dict(
-        method=Method.ROBUST,
-        threshold=DEG,
-        sigma=None,
-        confidence=0.99,
-        max_spurious=0,
-        ordering=False,
-        max_range=None,
-        min_range=None,
-        fov=None,
-        p_miss=None,
-        max_nodes=None,
-        timeout_s=None,
+def _opts(m: int = 6, method: Method = Method.ROBUST, **kw: Any) -> Any:
+    ms = kw.pop("max_spurious", 0)
+    return make_options(
+        m, method=method, sensor=None, budget=None, max_spurious=ms, ordering=False, legacy=kw
     )
-    base.update(kw)
-    return _make_options(m, **base)  # type: ignore[arg-type]
 
 
-def test_strategy_choice(monkeypatch) -> None:
+def test_strategy_choice() -> None:
     paper_rules = _opts()
     robust = _opts(sigma=DEG)
-    assert _choose_strategy("auto", Method.ROBUST, paper_rules, True) == "tree"
-    assert _choose_strategy("tree", Method.ROBUST, robust, True) == "tree"
-    assert _choose_strategy("hypotheses", Method.ROBUST, paper_rules, False) == "first"
-    monkeypatch.setattr(_compiled, "AVAILABLE", True)
-    assert _choose_strategy("auto", Method.ROBUST, robust, True) == "hypotheses"
-    monkeypatch.setattr(_compiled, "AVAILABLE", False)
-    assert _choose_strategy("auto", Method.ROBUST, robust, True) == "tree"
-    assert _choose_strategy("auto", Method.ROBUST, robust, False) == "first"
-    assert _choose_strategy(Strategy.TREE, Method.ROBUST, robust, True) == "tree"
-    assert _choose_strategy(Strategy.HYPOTHESES, Method.ROBUST, robust, False) == "first"
+    assert choose_engine("auto", Method.ROBUST, paper_rules, True) == "paper"
+    assert choose_engine("tree", Method.ROBUST, paper_rules, True) == "paper"
+    assert choose_engine("tree", Method.ROBUST, robust, True) == "tree"
+    assert choose_engine("hypotheses", Method.ROBUST, paper_rules, False) == "first"
+    assert choose_engine("auto", Method.ROBUST, robust, True) == "hypotheses"
+    assert choose_engine("auto", Method.ROBUST, robust, False) == "first"
+    assert choose_engine(Strategy.TREE, Method.ROBUST, robust, True) == "tree"
+    assert choose_engine(Strategy.HYPOTHESES, Method.ROBUST, robust, False) == "first"
+    assert choose_engine("auto", Method.PAPER, paper_rules, True) == "paper"
 
 
 @pytest.mark.parametrize(
@@ -338,37 +328,33 @@ def test_threshold_mode_with_wildcards_finds_the_truth() -> None:
 @settings(max_examples=50, deadline=None)
 @given(seed=st.integers(0, 2**31 - 1), m=st.integers(4, 15))
 def test_compiled_widest_triple_matches_numpy(seed: int, m: int) -> None:
-    from omniloc.search import _TRIPLES
+    from omniloc._kernels.tree import widest_triple
+    from omniloc.search.tree import widest_triple_numpy
 
     b = np.random.default_rng(seed).uniform(-math.pi, math.pi, m)
-    triples = _TRIPLES[min(m, 12)]
-    s = np.sort(np.mod(b[triples], 2 * math.pi), axis=1)
-    gaps = np.diff(np.concatenate([s, s[:, :1] + 2 * math.pi], axis=1), axis=1)
-    want = triples[int(np.argmax(gaps.min(axis=1)))].tolist()
-    assert list(_compiled.widest_triple(np.ascontiguousarray(b[:12]))) == want
+    assert widest_triple(np.ascontiguousarray(b[:12])) == widest_triple_numpy(b[:12])
 
 
 def test_compiled_covariances_match_numpy() -> None:
-    from omniloc.pose import _bearing_jacobian
+    from omniloc.pose import bearing_jacobian
 
     rng = np.random.default_rng(5)
     Lm = rng.uniform(0, 20, (6, 8, 2))
     poses = np.concatenate([rng.uniform(5, 15, (6, 2)), rng.uniform(-3, 3, (6, 1))], axis=1)
     w = (rng.uniform(size=(6, 8)) > 0.3).astype(float)
     w[:, :3] = 1.0
-    _, g = _bearing_jacobian(Lm, poses)
+    _, g = bearing_jacobian(Lm, poses)
     gw = g * w[..., None]
     want = np.linalg.inv(np.einsum("kni,knj->kij", gw, gw) + 1e-12 * np.eye(3)) * 0.01
-    assert np.allclose(_compiled.covariances(Lm, w, poses, 0.01), want, rtol=1e-9, atol=0)
+    got = geo.covariances(Lm, w, poses, 0.01, geo.COVARIANCE_FLOOR)
+    assert np.allclose(got, want, rtol=1e-9, atol=0)
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_compiled_merge_matches_numpy(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_compiled_merge_matches_numpy(seed: int) -> None:
     """The compiled merge (which skips pairs beyond the covariance's reach) keeps exactly
-    the solutions the numpy loop keeps, on poses clustered so that many merge: some with
+    the solutions the plain loop keeps, on poses clustered so that many merge: some with
     tight covariances, some wide, some at a heading across +-pi, one duplicate."""
-    from omniloc.search import _merge
-
     rng = np.random.default_rng(seed)
     K = 300
     centres = rng.uniform(0, 10, (6, 3))
@@ -380,19 +366,14 @@ def test_compiled_merge_matches_numpy(seed: int, monkeypatch: pytest.MonkeyPatch
     A = rng.normal(size=(K, 3, 3))
     cov = (A @ A.transpose(0, 2, 1) + 0.1 * np.eye(3)) * scale
     rank = rng.permutation(K).astype(np.int64)
-    kept = {}
-    for flag in (True, False):
-        monkeypatch.setattr(_compiled, "AVAILABLE", flag)
-        kept[flag] = _merge(rank, poses, cov)
-    assert kept[True] == kept[False]
-    assert 6 <= len(kept[True]) < K - 50  # merges happened, and not everything merged
+    fast = scoring._merge(rank, poses, cov)
+    assert fast == scoring.merge_numpy(rank, poses, cov)
+    assert 6 <= len(fast) < K - 50  # merges happened, and not everything merged
 
 
 def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
     # A spurious bearing just beside a true one took the true one's landmark (the first fit
     # checks bearings in a fixed order): the polish gives it back.
-    from omniloc.search import _Search
-
     lm = random_map(400, density=0.01, min_separation=1.0, rng=3)
     x0, y0, x1, y1 = lm.bounds
     pose = Pose((x0 + x1) / 2, (y0 + y1) / 2, 0.3)
@@ -401,13 +382,12 @@ def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
     truth = np.array([-1, *sc.assignment], dtype=np.int64)
     swapped = truth.copy()
     swapped[0], swapped[-1] = truth[-1], -1
-    opt = _opts(len(bearings), sigma=0.2 * DEG, max_spurious=1, max_range=20.0, p_miss=None)
-    s = _Search(lm, bearings, np.arange(len(bearings)), opt, "first")
-    assign, poses = s._polish(swapped[None], pose.as_array()[None])
+    opt = _opts(len(bearings), sigma=0.2 * DEG, max_spurious=1, max_range=20.0)
+    assign, poses = hyp_search._polish(lm, bearings, swapped[None], pose.as_array()[None], opt)
     assert assign[0].tolist() == truth.tolist()
     assert Pose.from_array(poses[0]).distance_to(pose)[0] < 0.05
     # A correct interpretation is left alone.
-    assign, _ = s._polish(truth[None], pose.as_array()[None])
+    assign, _ = hyp_search._polish(lm, bearings, truth[None], pose.as_array()[None], opt)
     assert assign[0].tolist() == truth.tolist()
 
 
@@ -420,8 +400,6 @@ def test_with_p_miss_the_whole_cost_ranks(p_miss: float | None) -> None:
     # that bearing forced onto a far landmark (one match more, a residual of tens of
     # degrees). Without p_miss matches rank first, as the robust issue specifies; with it,
     # the negative log-likelihood does.
-    from omniloc.search import _finish, _Search
-
     lm = random_map(60, size=40.0, rng=2)
     pose = Pose(20.0, 20.0, 0.4)
     sc = observe(lm, pose, max_range=12.0, n_spurious=1, rng=5)
@@ -429,10 +407,10 @@ def test_with_p_miss_the_whole_cost_ranks(p_miss: float | None) -> None:
     forced = truth.copy()
     far = int(np.argmax(np.hypot(*(lm.xy - pose.as_array()[:2]).T)))
     forced[truth < 0] = far
-    opt = _opts(len(truth), sigma=None, max_spurious=1, max_range=12.0, p_miss=p_miss)
-    s = _Search(lm, sc.bearings, np.arange(len(truth)), opt, "hypotheses")
-    s.leaves.append(s._leaf_batch(np.stack([forced, truth]), np.stack([pose.as_array()] * 2)))
-    sols, _ = _finish(s, sc.bearings, opt)
+    opt = _opts(len(truth), max_spurious=1, max_range=12.0, p_miss=p_miss)
+    leaves = Leaves(len(truth), np.arange(len(truth)))
+    leaves.add(np.stack([forced, truth]), np.stack([pose.as_array()] * 2))
+    sols, _ = scoring.finish(lm, sc.bearings, leaves, opt)
     best = np.array([-1 if a is None else a for a in sols[0].assignment])
     assert best.tolist() == (forced if p_miss is None else truth).tolist()
 
@@ -447,7 +425,7 @@ def test_output_buffer_keeps_the_better_half_in_order() -> None:
     p = np.tile(np.arange(n, dtype=float)[:, None], (1, 3))
     miss = np.arange(n, dtype=np.int64)
     bar = np.full(1, np.inf)
-    kept = _compiled._compact(a, p, miss, key, bar)
+    kept = hk._compact(hk._Out(a, p, miss, key, bar))
     assert kept == n // 2
     assert key[:kept].tolist() == list(range(n // 2))
     assert bar[0] == n // 2 - 1
@@ -467,7 +445,7 @@ def test_output_buffer_keeps_one_row_per_interpretation() -> None:
     p[:, 0] = np.arange(n)
     miss = np.zeros(n, dtype=np.int64)
     bar = np.full(1, np.inf)
-    kept = _compiled._compact(a, p, miss, key, bar)
+    kept = hk._compact(hk._Out(a, p, miss, key, bar))
     assert kept == 3
     assert sorted(a[:kept, 0].tolist()) == [0, 1, 2]
     assert key[:kept].tolist() == [0.0, 1.0, 2.0]  # each one's best row, best first
@@ -489,12 +467,21 @@ def _reach(
     x, y = 10.0 * np.cos(ang), 10.0 * np.sin(ang)
     q = np.arange(len(beta), dtype=np.int64) + 3
     c = 1e-6  # position m^2 and heading rad^2 variances: a gate of a few tenths of a degree
-    sig2 = (0.3 * DEG) ** 2
+    d = _derived(beta)
     ct, st = np.cos(heading), np.sin(heading)
-    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, ct, st, q, x, y, len(beta), (0, 1, 2))
     work = np.empty((4, 8)) if work is None else work
-    tail = ((c, 0.0, 0.0, c, 0.0, c), sig2, 16.0, work)
-    return bool(_compiled._can_reach(rest, len(rest), need, *args, *tail))
+    near = hk._Near(q, x, y)
+    cov = (c, 0.0, 0.0, c, 0.0, c)
+    return bool(
+        hk._can_reach(rest, len(rest), need, d, 0.0, 0.0, ct, st, near, len(beta), (0, 1, 2),
+                      cov, 16.0, work)
+    )  # fmt: skip
+
+
+def _derived(beta: np.ndarray) -> Any:
+    """The kernel's per-search constants for bearings ``beta`` at sigma 0.3 degrees."""
+    sig2 = (0.3 * DEG) ** 2
+    return hk._Derived(np.cos(beta), np.sin(beta), sig2, True, 6.6, 0.9 * DEG)
 
 
 @pytest.mark.parametrize(
@@ -517,7 +504,7 @@ def test_can_reach_counts_bearings_with_a_landmark_in_the_gate(
 
 
 def test_can_reach_flags_the_bearings_without_a_landmark() -> None:
-    # A first fit reserves wildcards for them (see _compiled._verify).
+    # A first fit reserves wildcards for them (see omniloc._kernels.hypotheses._verify).
     hits = [True, False, True, True, False, True]
     work = np.full((4, 8), 7.0)
     assert _reach(hits, 4, work=work)
@@ -529,13 +516,18 @@ def test_can_reach_ignores_the_hypothesis_own_landmarks() -> None:
     beta = np.deg2rad([0.0, 90.0])
     x, y = 10.0 * np.cos(beta), 10.0 * np.sin(beta)
     q = np.array([0, 1], dtype=np.int64)
-    args = (np.cos(beta), np.sin(beta), 0.0, 0.0, 1.0, 0.0, q, x, y, 2)
+    near = hk._Near(q, x, y)
     cov = (1e-6, 0.0, 0.0, 1e-6, 0.0, 1e-6)
-    tail = (cov, (0.3 * DEG) ** 2, 16.0, np.empty((4, 2)))
     rest = np.array([0, 1], dtype=np.int64)
-    assert _compiled._can_reach(rest, 2, 2, *args, (5, 6, 7), *tail)
+    d = _derived(beta)
+
+    def reach(own: tuple[int, int, int]) -> bool:
+        work = np.empty((4, 2))
+        return bool(hk._can_reach(rest, 2, 2, d, 0.0, 0.0, 1.0, 0.0, near, 2, own, cov, 16.0, work))
+
+    assert reach((5, 6, 7))
     for own in [(0, 6, 7), (5, 0, 7), (5, 6, 0)]:  # landmark 0 is one of the three
-        assert not _compiled._can_reach(rest, 2, 2, *args, own, *tail)
+        assert not reach(own)
 
 
 @pytest.mark.parametrize("exhaustive", [True, False])
@@ -544,8 +536,6 @@ def test_cheap_test_only_removes_poorly_fitting_interpretations(
 ) -> None:
     # The cheap test is exact to first order only: with and without it the best
     # interpretation is the same and it never adds one.
-    from omniloc import search
-
     work = {"on": 0, "off": 0}
     for seed in range(10):
         rng = np.random.default_rng(300 + seed)
@@ -556,7 +546,7 @@ def test_cheap_test_only_removes_poorly_fitting_interpretations(
         kw["exhaustive"] = exhaustive
         on = localize(lm, sc.bearings, strategy="hypotheses", **kw)
         with monkeypatch.context() as mp:
-            mp.setattr(search, "PRETEST_SLACK", {True: (0.0, 0.0), False: (0.0, 0.0)})
+            mp.setattr(hyp_search, "PRETEST_SLACK", {True: (0.0, 0.0), False: (0.0, 0.0)})
             off = localize(lm, sc.bearings, strategy="hypotheses", **kw)
         assert (on.best is None) == (off.best is None)
         if off.best is not None and on.best is not None:

@@ -309,32 +309,50 @@ def test_bad_input_gets_a_clear_error(landmarks, bearings, kw, match) -> None:
         localize(landmarks, bearings, **kw)
 
 
-@pytest.mark.parametrize("seed", range(6))
-def test_compiled_walk_equals_batched_search(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
-    """The numba walk of the paper's rules and the batched numpy search agree exactly."""
-    from omniloc import _compiled
+def _walk(lm: object, bearings: np.ndarray, method: str, compiled: bool) -> object:
+    """A search by the compiled paper walk or by the readable tree, from the same options."""
+    from omniloc.maps import as_landmark_map
+    from omniloc.search import Method
+    from omniloc.search.options import Leaves, make_options
+    from omniloc.search.scoring import finish
+    from omniloc.search.tree import TreeSearch, robust_order, run_paper_kernel
 
-    if not _compiled.AVAILABLE:
-        pytest.skip("numba is not installed")
+    lmap = as_landmark_map(lm)
+    meth = Method(method)
+    opt = make_options(
+        len(bearings), method=meth, sensor=None, budget=None, max_spurious=0, ordering=False,
+        legacy={},
+    )  # fmt: skip
+    order = robust_order(bearings) if meth is Method.ROBUST else np.arange(len(bearings))
+    leaves = Leaves(len(bearings), order)
+    if compiled:
+        run_paper_kernel(lmap, bearings[order], opt, leaves)
+    else:
+        TreeSearch(lmap, bearings[order], opt, leaves).run()
+    return leaves.counts, finish(lmap, bearings, leaves, opt)[0]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_compiled_walk_equals_batched_search(seed: int) -> None:
+    """The numba walk of the paper's rules and the readable batched tree (its oracle) visit
+    the same nodes and find the same solutions."""
     rng = np.random.default_rng(400 + seed)
     lm = demo_room() if seed % 2 else random_map(16, rng=rng)
     pose = random_pose(lm, rng=rng)
     scene = observe(lm, pose, n_obs=int(rng.integers(3, 8)), sigma=0.3 * DEG, rng=rng)
-    results = {}
-    for flag in (True, False):
-        monkeypatch.setattr(_compiled, "AVAILABLE", flag)
-        for method in ("paper", "robust"):
-            results[flag, method] = localize(lm, scene.bearings, method=method)
     for method in ("paper", "robust"):
-        fast, ref = results[True, method], results[False, method]
-        for key in ("nodes", "examined_paths", "triples_solved", "pruned_existence", "pruned_gate"):
-            assert getattr(fast.stats, key) == getattr(ref.stats, key)
-        assert sorted(s.assignment for s in fast.solutions) == sorted(
-            s.assignment for s in ref.solutions
+        (c_fast, fast), (c_ref, ref) = (
+            _walk(lm, scene.bearings, method, flag) for flag in (True, False)
         )
-        for s in fast.solutions:
-            t = next(t for t in ref.solutions if t.assignment == s.assignment)
+        for key in ("nodes", "examined", "triples", "existence", "gate"):
+            assert getattr(c_fast, key) == getattr(c_ref, key)
+        assert sorted(s.assignment for s in fast) == sorted(s.assignment for s in ref)
+        for s in fast:
+            t = next(t for t in ref if t.assignment == s.assignment)
             assert np.allclose(s.pose.as_array(), t.pose.as_array(), atol=1e-9)
+    # localize itself takes the compiled walk for the paper's rules.
+    res = localize(lm, scene.bearings, method="paper")
+    assert res.stats.nodes == _walk(lm, scene.bearings, "paper", True)[0].nodes
 
 
 def test_large_map_without_range_or_budget_warns(
@@ -357,17 +375,16 @@ def test_large_map_without_range_or_budget_warns(
 def test_too_many_complete_paths_are_capped(
     caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import omniloc.search as search_module
+    import omniloc.search.tree as tree_module
 
-    monkeypatch.setattr(search_module, "MAX_COMPILED_LEAVES", 100)
+    monkeypatch.setattr(tree_module, "MAX_COMPILED_LEAVES", 100)
     lm = random_map(20, rng=0)
     z = np.deg2rad([0.0, 120.0, 240.0])  # three bearings: thousands of consistent triples
     with caplog.at_level("WARNING", logger="omniloc.search"):
         res = localize(lm, z, method="paper")
     assert not res.complete
     assert len(res) <= 100
-    if search_module._compiled.AVAILABLE:
-        assert any("kept the first 100" in r.getMessage() for r in caplog.records)
+    assert any("kept the first 100" in r.getMessage() for r in caplog.records)
 
 
 # A real MRCLAM frame (robot 2, frames line 1931): six tubes seen through a 65 degree lens, a
@@ -377,28 +394,27 @@ NARROW_L = np.vstack([NARROW_L, [[0.86, -4.47]]])
 NARROW_B = np.deg2rad([-19.65, -18.51, 21.94, 24.81, 20.8, -16.33])
 
 
-@pytest.mark.parametrize("compiled", [True, False])
-def test_gauss_newton_reaches_the_least_squares_pose_when_poorly_fixed(
-    compiled: bool, monkeypatch: pytest.MonkeyPatch
-) -> None:
+def test_gauss_newton_reaches_the_least_squares_pose_when_poorly_fixed() -> None:
     """A full Gauss-Newton step overshoots along the valley here; without backtracking the
     search kept a pose 0.42 m from the least-squares one (it stopped at the first failed
     step), so the solution with the true pairs was not reported where it belongs."""
-    from omniloc import _compiled
-    from omniloc.pose import refine_pose
-    from omniloc.search import _gauss_newton
+    from scipy.optimize import least_squares
 
-    if compiled and not _compiled.AVAILABLE:
-        pytest.skip("numba is not installed")
-    monkeypatch.setattr(_compiled, "AVAILABLE", compiled)
-    best = refine_pose(NARROW_L, NARROW_B)[0].as_array()
+    from omniloc._kernels.geometry import gauss_newton
+
+    def residuals(p: np.ndarray) -> np.ndarray:
+        pred = np.arctan2(NARROW_L[:, 1] - p[1], NARROW_L[:, 0] - p[0]) - p[2]
+        return np.angle(np.exp(1j * (pred - NARROW_B)))
+
+    # The least-squares pose by an independent solver (scipy's trust region).
+    best = least_squares(residuals, [0.5, 0.5, -1.2], xtol=1e-14, ftol=1e-14).x
     start = np.array(
         [[0.2002, 0.2398, -1.1444], [0.9, 0.3, -1.3], best + np.array([0.0, 0.0, 0.01])]
     )
     K = len(start)
-    poses, sse = _gauss_newton(
+    poses, sse = gauss_newton(
         np.repeat(NARROW_L[None], K, 0), np.repeat(NARROW_B[None], K, 0), np.ones((K, 6)),
-        start, iters=10,
+        start, 10,
     )  # fmt: skip
     assert np.allclose(poses, best, atol=1e-5)
     assert np.allclose(sse, sse.min(), rtol=1e-6)
@@ -442,12 +458,10 @@ def test_a_timeout_spent_before_the_search_starts_is_incomplete(
 ) -> None:
     """On a big map the neighbour lists can take the whole timeout: no chunk runs, and the
     answer is an empty, incomplete result (it was a crash on an empty list of chunks)."""
-    from omniloc import _compiled, search
+    from omniloc.search import hypotheses
 
-    if not _compiled.AVAILABLE:
-        pytest.skip("numba is not installed")
-    monkeypatch.setattr(search, "CHUNK_ANCHORS", 16)
-    monkeypatch.setattr(search._Search, "_work_left", lambda self: -1)
+    monkeypatch.setattr(hypotheses, "CHUNK_ANCHORS", 16)
+    monkeypatch.setattr(hypotheses, "_work_left", lambda out, opt: -1)
     lm = random_map(200, density=0.01, min_separation=1.0, rng=1)
     scene = observe(lm, random_pose(lm, rng=2), max_range=20.0, sigma=0.3 * DEG, rng=3)
     res = localize(

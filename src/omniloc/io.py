@@ -23,25 +23,32 @@ from __future__ import annotations
 import csv
 import dataclasses
 import enum
+import io as _stdio
 import json
 import math
 import os
 import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from omniloc.errors import InputError, ObservationError
+from omniloc.errors import InputError, MapError, ObservationError
 
 __all__ = [
+    "MapFileData",
     "check_bearings",
     "content_lines",
     "json_float",
     "load_bearings",
     "parse_float",
     "parse_json",
+    "read_map_csv",
+    "read_map_file",
+    "read_map_json",
     "read_text",
     "real_array",
     "save_bearings",
@@ -49,6 +56,8 @@ __all__ = [
     "to_jsonable",
     "type_name",
     "write_json",
+    "write_map_csv",
+    "write_map_json",
     "write_text",
 ]
 
@@ -541,3 +550,268 @@ def write_json(path: PathLike, obj: Any, *, indent: int | None = 2) -> None:
     """
     text = json.dumps(to_jsonable(obj), indent=indent, allow_nan=False) + "\n"
     write_text(path, text, InputError)
+
+
+# --------------------------------------------------------------------------------------------
+# Map files (omniloc.maps builds and validates the LandmarkMap from what is read here)
+# --------------------------------------------------------------------------------------------
+
+_MAP_COLUMNS = ("id", "x", "y")
+_INT_ID = re.compile(r"[+-]?[0-9]+\Z")
+
+
+@dataclass(frozen=True)
+class MapFileData:
+    """What a map file holds, before the map-level checks of :class:`omniloc.LandmarkMap`.
+
+    ``place(i, j)`` names the file positions of entries i and j for messages (``"map.csv
+    lines 4 and 9"``).
+    """
+
+    source: str
+    coords: list[tuple[float, float]]
+    ids: tuple[int | str, ...]
+    names: list[str] | None
+    place: Callable[[int, int], str]
+
+
+def read_map_file(path: PathLike) -> MapFileData:
+    """Read a ``.csv`` or ``.json`` map file (chosen by extension); see :mod:`omniloc.maps`
+    for the formats.
+
+    Raises
+    ------
+    MapError
+        Unsupported extension, unreadable file, or content that is not a map (the message
+        names the file and the line or entry).
+    """
+    src = os.fspath(path)
+    suffix = Path(src).suffix.lower()
+    if suffix == ".csv":
+        return read_map_csv(path)
+    if suffix == ".json":
+        return read_map_json(path)
+    shown = repr(suffix) if suffix else "no extension"
+    raise MapError(f"{src}: unsupported map file ({shown}); supported extensions: .csv, .json")
+
+
+def read_map_csv(path: PathLike) -> MapFileData:
+    """Read a CSV map file (a header with ``id``, ``x``, ``y`` and optional ``name``)."""
+    src = os.fspath(path)
+    text = read_text(path, MapError)
+    lines = content_lines(text)
+    if not lines:
+        raise MapError(f"{src}: file is empty (expected a header with columns id, x, y)")
+    header_line, header_text = lines[0]
+    where = f"{src} line {header_line}"
+    header = [h.lower() for h in split_csv_line(header_text, where, MapError)]
+    missing = [c for c in _MAP_COLUMNS if c not in header]
+    if missing:
+        found = ", ".join(repr(h) for h in header)
+        raise MapError(
+            f"{where}: header must contain columns id, x, y; missing: {', '.join(missing)} "
+            f"(found: {found})"
+        )
+    for col in (*_MAP_COLUMNS, "name"):
+        if header.count(col) > 1:
+            raise MapError(f"{where}: column {col!r} appears more than once in the header")
+    c_id, c_x, c_y = (header.index(c) for c in _MAP_COLUMNS)
+    c_name = header.index("name") if "name" in header else None
+    width = len(header)
+
+    raw_ids: list[str] = []
+    coords: list[tuple[float, float]] = []
+    names: list[str] = []
+    line_numbers: list[int] = []
+    for lineno, line in lines[1:]:
+        where = f"{src} line {lineno}"
+        fields = split_csv_line(line, where, MapError)
+        if len(fields) != width:
+            raise MapError(
+                f"{where}: expected {width} fields ({', '.join(header)}), got {len(fields)}"
+            )
+        if not fields[c_id]:
+            raise MapError(f"{where}: id is empty")
+        raw_ids.append(fields[c_id])
+        coords.append(
+            (
+                parse_float(fields[c_x], where, "x", MapError),
+                parse_float(fields[c_y], where, "y", MapError),
+            )
+        )
+        if c_name is not None:
+            names.append(fields[c_name])
+        line_numbers.append(lineno)
+
+    def place(i: int, j: int) -> str:
+        return f"{src} lines {line_numbers[i]} and {line_numbers[j]}"
+
+    return MapFileData(
+        src, coords, _ids_from_file(raw_ids), names if c_name is not None else None, place
+    )
+
+
+def read_map_json(path: PathLike) -> MapFileData:
+    """Read a JSON map file (the layouts of :mod:`omniloc.maps`)."""
+    src = os.fspath(path)
+    data = parse_json(read_text(path, MapError), src, MapError)
+    if isinstance(data, dict) and "landmarks" in data:
+        entries = data["landmarks"]
+        if not isinstance(entries, list):
+            raise MapError(
+                f"{src}: 'landmarks' must be a list of objects, got {type_name(entries)}"
+            )
+        return _map_json_entries(src, entries)
+    if isinstance(data, list):
+        return _map_json_entries(src, data)
+    if isinstance(data, dict) and "xy" in data:
+        return _map_json_xy(src, data)
+    got = (
+        f"an object with keys {', '.join(repr(k) for k in data) or 'none'}"
+        if isinstance(data, dict)
+        else type_name(data)
+    )
+    raise MapError(
+        f"{src}: expected a list of landmarks, an object with a 'landmarks' list or an "
+        f"object with 'xy' (and optional 'ids', 'names'); got {got}"
+    )
+
+
+def _map_json_entries(src: str, entries: list[Any]) -> MapFileData:
+    raw_ids: list[int | str] = []
+    coords: list[tuple[float, float]] = []
+    names: list[str] = []
+    has_names = any(isinstance(e, dict) and "name" in e for e in entries)
+    for k, entry in enumerate(entries):
+        where = f"{src}: landmarks[{k}]"
+        if not isinstance(entry, dict):
+            raise MapError(f"{where}: expected an object with id, x, y; got {type_name(entry)}")
+        missing = [key for key in _MAP_COLUMNS if key not in entry]
+        if missing:
+            raise MapError(f"{where}: missing {', '.join(repr(m) for m in missing)}")
+        raw_ids.append(_json_id(entry["id"], where))
+        coords.append(
+            (
+                json_float(entry["x"], where, "x", MapError),
+                json_float(entry["y"], where, "y", MapError),
+            )
+        )
+        if has_names:
+            name = entry.get("name", "")
+            if not isinstance(name, str):
+                raise MapError(f"{where}: name must be a string, got {type_name(name)}")
+            names.append(name)
+
+    def place(i: int, j: int) -> str:
+        return f"{src}: landmarks[{i}] and landmarks[{j}]"
+
+    return MapFileData(src, coords, _ids_from_file(raw_ids), names if has_names else None, place)
+
+
+def _map_json_xy(src: str, data: dict[str, Any]) -> MapFileData:
+    rows = data["xy"]
+    if not isinstance(rows, list):
+        raise MapError(f"{src}: 'xy' must be a list of [x, y] pairs, got {type_name(rows)}")
+    coords: list[tuple[float, float]] = []
+    for k, row in enumerate(rows):
+        where = f"{src}: xy[{k}]"
+        if not isinstance(row, list) or len(row) != 2:
+            raise MapError(f"{where}: expected a pair [x, y], got {json.dumps(row)}")
+        coords.append(
+            (
+                json_float(row[0], where, "x", MapError),
+                json_float(row[1], where, "y", MapError),
+            )
+        )
+    ids: tuple[int | str, ...] | None = None
+    if data.get("ids") is not None:
+        raw = data["ids"]
+        if not isinstance(raw, list):
+            raise MapError(f"{src}: 'ids' must be a list, got {type_name(raw)}")
+        if len(raw) != len(coords):
+            raise MapError(f"{src}: 'ids' has {len(raw)} entries but 'xy' has {len(coords)}")
+        ids = _ids_from_file([_json_id(v, f"{src}: ids[{k}]") for k, v in enumerate(raw)])
+    names: list[str] | None = None
+    if data.get("names") is not None:
+        raw = data["names"]
+        if not isinstance(raw, list):
+            raise MapError(f"{src}: 'names' must be a list, got {type_name(raw)}")
+        if len(raw) != len(coords):
+            raise MapError(f"{src}: 'names' has {len(raw)} entries but 'xy' has {len(coords)}")
+        for k, name in enumerate(raw):
+            if not isinstance(name, str):
+                raise MapError(f"{src}: names[{k}] must be a string, got {type_name(name)}")
+        names = raw
+
+    def place(i: int, j: int) -> str:
+        return f"{src}: xy[{i}] and xy[{j}]"
+
+    return MapFileData(
+        src, coords, ids if ids is not None else tuple(range(len(coords))), names, place
+    )
+
+
+def write_map_csv(
+    path: PathLike,
+    xy: NDArray[np.float64],
+    ids: Sequence[int | str],
+    names: Sequence[str] | None,
+) -> None:
+    """Write a map as CSV (``id,x,y`` plus ``name``), with enough digits to read back
+    exactly."""
+    for row, lid in enumerate(ids):
+        texts = [str(lid)] + ([names[row]] if names is not None else [])
+        if any("\n" in t or "\r" in t for t in texts):
+            raise MapError(
+                f"{os.fspath(path)}: landmark {row} (id {lid!r}) has a line break in its "
+                "id or name, which CSV maps cannot hold; use JSON"
+            )
+    # Quote every text field if a line could otherwise be mistaken for a comment.
+    leading_hash = any(isinstance(lid, str) and lid.lstrip().startswith("#") for lid in ids)
+    buf = _stdio.StringIO()
+    writer = csv.writer(
+        buf,
+        lineterminator="\n",
+        quoting=csv.QUOTE_NONNUMERIC if leading_hash else csv.QUOTE_MINIMAL,
+    )
+    header = ["id", "x", "y"] + (["name"] if names is not None else [])
+    writer.writerow(header)
+    for row, lid in enumerate(ids):
+        x, y = (float(v) for v in xy[row])
+        writer.writerow([lid, x, y] + ([names[row]] if names is not None else []))
+    write_text(path, buf.getvalue(), MapError)
+
+
+def write_map_json(
+    path: PathLike,
+    xy: NDArray[np.float64],
+    ids: Sequence[int | str],
+    names: Sequence[str] | None,
+) -> None:
+    """Write a map as ``{"landmarks": [{"id": ..., "x": ..., "y": ...}, ...]}``, one
+    landmark per line."""
+    entries = []
+    for row, lid in enumerate(ids):
+        entry: dict[str, Any] = {"id": lid, "x": float(xy[row, 0])}
+        entry["y"] = float(xy[row, 1])
+        if names is not None:
+            entry["name"] = names[row]
+        entries.append("  " + json.dumps(entry))
+    text = '{"landmarks": [\n' + ",\n".join(entries) + "\n]}\n"
+    write_text(path, text, MapError)
+
+
+def _ids_from_file(raw: Sequence[int | str]) -> tuple[int | str, ...]:
+    """Ids as read from a file: all ints if every id is integer-like, otherwise all strings."""
+    texts = [str(v).strip() for v in raw]
+    if all(_INT_ID.match(t) for t in texts):
+        return tuple(int(t) for t in texts)
+    return tuple(texts)
+
+
+def _json_id(value: object, where: str) -> int | str:
+    if isinstance(value, bool) or not isinstance(value, int | str):
+        raise MapError(f"{where}: id must be an integer or a string, got {json.dumps(value)}")
+    if isinstance(value, str) and not value.strip():
+        raise MapError(f"{where}: id is empty")
+    return value

@@ -21,15 +21,9 @@ strings; so a map whose ids are all integer-like strings reads back with integer
 
 from __future__ import annotations
 
-import csv
-import io as _stdio
-import json
-import os
-import re
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -38,16 +32,14 @@ from scipy.spatial import cKDTree
 
 from omniloc.errors import MapError
 from omniloc.io import (
+    MapFileData,
     PathLike,
-    content_lines,
-    json_float,
-    parse_float,
-    parse_json,
-    read_text,
+    read_map_csv,
+    read_map_file,
+    read_map_json,
     real_array,
-    split_csv_line,
-    type_name,
-    write_text,
+    write_map_csv,
+    write_map_json,
 )
 
 __all__ = ["COINCIDENCE_TOLERANCE", "LandmarkId", "LandmarkMap", "as_landmark_map"]
@@ -58,8 +50,6 @@ LandmarkId = int | str
 COINCIDENCE_TOLERANCE = 1e-9
 """Two landmarks closer than this (metres) are the same place, which a map may not contain."""
 
-_REQUIRED_COLUMNS = ("id", "x", "y")
-_INT_ID = re.compile(r"[+-]?[0-9]+\Z")
 
 
 def _min_pair(pairs: NDArray[np.intp]) -> tuple[int, int]:
@@ -334,48 +324,6 @@ class LandmarkMap:
         """``scipy.spatial.cKDTree`` over :attr:`xy`, built once."""
         return cKDTree(self.xy)
 
-    def neighbours(self, radius: float) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """Landmarks within ``radius`` of each landmark (itself excluded), as CSR lists.
-
-        Returns ``(ptr, idx)``: the neighbours of landmark ``i`` are
-        ``idx[ptr[i]:ptr[i + 1]]``, in increasing order. Built once per radius from the
-        k-d tree (the last few radii are kept), in memory proportional to the number of
-        neighbouring pairs.
-
-        Examples
-        --------
-        >>> lm = LandmarkMap([[0, 0], [1, 0], [5, 0]])
-        >>> ptr, idx = lm.neighbours(2.0)
-        >>> idx[ptr[0]:ptr[1]].tolist(), idx[ptr[2]:ptr[3]].tolist()
-        ([1], [])
-        """
-        cache: dict[float, tuple[NDArray[np.int64], NDArray[np.int64]]]
-        cache = self.__dict__.setdefault("_neighbour_lists", {})
-        key = float(radius)
-        if key not in cache:
-            pairs = self.kdtree.query_pairs(key, output_type="ndarray").astype(np.int64)
-            src = np.concatenate([pairs[:, 0], pairs[:, 1]])
-            dst = np.concatenate([pairs[:, 1], pairs[:, 0]])
-            del pairs
-            order = np.lexsort((dst, src))
-            ptr = np.zeros(self.n + 1, dtype=np.int64)
-            np.cumsum(np.bincount(src, minlength=self.n), out=ptr[1:])
-            if len(cache) >= 4:
-                cache.pop(next(iter(cache)))
-            cache[key] = (ptr, dst[order])
-        return cache[key]
-
-    def neighbour_xy(self, radius: float) -> NDArray[np.float64]:
-        """Coordinates of :meth:`neighbours`' ``idx``, contiguous (for sequential reads)."""
-        cache: dict[float, NDArray[np.float64]]
-        cache = self.__dict__.setdefault("_neighbour_xy", {})
-        key = float(radius)
-        if key not in cache:
-            if len(cache) >= 4:
-                cache.pop(next(iter(cache)))
-            cache[key] = np.ascontiguousarray(self.xy[self.neighbours(radius)[1]])
-        return cache[key]
-
     # ----------------------------------------------------------------------------------------
     # Files
     # ----------------------------------------------------------------------------------------
@@ -387,16 +335,11 @@ class LandmarkMap:
         Raises
         ------
         MapError
-            If the extension is not supported or the file is unreadable or invalid.
+            If the extension is not supported or the file is unreadable or invalid (the
+            message names the file and the line or entry; both for a duplicate id or a
+            coincident pair).
         """
-        src = os.fspath(path)
-        suffix = Path(src).suffix.lower()
-        if suffix == ".csv":
-            return cls.from_csv(path)
-        if suffix == ".json":
-            return cls.from_json(path)
-        shown = repr(suffix) if suffix else "no extension"
-        raise MapError(f"{src}: unsupported map file ({shown}); supported extensions: .csv, .json")
+        return cls._from_file(read_map_file(path))
 
     @classmethod
     def from_csv(cls, path: PathLike) -> LandmarkMap:
@@ -431,58 +374,7 @@ class LandmarkMap:
         ...
         omniloc.errors.MapError: ...map.csv line 3: x is not a number: 'abc'
         """
-        src = os.fspath(path)
-        text = read_text(path, MapError)
-        lines = content_lines(text)
-        if not lines:
-            raise MapError(f"{src}: file is empty (expected a header with columns id, x, y)")
-        header_line, header_text = lines[0]
-        where = f"{src} line {header_line}"
-        header = [h.lower() for h in split_csv_line(header_text, where, MapError)]
-        missing = [c for c in _REQUIRED_COLUMNS if c not in header]
-        if missing:
-            found = ", ".join(repr(h) for h in header)
-            raise MapError(
-                f"{where}: header must contain columns id, x, y; missing: {', '.join(missing)} "
-                f"(found: {found})"
-            )
-        for col in (*_REQUIRED_COLUMNS, "name"):
-            if header.count(col) > 1:
-                raise MapError(f"{where}: column {col!r} appears more than once in the header")
-        c_id, c_x, c_y = (header.index(c) for c in _REQUIRED_COLUMNS)
-        c_name = header.index("name") if "name" in header else None
-        width = len(header)
-
-        raw_ids: list[str] = []
-        coords: list[tuple[float, float]] = []
-        names: list[str] = []
-        line_numbers: list[int] = []
-        for lineno, line in lines[1:]:
-            where = f"{src} line {lineno}"
-            fields = split_csv_line(line, where, MapError)
-            if len(fields) != width:
-                raise MapError(
-                    f"{where}: expected {width} fields ({', '.join(header)}), got {len(fields)}"
-                )
-            if not fields[c_id]:
-                raise MapError(f"{where}: id is empty")
-            raw_ids.append(fields[c_id])
-            coords.append(
-                (
-                    parse_float(fields[c_x], where, "x", MapError),
-                    parse_float(fields[c_y], where, "y", MapError),
-                )
-            )
-            if c_name is not None:
-                names.append(fields[c_name])
-            line_numbers.append(lineno)
-
-        def place(i: int, j: int) -> str:
-            return f"{src} lines {line_numbers[i]} and {line_numbers[j]}"
-
-        return cls._from_file(
-            src, coords, _ids_from_file(raw_ids), names if c_name is not None else None, place
-        )
+        return cls._from_file(read_map_csv(path))
 
     @classmethod
     def from_json(cls, path: PathLike) -> LandmarkMap:
@@ -503,115 +395,14 @@ class LandmarkMap:
         >>> LandmarkMap.from_json(p)
         LandmarkMap(n=3, ids=('a', 'b', 'c'), bounds=(0, 0, 5, 4))
         """
-        src = os.fspath(path)
-        data = parse_json(read_text(path, MapError), src, MapError)
-        if isinstance(data, dict) and "landmarks" in data:
-            entries = data["landmarks"]
-            if not isinstance(entries, list):
-                raise MapError(
-                    f"{src}: 'landmarks' must be a list of objects, got {type_name(entries)}"
-                )
-            return cls._from_json_entries(src, entries)
-        if isinstance(data, list):
-            return cls._from_json_entries(src, data)
-        if isinstance(data, dict) and "xy" in data:
-            return cls._from_json_xy(src, data)
-        got = (
-            f"an object with keys {', '.join(repr(k) for k in data) or 'none'}"
-            if isinstance(data, dict)
-            else type_name(data)
-        )
-        raise MapError(
-            f"{src}: expected a list of landmarks, an object with a 'landmarks' list or an "
-            f"object with 'xy' (and optional 'ids', 'names'); got {got}"
-        )
+        return cls._from_file(read_map_json(path))
 
     @classmethod
-    def _from_json_entries(cls, src: str, entries: list[Any]) -> LandmarkMap:
-        raw_ids: list[int | str] = []
-        coords: list[tuple[float, float]] = []
-        names: list[str] = []
-        has_names = any(isinstance(e, dict) and "name" in e for e in entries)
-        for k, entry in enumerate(entries):
-            where = f"{src}: landmarks[{k}]"
-            if not isinstance(entry, dict):
-                raise MapError(f"{where}: expected an object with id, x, y; got {type_name(entry)}")
-            missing = [key for key in _REQUIRED_COLUMNS if key not in entry]
-            if missing:
-                raise MapError(f"{where}: missing {', '.join(repr(m) for m in missing)}")
-            raw_ids.append(_json_id(entry["id"], where))
-            coords.append(
-                (
-                    json_float(entry["x"], where, "x", MapError),
-                    json_float(entry["y"], where, "y", MapError),
-                )
-            )
-            if has_names:
-                name = entry.get("name", "")
-                if not isinstance(name, str):
-                    raise MapError(f"{where}: name must be a string, got {type_name(name)}")
-                names.append(name)
-
-        def place(i: int, j: int) -> str:
-            return f"{src}: landmarks[{i}] and landmarks[{j}]"
-
-        return cls._from_file(
-            src, coords, _ids_from_file(raw_ids), names if has_names else None, place
-        )
-
-    @classmethod
-    def _from_json_xy(cls, src: str, data: dict[str, Any]) -> LandmarkMap:
-        rows = data["xy"]
-        if not isinstance(rows, list):
-            raise MapError(f"{src}: 'xy' must be a list of [x, y] pairs, got {type_name(rows)}")
-        coords: list[tuple[float, float]] = []
-        for k, row in enumerate(rows):
-            where = f"{src}: xy[{k}]"
-            if not isinstance(row, list) or len(row) != 2:
-                raise MapError(f"{where}: expected a pair [x, y], got {json.dumps(row)}")
-            coords.append(
-                (
-                    json_float(row[0], where, "x", MapError),
-                    json_float(row[1], where, "y", MapError),
-                )
-            )
-        ids: tuple[LandmarkId, ...] | None = None
-        if data.get("ids") is not None:
-            raw = data["ids"]
-            if not isinstance(raw, list):
-                raise MapError(f"{src}: 'ids' must be a list, got {type_name(raw)}")
-            if len(raw) != len(coords):
-                raise MapError(f"{src}: 'ids' has {len(raw)} entries but 'xy' has {len(coords)}")
-            ids = _ids_from_file([_json_id(v, f"{src}: ids[{k}]") for k, v in enumerate(raw)])
-        names: list[str] | None = None
-        if data.get("names") is not None:
-            raw = data["names"]
-            if not isinstance(raw, list):
-                raise MapError(f"{src}: 'names' must be a list, got {type_name(raw)}")
-            if len(raw) != len(coords):
-                raise MapError(f"{src}: 'names' has {len(raw)} entries but 'xy' has {len(coords)}")
-            for k, name in enumerate(raw):
-                if not isinstance(name, str):
-                    raise MapError(f"{src}: names[{k}] must be a string, got {type_name(name)}")
-            names = raw
-
-        def place(i: int, j: int) -> str:
-            return f"{src}: xy[{i}] and xy[{j}]"
-
-        return cls._from_file(
-            src, coords, ids if ids is not None else tuple(range(len(coords))), names, place
-        )
-
-    @classmethod
-    def _from_file(
-        cls,
-        src: str,
-        coords: list[tuple[float, float]],
-        ids: tuple[LandmarkId, ...],
-        names: list[str] | None,
-        place: Callable[[int, int], str],
-    ) -> LandmarkMap:
+    def _from_file(cls, data: MapFileData) -> LandmarkMap:
         """Map-level checks with file positions in the messages, then construction."""
+        src, coords, ids, names, place = (
+            data.source, data.coords, data.ids, data.names, data.place
+        )  # fmt: skip
         n = len(coords)
         if n < 3:
             raise MapError(f"{src}: a map needs at least 3 landmarks, got {n}")
@@ -656,29 +447,7 @@ class LandmarkMap:
         1,0.1,0.0
         2,0.0,2.0
         """
-        for row, lid in enumerate(self.ids):
-            texts = [str(lid)] + ([self.names[row]] if self.names is not None else [])
-            if any("\n" in t or "\r" in t for t in texts):
-                raise MapError(
-                    f"{os.fspath(path)}: landmark {row} (id {lid!r}) has a line break in its "
-                    "id or name, which CSV maps cannot hold; use JSON"
-                )
-        # Quote every text field if a line could otherwise be mistaken for a comment.
-        leading_hash = any(
-            isinstance(lid, str) and lid.lstrip().startswith("#") for lid in self.ids
-        )
-        buf = _stdio.StringIO()
-        writer = csv.writer(
-            buf,
-            lineterminator="\n",
-            quoting=csv.QUOTE_NONNUMERIC if leading_hash else csv.QUOTE_MINIMAL,
-        )
-        header = ["id", "x", "y"] + (["name"] if self.names is not None else [])
-        writer.writerow(header)
-        for row, lid in enumerate(self.ids):
-            x, y = (float(v) for v in self.xy[row])
-            writer.writerow([lid, x, y] + ([self.names[row]] if self.names is not None else []))
-        write_text(path, buf.getvalue(), MapError)
+        write_map_csv(path, self.xy, self.ids, self.names)
 
     def to_json(self, path: PathLike) -> None:
         """Write the map as ``{"landmarks": [{"id": ..., "x": ..., "y": ...}, ...]}``.
@@ -690,31 +459,7 @@ class LandmarkMap:
         MapError
             If the file cannot be written.
         """
-        entries = []
-        for row, lid in enumerate(self.ids):
-            entry: dict[str, Any] = {"id": lid, "x": float(self.xy[row, 0])}
-            entry["y"] = float(self.xy[row, 1])
-            if self.names is not None:
-                entry["name"] = self.names[row]
-            entries.append("  " + json.dumps(entry))
-        text = '{"landmarks": [\n' + ",\n".join(entries) + "\n]}\n"
-        write_text(path, text, MapError)
-
-
-def _ids_from_file(raw: Sequence[int | str]) -> tuple[LandmarkId, ...]:
-    """Ids as read from a file: all ints if every id is integer-like, otherwise all strings."""
-    texts = [str(v).strip() for v in raw]
-    if all(_INT_ID.match(t) for t in texts):
-        return tuple(int(t) for t in texts)
-    return tuple(texts)
-
-
-def _json_id(value: object, where: str) -> int | str:
-    if isinstance(value, bool) or not isinstance(value, int | str):
-        raise MapError(f"{where}: id must be an integer or a string, got {json.dumps(value)}")
-    if isinstance(value, str) and not value.strip():
-        raise MapError(f"{where}: id is empty")
-    return value
+        write_map_json(path, self.xy, self.ids, self.names)
 
 
 def as_landmark_map(landmarks: LandmarkMap | ArrayLike) -> LandmarkMap:

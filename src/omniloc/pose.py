@@ -1,13 +1,19 @@
 """Pose from bearings with known landmark/bearing pairs (the seed paper's section 2).
 
-Three functions carry the geometry:
-
 * :func:`estimate_pose` -- the closed-form linear estimate of Lee & Chung (eqs. 1-6), after
-  Betke & Gurvits' complex-number formulation: one 2x2 inverse, whatever the number of pairs.
+  Betke & Gurvits' complex-number formulation: one 2x2 inverse, whatever the number of pairs;
+  :func:`poses_from_pairs` does the same for many sets of pairs at once and says which have a
+  pose (rule i of the search);
 * :func:`refine_pose` -- maximum-likelihood refinement on wrapped angular residuals
-  (Levenberg-Marquardt), with the pose covariance. The linear estimate minimises an algebraic
-  error, not the bearing error, so it is biased under noise; the refinement removes that.
-* :func:`crlb` -- the Cramer-Rao lower bound of (x, y, theta) for Gaussian bearing noise.
+  (Gauss-Newton, a step that does not lower the error halved), with the pose covariance. The
+  linear estimate minimises an algebraic error, not the bearing error, so it is biased under
+  noise; the refinement removes that;
+* :func:`bearing_jacobian`, :func:`fisher_information`, :func:`pose_covariance` and
+  :func:`crlb` -- the bearing function's derivatives, the information, the covariance of the
+  maximum-likelihood pose and the Cramer-Rao lower bound for Gaussian bearing noise.
+
+The formulas themselves are written once, in :mod:`omniloc._kernels.geometry`, and shared with
+the compiled search engines; this module applies them to numpy arrays and checks the input.
 
 Conventions: a pose ``(x, y, theta)`` has theta the heading of the robot's forward axis,
 counter-clockwise from world x; a bearing is ``wrap(atan2(Ly - y, Lx - x) - theta)``.
@@ -28,14 +34,20 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._kernels import geometry as _geo
 from .angles import wrap
 from .errors import DegenerateGeometryError, InputError
+from .io import real_array
 
 __all__ = [
+    "SINGULAR_RTOL",
     "Pose",
+    "bearing_jacobian",
     "crlb",
     "estimate_pose",
     "fisher_information",
+    "pose_covariance",
+    "poses_from_pairs",
     "predict_bearings",
     "refine_pose",
 ]
@@ -44,6 +56,15 @@ FloatArray = NDArray[np.float64]
 
 #: Relative tolerance below which the 2x2 matrix of eq. (4) counts as singular.
 SINGULAR_RTOL = 1e-10
+
+#: A covariance is refused (DegenerateGeometryError) when the information's condition number
+#: exceeds this: the pairs do not fix the pose (the robot on the circle through three
+#: landmarks, landmarks all on one line through it).
+MAX_CONDITION = 1e12
+
+#: Gauss-Newton iterations of :func:`refine_pose` (it stops earlier when a step no longer
+#: lowers the error).
+REFINE_ITERATIONS = 50
 
 
 @dataclass(frozen=True)
@@ -108,15 +129,25 @@ class Pose:
 # --------------------------------------------------------------------------------------------
 
 
+def _check_landmarks(landmarks_xy: ArrayLike, name: str = "landmarks_xy") -> FloatArray:
+    L = real_array(landmarks_xy, name, InputError)
+    if L.ndim != 2 or L.shape[1] != 2:
+        raise InputError(f"{name} must have shape (N, 2), got {L.shape}")
+    bad = np.flatnonzero(~np.isfinite(L).all(axis=1))
+    if bad.size:
+        raise InputError(f"landmark {int(bad[0])} has a non-finite coordinate: {L[bad[0]]}")
+    return L
+
+
 def _check_pairs(landmarks_xy: ArrayLike, bearings: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Validate a set of known landmark/bearing pairs and return float64 arrays."""
     try:
-        L = np.asarray(landmarks_xy, dtype=np.float64)
-        b = np.asarray(bearings, dtype=np.float64)
+        np.asarray(landmarks_xy, dtype=np.float64)
+        np.asarray(bearings, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InputError(f"landmarks and bearings must be numeric arrays: {exc}") from exc
-    if L.ndim != 2 or L.shape[1] != 2:
-        raise InputError(f"landmarks_xy must have shape (N, 2), got {L.shape}")
+    L = _check_landmarks(landmarks_xy)
+    b = real_array(bearings, "bearings", InputError)
     if b.ndim != 1:
         raise InputError(f"bearings must have shape (N,), got {b.shape}")
     if L.shape[0] != b.shape[0]:
@@ -125,19 +156,30 @@ def _check_pairs(landmarks_xy: ArrayLike, bearings: ArrayLike) -> tuple[FloatArr
         )
     if L.shape[0] < 3:
         raise InputError(f"a pose from bearings needs at least 3 pairs, got {L.shape[0]}")
-    bad = np.flatnonzero(~np.isfinite(L).all(axis=1))
-    if bad.size:
-        raise InputError(f"landmark {int(bad[0])} has a non-finite coordinate: {L[bad[0]]}")
     bad = np.flatnonzero(~np.isfinite(b))
     if bad.size:
         raise InputError(f"bearing {int(bad[0])} is not finite: {b[bad[0]]}")
     return L, b
 
 
-def _check_pose(pose: Pose | ArrayLike) -> FloatArray:
+def _check_pose(pose: Pose | ArrayLike, name: str = "pose") -> FloatArray:
     if isinstance(pose, Pose):
         return pose.as_array()
-    return Pose.from_array(pose).as_array()
+    try:
+        return Pose.from_array(pose).as_array()
+    except InputError as exc:
+        raise InputError(f"{name}: {exc}") from None
+
+
+def _check_sigma(sigma: object) -> float:
+    if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
+        raise InputError(f"sigma must be a number (radians), got {type(sigma).__name__} {sigma!r}")
+    s = float(sigma)
+    if not (np.isfinite(s) and s > 0):
+        raise InputError(f"sigma must be a positive bearing standard deviation, got {sigma!r}")
+    if s > np.pi:
+        raise InputError(f"sigma must be at most pi radians, got {sigma!r}")
+    return s
 
 
 # --------------------------------------------------------------------------------------------
@@ -158,24 +200,110 @@ def predict_bearings(landmarks_xy: ArrayLike, pose: Pose | ArrayLike) -> FloatAr
     Returns
     -------
     ndarray, shape (N,)
-        ``wrap(atan2(Ly - y, Lx - x) - theta)`` in radians.
+        ``wrap(atan2(Ly - y, Lx - x) - theta)`` in radians (a landmark at the pose's own
+        position has no bearing: that is an error).
 
     Examples
     --------
     >>> predict_bearings([[1.0, 0.0], [0.0, 2.0]], Pose(0.0, 0.0, np.pi / 2)).round(6)
     array([-1.570796,  0.      ])
     """
-    L = np.asarray(landmarks_xy, dtype=np.float64)
-    if L.ndim != 2 or L.shape[1] != 2:
-        raise InputError(f"landmarks_xy must have shape (N, 2), got {L.shape}")
+    L = _check_landmarks(landmarks_xy)
     p = _check_pose(pose)
     d = L - p[:2]
+    at = np.flatnonzero((d == 0).all(axis=1))
+    if at.size:
+        raise DegenerateGeometryError(
+            f"landmark {int(at[0])} is at the pose ({p[0]:g}, {p[1]:g}): it has no bearing"
+        )
     return np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - p[2]))
+
+
+def bearing_jacobian(landmarks_xy: FloatArray, poses: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Predicted bearings (unwrapped) and their gradients with respect to (x, y, theta).
+
+    Parameters
+    ----------
+    landmarks_xy : ndarray, shape (..., n, 2)
+    poses : ndarray, shape (..., 3)
+
+    Returns
+    -------
+    bearings : ndarray, shape (..., n)
+        ``atan2(Ly - y, Lx - x) - theta``, not wrapped.
+    gradients : ndarray, shape (..., n, 3)
+        Rows ``[dy / r^2, -dx / r^2, -1]``.
+    """
+    L = np.asarray(landmarks_xy, dtype=np.float64)
+    p = np.asarray(poses, dtype=np.float64)
+    dx = L[..., 0] - p[..., None, 0]
+    dy = L[..., 1] - p[..., None, 1]
+    r2 = dx * dx + dy * dy
+    pred = np.arctan2(dy, dx) - p[..., None, 2]
+    g = np.stack([dy / r2, -dx / r2, -np.ones_like(r2)], axis=-1)
+    return pred, g
 
 
 # --------------------------------------------------------------------------------------------
 # Section 2: the linear estimate, eqs. (1)-(6)
 # --------------------------------------------------------------------------------------------
+
+
+def poses_from_pairs(
+    landmarks_xy: FloatArray, bearings: FloatArray, *, scale: float | FloatArray | None = None
+) -> tuple[FloatArray, NDArray[np.bool_], dict[str, NDArray[np.bool_]]]:
+    """Eqs. (1)-(6) for K sets of n known pairs at once, and whether each has a pose.
+
+    Pair 0 of each set is the reference ``L_0, theta_0`` (see :func:`estimate_pose`).
+
+    Parameters
+    ----------
+    landmarks_xy : ndarray, shape (K, n, 2)
+    bearings : ndarray, shape (K, n)
+    scale : float or ndarray (K,), optional
+        Size of the scene, metres, for the "robot at infinity" test (``|f| <= 1e-12 /
+        scale``); default the largest distance of a set's landmarks from their mean.
+
+    Returns
+    -------
+    poses : ndarray, shape (K, 3)
+        ``(x, y, theta)``; meaningless where ``ok`` is False.
+    ok : ndarray of bool, shape (K,)
+        Rule (i): the pose exists.
+    why : dict of str to ndarray of bool, shape (K,)
+        Which test failed: ``"coincident"`` (a landmark on the reference), ``"singular"``
+        (``sum P_i`` singular), ``"behind"`` (a distance ratio ``r_i <= 0``), ``"infinity"``.
+        ``why["behind_at"]`` holds the first pair with ``r_i <= 0`` (as an int array).
+    """
+    L = np.asarray(landmarks_xy, dtype=np.float64)
+    b = np.asarray(bearings, dtype=np.float64)
+    if scale is None:
+        scale = np.abs(L - L.mean(axis=1, keepdims=True)).max(axis=(1, 2))
+        scale = np.where(scale > 0, scale, 1.0)
+    zx = L[:, 1:, 0] - L[:, :1, 0]
+    zy = L[:, 1:, 1] - L[:, :1, 1]
+    coincident = (np.hypot(zx, zy) <= 1e-12 * np.asarray(scale)[..., None]).any(axis=1)
+    rot = np.exp(1j * (b[:, 1:] - b[:, :1]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, bb, p00, p01, p11, pb0, pb1 = _geo.np_pair_terms(zx, zy, rot)  # eqs. (1)-(3)
+        s00, s01, s11 = p00.sum(axis=1), p01.sum(axis=1), p11.sum(axis=1)
+        t0, t1 = pb0.sum(axis=1), pb1.sum(axis=1)
+        fx, fy, det, f2, rx, ry, th = _geo.np_pose_from_sums(  # eqs. (4)-(6)
+            s00, s01, s11, t0, t1, L[:, 0, 0], L[:, 0, 1], b[:, 0]
+        )
+        singular = ~_geo.np_sums_invertible(det, s00, s01, s11, SINGULAR_RTOL)
+        r = _geo.np_distance_ratio(a, bb, fx[:, None], fy[:, None])  # eq. (10)
+        behind = ~(r > 0)
+        infinity = ~(np.isfinite(f2) & (f2 > (1e-12 / np.asarray(scale)) ** 2))
+    why = {
+        "coincident": coincident,
+        "singular": singular & ~coincident,
+        "behind": behind.any(axis=1) & ~singular & ~coincident,
+        "infinity": infinity & ~coincident & ~singular,
+        "behind_at": np.argmax(behind, axis=1),
+    }
+    ok = ~(coincident | singular | behind.any(axis=1) | infinity)
+    return np.stack([rx, ry, th], axis=1), ok, why
 
 
 def estimate_pose(landmarks_xy: ArrayLike, bearings: ArrayLike) -> Pose:
@@ -208,7 +336,7 @@ def estimate_pose(landmarks_xy: ArrayLike, bearings: ArrayLike) -> Pose:
     Raises
     ------
     InputError
-        Wrong shapes, non-finite values, fewer than 3 pairs.
+        Wrong shapes, non-finite or non-real values, fewer than 3 pairs.
     DegenerateGeometryError
         Coincident landmarks, a singular ``sum P_i`` (the robot on the circle through the
         landmarks, or every pair carrying the same information), a distance ratio
@@ -228,7 +356,7 @@ def estimate_pose(landmarks_xy: ArrayLike, bearings: ArrayLike) -> Pose:
     """
     L, b = _check_pairs(landmarks_xy, bearings)
     scale = float(np.max(np.abs(L - L.mean(axis=0)))) or 1.0
-    # Coincident landmarks: no a_i or b_i exists (eqs. 1-2 divide by L_i - L_0).
+    # Coincident landmarks anywhere (not only on the reference): no a_i or b_i exists.
     diff = L[:, None, :] - L[None, :, :]
     dist = np.hypot(diff[..., 0], diff[..., 1])
     np.fill_diagonal(dist, np.inf)
@@ -236,124 +364,27 @@ def estimate_pose(landmarks_xy: ArrayLike, bearings: ArrayLike) -> Pose:
     if dist[i, j] <= 1e-12 * scale:
         lo, hi = sorted((int(i), int(j)))
         raise DegenerateGeometryError(f"landmarks {lo} and {hi} coincide at {L[lo].tolist()}")
-
-    z = (L[1:, 0] - L[0, 0]) + 1j * (L[1:, 1] - L[0, 1])  # comp<L_i - L_0>
-    a_c = np.exp(1j * (b[1:] - b[0])) / z  # eq. (1)
-    b_c = 1.0 / z  # eq. (2)
-    a = np.stack([a_c.real, a_c.imag], axis=1)  # vec<.>, shape (N-1, 2)
-    bv = np.stack([b_c.real, b_c.imag], axis=1)
-    aa = np.einsum("ij,ij->i", a, a)
-    P = a[:, :, None] * a[:, None, :] / aa[:, None, None] - np.eye(2)  # eq. (3)
-    S = P.sum(axis=0)
-    T = np.einsum("ijk,ik->j", P, bv)
-    det = S[0, 0] * S[1, 1] - S[0, 1] * S[1, 0]
-    if abs(det) <= SINGULAR_RTOL * max(1.0, float(np.abs(S).max()) ** 2):
+    poses, ok, why = poses_from_pairs(L[None], b[None], scale=scale)
+    if why["singular"][0]:
         raise DegenerateGeometryError(
             "the sum of P_i in eq. (4) is singular: the pairs do not fix the pose "
             "(the robot lies on the circle through the landmarks, or the bearings carry no "
             "independent information)"
         )
-    S_inv = np.array([[S[1, 1], -S[0, 1]], [-S[1, 0], S[0, 0]]]) / det
-    f = -S_inv @ T  # eq. (4)
-    r = np.einsum("ij,ij->i", a, f + bv) / aa  # least-squares distance ratios, eq. (10)
-    bad = np.flatnonzero(~(r > 0))
-    if bad.size:
-        k = int(bad[0]) + 1
+    if why["behind"][0]:
+        k = int(why["behind_at"][0]) + 1
         raise DegenerateGeometryError(
-            f"no pose exists: the distance ratio r_{k} = |L_{k} - R| / |L_0 - R| comes out "
-            f"{r[k - 1]:.3g} <= 0 (landmark {k} would be seen opposite its bearing)"
+            f"no pose exists: the distance ratio r_{k} = |L_{k} - R| / |L_0 - R| is not "
+            f"positive (landmark {k} would be seen opposite its bearing)"
         )
-    f2 = float(f @ f)
-    if not np.isfinite(f2) or f2 <= (1e-12 / scale) ** 2:
+    if not ok[0]:
         raise DegenerateGeometryError("no pose exists: the solution lies at infinity (f = 0)")
-    R = L[0] - np.array([f[0], -f[1]]) / f2  # eq. (5)
-    theta = np.arctan2(L[0, 1] - R[1], L[0, 0] - R[0]) - b[0]  # eq. (6)
-    return Pose(float(R[0]), float(R[1]), float(theta))
+    return Pose.from_array(poses[0])
 
 
 # --------------------------------------------------------------------------------------------
-# Maximum-likelihood refinement
+# Maximum likelihood: information, covariance, refinement, Cramer-Rao bound
 # --------------------------------------------------------------------------------------------
-
-
-def _bearing_jacobian(L: FloatArray, p: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """Predicted bearings and their gradient with respect to (x, y, theta).
-
-    ``L`` has shape (..., n, 2) and ``p`` shape (..., 3); returns bearings (..., n) and
-    gradients (..., n, 3) with rows ``[dy / r^2, -dx / r^2, -1]``.
-    """
-    dx = L[..., 0] - p[..., None, 0]
-    dy = L[..., 1] - p[..., None, 1]
-    r2 = dx * dx + dy * dy
-    pred = np.arctan2(dy, dx) - p[..., None, 2]
-    g = np.stack([dy / r2, -dx / r2, -np.ones_like(r2)], axis=-1)
-    return pred, g
-
-
-def refine_batch(
-    L: FloatArray,
-    bearings: FloatArray,
-    initial: FloatArray,
-    weights: FloatArray | None = None,
-    *,
-    max_iter: int = 20,
-    tol: float = 1e-12,
-) -> tuple[FloatArray, FloatArray]:
-    """Levenberg-Marquardt on wrapped bearing residuals for K problems at once.
-
-    Parameters
-    ----------
-    L : ndarray, shape (K, n, 2)
-        Landmark positions of each problem, metres.
-    bearings : ndarray, shape (K, n)
-        Measured bearings, radians.
-    initial : ndarray, shape (K, 3)
-        Starting poses.
-    weights : ndarray, shape (K, n), optional
-        1 for a pair that counts, 0 for padding (problems with fewer pairs).
-
-    Returns
-    -------
-    poses : ndarray, shape (K, 3)
-        Refined poses; never worse than ``initial`` in weighted squared bearing error.
-    sse : ndarray, shape (K,)
-        Weighted sum of squared wrapped residuals at the returned poses, rad^2.
-    """
-    p = np.array(initial, dtype=np.float64, copy=True)
-    w = np.ones(bearings.shape) if weights is None else weights
-    lam = np.full(p.shape[0], 1e-3)
-
-    def cost(pp: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
-        pred, g = _bearing_jacobian(L, pp)
-        res = np.asarray(wrap(pred - bearings)) * w
-        return res, g, np.einsum("kn,kn->k", res, res)
-
-    res, g, sse = cost(p)
-    eye = np.eye(3)
-    for _ in range(max_iter):
-        gw = g * w[..., None]
-        H = np.einsum("kni,knj->kij", gw, gw)
-        grad = np.einsum("kni,kn->ki", gw, res)
-        diag = np.einsum("kii->ki", H)
-        A = H + lam[:, None, None] * (diag[:, :, None] * eye + 1e-12 * eye)
-        try:
-            step = -np.linalg.solve(A, grad[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            break
-        cand = p + step
-        cand[:, 2] = np.asarray(wrap(cand[:, 2]))
-        res_c, g_c, sse_c = cost(cand)
-        better = np.isfinite(sse_c) & (sse_c <= sse)
-        p[better] = cand[better]
-        res[better], g[better], sse_new = res_c[better], g_c[better], sse_c[better]
-        improvement = sse[better] - sse_new
-        sse[better] = sse_new
-        lam = np.where(better, lam * 0.3, lam * 10.0)
-        if not better.any() and (lam > 1e8).all():
-            break
-        if better.all() and (improvement <= tol * (1.0 + sse[better])).all():
-            break
-    return p, sse
 
 
 def fisher_information(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: float) -> FloatArray:
@@ -364,21 +395,69 @@ def fisher_information(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: f
     Returns
     -------
     ndarray, shape (3, 3)
+
+    Raises
+    ------
+    InputError
+        Malformed landmarks, pose or sigma (the message names which).
+    DegenerateGeometryError
+        The pose stands on one of the landmarks (no bearing to it).
     """
-    L = np.asarray(landmarks_xy, dtype=np.float64)
-    if L.ndim != 2 or L.shape[1] != 2 or not np.isfinite(L).all():
-        raise InputError(f"landmarks_xy must be a finite array of shape (N, 2), got {L.shape}")
-    if not (np.isfinite(sigma) and sigma > 0):
-        raise InputError(f"sigma must be a positive bearing standard deviation, got {sigma}")
+    L = _check_landmarks(landmarks_xy)
+    s = _check_sigma(sigma)
     p = _check_pose(pose)
-    at = np.flatnonzero(np.hypot(L[:, 0] - p[0], L[:, 1] - p[1]) <= 1e-9)
+    d = np.hypot(L[:, 0] - p[0], L[:, 1] - p[1])
+    scale = max(float(np.max(np.abs(L - p[:2]), initial=0.0)), 1.0)
+    at = np.flatnonzero(d <= 1e-9 * scale)
     if at.size:
         raise DegenerateGeometryError(
             f"the pose ({p[0]:.3f}, {p[1]:.3f}) coincides with landmark {int(at[0])}: "
             "it has no bearing from there"
         )
-    _, g = _bearing_jacobian(L, p)
-    return np.asarray(g.T @ g / sigma**2)
+    _, g = bearing_jacobian(L, p)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        J = g.T @ g / (s * s)
+    return np.asarray(J)
+
+
+def pose_covariance(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: float) -> FloatArray:
+    """Covariance of the maximum-likelihood pose from matched landmarks: ``sigma^2 (G^T
+    G)^-1`` at ``pose`` (the inverse Fisher information).
+
+    Parameters
+    ----------
+    landmarks_xy : array_like, shape (N, 2)
+        The matched landmarks, metres.
+    pose : Pose or array_like, shape (3,)
+    sigma : float
+        Bearing noise standard deviation, radians.
+
+    Returns
+    -------
+    ndarray, shape (3, 3)
+        Symmetric positive definite.
+
+    Raises
+    ------
+    DegenerateGeometryError
+        The information is singular (fewer than 3 landmarks, the pose on their circle, or the
+        pose at one of them): the landmarks do not fix the pose, and no finite covariance
+        describes it.
+    """
+    J = fisher_information(landmarks_xy, pose, sigma)
+    if not np.isfinite(J).all():
+        raise DegenerateGeometryError(
+            "the Fisher information is not finite: sigma is too small for these distances"
+        )
+    w, V = np.linalg.eigh(J)
+    if not (w[0] > 0 and w[-1] / w[0] <= MAX_CONDITION):
+        raise DegenerateGeometryError(
+            "the Fisher information is singular: these landmarks do not fix the pose "
+            f"(condition number {w[-1] / max(w[0], 1e-300):.2g}; the pose may lie on the "
+            "circle through three of them, or they may be too few or on one line)"
+        )
+    C = (V / w) @ V.T
+    return np.asarray(0.5 * (C + C.T))
 
 
 def crlb(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: float) -> FloatArray:
@@ -411,12 +490,7 @@ def crlb(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: float) -> Float
     >>> round(float(np.sqrt(C[0, 0] + C[1, 1])), 4)
     0.1234
     """
-    J = fisher_information(landmarks_xy, pose, sigma)
-    if np.linalg.cond(J) > 1e12:
-        raise DegenerateGeometryError(
-            "the Fisher information is singular: these landmarks do not fix the pose"
-        )
-    return np.asarray(np.linalg.inv(J))
+    return pose_covariance(landmarks_xy, pose, sigma)
 
 
 def refine_pose(
@@ -428,9 +502,9 @@ def refine_pose(
 ) -> tuple[Pose, FloatArray]:
     """Maximum-likelihood pose from known pairs, with its covariance.
 
-    Minimises ``sum_i wrap(predicted_i - measured_i)^2`` by Levenberg-Marquardt from
-    ``initial`` (by default the linear estimate of :func:`estimate_pose`). The result is never
-    worse than ``initial`` in angular RMS: a step is only taken when it lowers the error.
+    Minimises ``sum_i wrap(predicted_i - measured_i)^2`` by Gauss-Newton from ``initial`` (by
+    default the linear estimate of :func:`estimate_pose`); a step that does not lower the
+    error is halved until it does, so the result is never worse than ``initial``.
 
     Parameters
     ----------
@@ -452,6 +526,14 @@ def refine_pose(
     covariance : ndarray, shape (3, 3)
         ``sigma^2 (G^T G)^-1`` at the refined pose (Gauss-Newton approximation).
 
+    Raises
+    ------
+    InputError
+        Malformed input (the message names the argument).
+    DegenerateGeometryError
+        No linear estimate exists (without ``initial``), a landmark lies at the starting or
+        the refined pose, or the pairs do not fix the pose (see :func:`pose_covariance`).
+
     Examples
     --------
     >>> L = np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 3.0], [4.0, 3.0]])
@@ -461,21 +543,33 @@ def refine_pose(
     (3, 3)
     """
     L, b = _check_pairs(landmarks_xy, bearings)
-    if sigma is not None and not (np.isfinite(sigma) and sigma > 0):
-        raise InputError(f"sigma must be a positive bearing standard deviation, got {sigma}")
-    p0 = estimate_pose(L, b).as_array() if initial is None else _check_pose(initial)
-    p, sse = refine_batch(L[None], b[None], p0[None])
+    s = None if sigma is None else _check_sigma(sigma)
+    p0 = estimate_pose(L, b).as_array() if initial is None else _check_pose(initial, "initial")
+    scale = max(float(np.max(np.abs(L - L.mean(axis=0)))), 1.0)
+    if np.abs(p0[:2] - L.mean(axis=0)).max() > 1e6 * scale:
+        raise InputError(
+            f"initial=({p0[0]:.3g}, {p0[1]:.3g}) is more than a million times the landmarks' "
+            "spread away from them: no bearing can tell that pose"
+        )
+    start_gap = np.hypot(L[:, 0] - p0[0], L[:, 1] - p0[1]).min()
+    if start_gap <= 1e-9 * scale:
+        raise DegenerateGeometryError(
+            "the starting pose stands on a landmark (it has no bearing from there): "
+            "give another initial pose"
+        )
+    w = np.ones((1, L.shape[0]))
+    p, sse = _geo.gauss_newton(
+        L[None].copy(), b[None].copy(), w, p0[None].copy(), REFINE_ITERATIONS
+    )
+    pose = Pose.from_array(p[0])
     n = L.shape[0]
-    _, g = _bearing_jacobian(L, p[0])
-    H = g.T @ g
-    if sigma is not None:
-        s2 = sigma**2
-    elif n > 3:
-        s2 = float(sse[0]) / (n - 3)
-    else:
-        s2 = float("nan")
-    try:
-        cov = np.linalg.inv(H) * s2
-    except np.linalg.LinAlgError:
-        cov = np.full((3, 3), np.inf)
-    return Pose.from_array(p[0]), np.asarray(cov)
+    if s is not None:
+        return pose, pose_covariance(L, pose, s)
+    if n > 3:
+        s_est = float(np.sqrt(sse[0] / (n - 3)))
+        if s_est > 0:
+            return pose, pose_covariance(L, pose, s_est)
+        # An exact fit of redundant pairs: the residual variance is zero.
+        return pose, np.zeros((3, 3))
+    pose_covariance(L, pose, 1.0)  # the geometry must still fix the pose
+    return pose, np.full((3, 3), np.nan)

@@ -325,29 +325,17 @@ class SensorModel:
 
         Parameters
         ----------
-        landmarks_xy : array_like, shape (N, 2)
-            Landmark positions, metres.
-        pose : Pose or array_like, shape (3,)
+        landmarks_xy : array_like, shape (N, 2) or (K, N, 2)
+            Landmark positions, metres (one set, or one per pose).
+        pose : Pose or array_like, shape (3,) or (K, 3)
             ``(x, y, theta)``.
 
         Returns
         -------
-        ndarray of bool, shape (N,)
+        ndarray of bool, shape (N,) or (K, N)
             A landmark at the pose's own position is never visible.
         """
-        L, p = _landmarks_pose(landmarks_xy, pose)
-        d = L - p[:2]
-        r2 = d[:, 0] ** 2 + d[:, 1] ** 2
-        ok = r2 > 1e-18
-        if self.max_range is not None:
-            ok &= r2 <= self.max_range**2
-        if self.min_range is not None:
-            ok &= r2 >= self.min_range**2
-        half = self.half_fov
-        if half is not None:
-            b = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - p[2]))
-            ok &= np.abs(b) <= half
-        return np.asarray(ok)
+        return self._within(*_landmarks_pose(landmarks_xy, pose), 0.0, 0.0, ())
 
     def plainly_visible(
         self, landmarks_xy: ArrayLike, pose: Pose | ArrayLike, bearings: ArrayLike = ()
@@ -357,25 +345,32 @@ class SensorModel:
         and more than twice that away from every reported bearing (not hidden behind one).
 
         These are the landmarks whose absence is evidence against the pose (negative
-        evidence), and what ``p_detect`` is the detection rate of.
+        evidence), and what ``p_detect`` is the detection rate of. Shapes as :meth:`visible`;
+        ``bearings`` (radians) are the frame's reported bearings.
         """
         L, p = _landmarks_pose(landmarks_xy, pose)
-        d = L - p[:2]
-        r2 = d[:, 0] ** 2 + d[:, 1] ** 2
-        ok = r2 > 1e-18
-        if self.plain_max is not None:
-            ok &= r2 <= self.plain_max**2
-        if self.plain_min is not None:
-            ok &= r2 >= self.plain_min**2
-        pred = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - p[2]))
-        half = self.half_fov
-        margin = self.plain_margin
-        if half is not None:
-            ok &= np.abs(pred) <= half - margin
         b = np.asarray(bearings, dtype=np.float64).reshape(-1)
-        if b.size:
-            sep = np.abs(np.asarray(wrap(pred[:, None] - b[None, :])))
-            ok &= sep.min(axis=1) > 2.0 * margin
+        return self._within(L, p, VISIBLE_RANGE_MARGIN, self.plain_margin, b)
+
+    def _within(
+        self, L: FloatArray, p: FloatArray, range_margin: float, angle_margin: float, b: ArrayLike
+    ) -> NDArray[np.bool_]:
+        d = L - p[..., None, :2]
+        r2 = d[..., 0] ** 2 + d[..., 1] ** 2
+        ok = r2 > 1e-18
+        if self.max_range is not None:
+            ok &= r2 <= ((1.0 - range_margin) * self.max_range) ** 2
+        if self.min_range is not None:
+            ok &= r2 >= ((1.0 + range_margin) * self.min_range) ** 2
+        half = self.half_fov
+        bb = np.asarray(b, dtype=np.float64)
+        if half is not None or bb.size:
+            pred = np.asarray(wrap(np.arctan2(d[..., 1], d[..., 0]) - p[..., None, 2]))
+            if half is not None:
+                ok &= np.abs(pred) <= half - angle_margin
+            if bb.size:
+                sep = np.abs(np.asarray(wrap(pred[..., None] - bb)))
+                ok &= sep.min(axis=-1) > 2.0 * angle_margin
         return np.asarray(ok)
 
     # ---- the likelihood of a frame -----------------------------------------------------------
@@ -418,10 +413,10 @@ def _landmarks_pose(
         p = pose.as_array() if isinstance(pose, Pose) else np.asarray(pose, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InputError(f"landmarks_xy and pose must be numeric arrays: {exc}") from exc
-    if L.ndim != 2 or L.shape[1] != 2:
-        raise InputError(f"landmarks_xy must have shape (N, 2), got {L.shape}")
-    if p.shape != (3,):
-        raise InputError(f"pose must have shape (3,), got {p.shape}")
+    if L.ndim not in (2, 3) or L.shape[-1] != 2:
+        raise InputError(f"landmarks_xy must have shape (N, 2) or (K, N, 2), got {L.shape}")
+    if p.shape[-1:] != (3,) or p.ndim != L.ndim - 1:
+        raise InputError(f"pose must have shape (3,) (or (K, 3) with (K, N, 2)), got {p.shape}")
     if not (np.isfinite(L).all() and np.isfinite(p).all()):
         raise InputError("landmarks_xy and pose must be finite")
     return L, p

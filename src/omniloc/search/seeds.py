@@ -20,7 +20,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from .angles import TWO_PI
+from ..angles import TWO_PI
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

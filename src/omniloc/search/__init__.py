@@ -1,0 +1,263 @@
+"""Correspondences and pose together from bearings alone (the seed paper's section 3).
+
+Where each idea lives:
+
+* :mod:`.tree` -- the interpretation tree, readable (rule (i) in ``_add_third``, rule (ii)
+  and the chi-square gate in ``_add_checked`` / ``_sigma_gate``, the wildcard bound in
+  ``_expand``, the ordering constraint), and the driver of its compiled walk;
+* :mod:`.hypotheses` -- hypothesise and verify, for wildcards, chi-square gates and large
+  maps (the compiled kernel is :mod:`omniloc._kernels.hypotheses`), with :mod:`.seeds`
+  (which bearings start hypotheses) and :mod:`.neighbours` (which landmarks can be seen
+  together);
+* :mod:`.scoring` -- refinement, the joint test, ranking, merging and ambiguity;
+* :mod:`.options` -- the options, checked at the door; :mod:`.results` -- what is returned.
+
+:func:`localize` is the entry point.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import InputError
+from ..io import check_bearings
+from ..maps import LandmarkMap, as_landmark_map
+from ..sensor import SensorModel
+from .hypotheses import run_hypotheses
+from .options import Budget, Leaves, SearchOptions, make_options
+from .results import LocalizationResult, Method, SearchStats, Solution, Strategy
+from .scoring import MAX_LEAVES, finish
+from .tree import TreeSearch, robust_order, run_paper_kernel
+
+__all__ = [
+    "MAX_LEAVES",
+    "Budget",
+    "LocalizationResult",
+    "Method",
+    "SearchStats",
+    "Solution",
+    "Strategy",
+    "localize",
+]
+
+log = logging.getLogger("omniloc.search")
+
+#: Maps larger than this, searched without max_range or a budget, get a warning in the log.
+LARGE_MAP = 1000
+
+
+def choose_engine(
+    strategy: Strategy | str, method: Method, opt: SearchOptions, exhaustive: Any
+) -> str:
+    """``"paper"`` (the compiled paper tree), ``"tree"`` (the readable tree), ``"hypotheses"``
+    or ``"first"`` (hypotheses, stopping at the first fit)."""
+    try:
+        strat = Strategy(strategy)
+    except ValueError as exc:
+        raise InputError(
+            f"strategy must be one of {[s.value for s in Strategy]}, got {strategy!r}"
+        ) from exc
+    if not isinstance(exhaustive, (bool, np.bool_)):
+        raise InputError(f"exhaustive must be True or False, got {exhaustive!r}")
+    if method is Method.PAPER:
+        if strat is Strategy.HYPOTHESES or not exhaustive:
+            raise InputError(
+                "method='paper' walks the paper's tree exhaustively; "
+                "strategy='hypotheses' and exhaustive=False need method='robust'"
+            )
+        return "paper"
+    if strat is Strategy.AUTO:
+        if exhaustive and opt.paper_rules:
+            return "paper"
+        strat = Strategy.HYPOTHESES
+    if strat is Strategy.TREE:
+        if not exhaustive:
+            raise InputError("exhaustive=False needs strategy='hypotheses' (or 'auto')")
+        # The paper's rules alone: the compiled walk visits the same nodes, faster.
+        return "paper" if opt.paper_rules else "tree"
+    return "hypotheses" if exhaustive else "first"
+
+
+def localize(
+    landmarks: LandmarkMap | ArrayLike,
+    bearings: ArrayLike,
+    sensor: SensorModel | None = None,
+    *,
+    budget: Budget | None = None,
+    max_spurious: int | float = 0,
+    ordering: bool = False,
+    method: Method | str = Method.ROBUST,
+    strategy: Strategy | str = Strategy.AUTO,
+    exhaustive: bool = True,
+    threshold: float | None = None,
+    sigma: float | None = None,
+    confidence: float | None = None,
+    max_range: float | None = None,
+    min_range: float | None = None,
+    fov: float | None = None,
+    p_miss: float | None = None,
+    max_nodes: int | None = None,
+    timeout_s: float | None = None,
+) -> LocalizationResult:
+    """Find where the robot is, and which landmark each bearing is, from bearings alone.
+
+    Parameters
+    ----------
+    landmarks : LandmarkMap or array_like, shape (N, 2)
+        The known map, metres.
+    bearings : array_like, shape (m,)
+        Measured bearings in the robot frame, radians, counter-clockwise from forward.
+        3 <= m <= N (at most N + max_spurious with wildcards).
+    sensor : SensorModel, optional
+        What the sensor measures and how well: bearing noise (or the paper's fixed
+        threshold), field of view, range limits, detection probability, clutter. Default:
+        the paper's sensor, a fixed 1-degree threshold and nothing else known. The keyword
+        arguments ``threshold`` ... ``p_miss`` below build one instead (not both).
+    budget : Budget, optional
+        ``Budget(max_nodes=, timeout_s=)``: past it the search stops and returns what it
+        has; ``result.complete`` is then False. (Or the keywords ``max_nodes``,
+        ``timeout_s``.) The compiled engines cannot read the clock: a time becomes a budget
+        of work at a rate fitted to measured times (see the README).
+    max_spurious : int or float, default 0
+        How many bearings may be spurious (not on the map): an int, or a fraction of m.
+        Unmatched observations appear as None in :attr:`Solution.assignment`.
+    ordering : bool, default False
+        Prune paths whose landmarks go round the hypothesised pose in another cyclic order
+        than the measured bearings (the paper's future work).
+    method : {"robust", "paper"}
+        ``"paper"`` is the published algorithm to the letter (see :class:`Method`).
+    strategy : Strategy or {"auto", "tree", "hypotheses"}
+        How the robust search runs. ``"tree"`` walks the interpretation tree with wildcard
+        branches (the readable reference). ``"hypotheses"`` (compiled) starts a hypothesis
+        from every landmark triple that can be seen together, for a few seed triples of
+        bearings that together avoid every possible set of ``max_spurious`` spurious
+        bearings, and verifies it on the other bearings; it finds the same interpretations
+        far faster when there are wildcards, a chi-square gate or a large map. ``"auto"``
+        uses the compiled paper tree where the paper's rules alone apply, else
+        ``"hypotheses"``. ``method="paper"`` always walks the tree.
+    exhaustive : bool, default True
+        False stops at the first interpretation that explains ``m - max_spurious`` bearings
+        (and passes the joint test with ``sigma``; with ``p_miss``, leaves no more plainly
+        visible landmarks unseen than the median of Binomial(m, p_miss)): much faster on large
+        maps, but rival interpretations are not sought, so ``ambiguous`` cannot be trusted
+        (``stats.exhaustive`` is then False). Needs the hypotheses strategy.
+    threshold : float, default 1 degree
+        Rule (ii): largest accepted ``|predicted - measured|`` bearing, radians, when
+        ``sigma`` is not given.
+    sigma : float, optional
+        Bearing noise standard deviation, radians: a chi-square gate on the innovation
+        (its variance includes the pose's uncertainty) instead of the fixed threshold.
+    confidence : float, default 0.99
+        Confidence level of the chi-square gates.
+    max_range, min_range : float, optional
+        Sensor range limits, metres.
+    fov : float, optional
+        Full field of view in radians (e.g. 65 degrees).
+    p_miss : float, optional
+        Probability that a plainly visible landmark is not detected (``1 - p_detect``):
+        every such landmark counts against a solution (negative evidence).
+    max_nodes, timeout_s : optional
+        The budget (see ``budget``).
+
+    Returns
+    -------
+    LocalizationResult
+        Falsy when no interpretation is consistent.
+
+    Raises
+    ------
+    InputError
+        Malformed map or bearings, or options out of range (the message names which).
+
+    References
+    ----------
+    Lee & Chung, section 3 (rules i and ii); Grimson (1990) for the wildcard branch.
+
+    Examples
+    --------
+    >>> from omniloc.pose import Pose, predict_bearings
+    >>> L = np.array([[0, 0], [6, 0], [6, 4], [0, 4], [3, 7], [-2, 2]], dtype=float)
+    >>> z = predict_bearings(L[[1, 4, 0, 2]], Pose(2.0, 1.5, 0.4))
+    >>> result = localize(L, z)
+    >>> result.best.assignment
+    (1, 4, 0, 2)
+    >>> round(result.best.pose.x, 6), round(result.best.pose.y, 6)
+    (2.0, 1.5)
+    """
+    t0 = time.perf_counter()
+    lm = as_landmark_map(landmarks)
+    try:
+        meth = Method(method)
+    except ValueError as exc:
+        raise InputError(
+            f"method must be one of {[m.value for m in Method]}, got {method!r}"
+        ) from exc
+    b = check_bearings(bearings, n_landmarks=None, min_count=3)
+    m = int(b.shape[0])
+    legacy = {
+        "threshold": threshold,
+        "sigma": sigma,
+        "confidence": confidence,
+        "max_range": max_range,
+        "min_range": min_range,
+        "fov": fov,
+        "p_miss": p_miss,
+        "max_nodes": max_nodes,
+        "timeout_s": timeout_s,
+    }
+    opt = make_options(
+        m,
+        method=meth,
+        sensor=sensor,
+        budget=budget,
+        max_spurious=max_spurious,
+        ordering=ordering,
+        legacy=legacy,
+    )
+    if opt.min_match > lm.n:
+        raise InputError(
+            f"{m} bearings but the map has only {lm.n} landmarks"
+            + (f" (with max_spurious={opt.max_wild})" if opt.max_wild else "")
+        )
+    if lm.n > LARGE_MAP and opt.sensor.max_range is None and not opt.budget.bounded:
+        log.warning(
+            "localize: %d landmarks without max_range or a budget: the tree holds about %.1e "
+            "landmark triples per seed and may run for a very long time; pass max_range, "
+            "timeout_s or max_nodes",
+            lm.n,
+            float(lm.n) ** 3,
+        )
+    engine = choose_engine(strategy, meth, opt, exhaustive)
+    # The robust tree starts with the best-spread triple; the paper's takes the given order.
+    robust_tree = engine in ("paper", "tree") and meth is Method.ROBUST
+    order = robust_order(b) if robust_tree else np.arange(m)
+    leaves = Leaves(m, order, started=t0)
+    if engine == "paper":
+        run_paper_kernel(lm, b[order], opt, leaves)
+    elif engine == "tree":
+        TreeSearch(lm, b[order], opt, leaves).run()
+    else:
+        run_hypotheses(lm, b, opt, leaves, stop_first=engine == "first")
+    solutions, ambiguous = finish(lm, b, leaves, opt)
+    c = leaves.counts
+    stats = SearchStats(
+        total_paths=math.perm(lm.n, m) if m <= lm.n else 0,
+        examined_paths=c.examined,
+        nodes=c.nodes,
+        elapsed_s=time.perf_counter() - t0,
+        triples_solved=c.triples,
+        pruned_existence=c.existence,
+        pruned_gate=c.gate,
+        pruned_ordering=c.ordering,
+        pruned_visibility=c.visibility,
+        pruned_bound=c.bound,
+        complete=leaves.complete,
+        exhaustive=leaves.exhaustive,
+    )
+    return LocalizationResult(solutions, stats, lm, ambiguous)

@@ -1,0 +1,330 @@
+"""Hypothesise and verify: the search for wildcards, chi-square gates and large maps.
+
+Every landmark triple that can be seen together starts a hypothesis for a few *seed* triples
+of bearings (:mod:`.seeds`: whichever ``max_spurious`` bearings are spurious, one seed is
+clean), and the hypothesis is verified on the other bearings depth first -- each matched to
+every landmark inside its gate, the pose and covariance taking it in with a Kalman update, or
+left unmatched while the match count allows, as in the tree. The compiled kernel is
+:func:`omniloc._kernels.hypotheses.hypotheses`; this module prepares its inputs (seeds, pair
+limits, neighbour lists, the cost its buffer ranks by), runs large maps in chunks on two
+threads, turns a time budget into a budget of work, and polishes a first fit.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.stats import binom
+
+from .._kernels import geometry as geo
+from .._kernels.hypotheses import (
+    Bearings,
+    Budget,
+    Gate,
+    HypothesisCounts,
+    Neighbours,
+    Scoring,
+    Seeds,
+    Visibility,
+    hypotheses,
+)
+from ..angles import TWO_PI, wrap
+from ..maps import LandmarkMap
+from ..pose import SINGULAR_RTOL
+from . import seeds as seeding
+from .neighbours import neighbour_lists
+from .options import Leaves, SearchOptions
+from .tree import eps_f2
+
+__all__ = ["run_hypotheses"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+KernelResult = tuple[IntArray, FloatArray, IntArray, HypothesisCounts]
+
+#: Rate at which a time budget becomes a budget of work in the kernel (candidate landmarks
+#: looked at, a verification node once per landmark near its hypothesis plus NODE_WORK, a
+#: complete path LEAF_WORK; see omniloc._kernels.hypotheses).
+HYPOTHESIS_WORK_PER_SECOND = 600_000_000
+
+#: From a narrow seed (three bearings spanning less than seeds.WIDE_SPAN), the verification
+#: relinearises (two Gauss-Newton steps and a fresh covariance, as the tree does at every
+#: node) while a path has at most this many pairs, and uses one Kalman update per match
+#: after that: such poses are far from linear at first (with a 67-degree field of view,
+#: Kalman updates alone lost the true pose in 2 % more MRCLAM frames).
+RELINEARISE = 4
+
+#: Margins on the first-order bound of the kernel's cheap test before it verifies a
+#: hypothesis: (wide seeds, narrow seeds) for an exhaustive search and for a first fit; 0
+#: turns the test off. The bound is exact for a linear bearing function; poses from three
+#: bearings are not (one seed pose was 4x off its linearised covariance). Measured against
+#: the search without the test: with (4, 8), 1 of 977 scenes (scene b, random 12-30 landmark
+#: maps with 2 spurious, all MRCLAM frames) lost one poorly fitting interpretation, never the
+#: best; with (1.5, 3), 5 of 380. A first fit gives up completeness anyway and takes the
+#: faster margin (scene c: 0.59 s median with it, 0.83 s with the exhaustive one, 1.08 s
+#: without).
+PRETEST_SLACK = {True: (4.0, 8.0), False: (1.5, 3.0)}
+
+#: Bearings closer than this (radians) may compete for one landmark: the search tries each
+#: of them as spurious even where a landmark fits (as the tree tries every bearing).
+CONTESTED = float(np.deg2rad(25.0))
+
+#: First landmarks per chunk of a large map's search, and threads that run chunks.
+CHUNK_ANCHORS = 256
+THREADS = 2
+
+#: The kernel keeps at most this many complete paths (the best by its cost), twice what the
+#: scoring refines and returns (search.scoring.MAX_LEAVES).
+CAPACITY = 16000
+
+
+def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> Neighbours:
+    """Whom each landmark can be seen with: with a range, its neighbours within twice the
+    range (the pose lies within range of the first landmark, so every landmark it sees lies
+    within twice that of it); else every other landmark."""
+    s = opt.sensor
+    if s.reach_max is not None and lm.n > 64:
+        nb = neighbour_lists(lm, 2.0 * s.reach_max)
+        return Neighbours(lm.xy, nb.ptr[:-1], nb.ptr[1:], nb.idx, nb.xy)
+    # In the list 0..N-1 written twice, the N - 1 entries after position i are all
+    # landmarks but i.
+    N = lm.n
+    idx = np.tile(np.arange(N, dtype=np.int64), 2)
+    lo = np.arange(1, N + 1, dtype=np.int64)
+    return Neighbours(lm.xy, lo, lo + (N - 1), idx, np.ascontiguousarray(lm.xy[idx]))
+
+
+def _scoring(opt: SearchOptions) -> Scoring:
+    """The cost the kernel's buffer keeps the best paths by (as search.scoring ranks)."""
+    s = opt.sensor
+    if s.p_detect is None:
+        return Scoring(1e6, 0.0)  # matches first
+    spur_w = max(0.5 * math.log(TWO_PI) - math.log(s.noise), 0.0)
+    return Scoring(spur_w, -s.log_miss)
+
+
+def run_hypotheses(
+    lm: LandmarkMap, beta: FloatArray, opt: SearchOptions, out: Leaves, *, stop_first: bool
+) -> None:
+    """Hypothesise and verify for bearings ``beta`` (observation order), into ``out``.
+
+    Large maps are cut into chunks of first landmarks, run on two threads (the kernel
+    releases the GIL); ``stop_first`` (a first fit) stops handing out chunks once one has an
+    answer.
+    """
+    s = opt.sensor
+    m = beta.shape[0]
+    limits = seeding.pair_limits(beta, s.reach_max, s.reach_min, 2.0 * s.gate_width)
+    triples = seeding.seed_triples(beta, opt.max_wild, limits)
+    nb = _neighbours(lm, opt)
+    miss_allow = m + lm.n
+    if stop_first and s.p_detect is not None:
+        # A first fit must not leave more plainly visible landmarks unseen than misses
+        # typically explain: the median of Binomial(m, p_miss). The true interpretation with
+        # more misses than that does not stop the search early but is still found (it costs
+        # time, not the answer), while a generous allowance would let a wrong pose that hides
+        # a landmark or two stop it (it did on a 100,000-landmark map).
+        miss_allow = int(binom.ppf(0.5, m, 1.0 - s.p_detect))
+    # Poses from narrow seeds are far from linear: relinearise their first matches.
+    relin = np.where(seeding.narrow(beta, triples), RELINEARISE, 0).astype(np.int64)
+    wide, narrow = PRETEST_SLACK[not stop_first]
+    near_pair = seeding.angle_between(beta) <= CONTESTED
+    np.fill_diagonal(near_pair, False)
+    bearings = Bearings(
+        np.require(beta, np.float64, ["C"]), limits, np.ascontiguousarray(near_pair.any(axis=1))
+    )
+    gate = Gate(
+        -1.0 if s.sigma is None else float(s.sigma),
+        float(s.gate_chi2),
+        float(s.threshold),
+        np.require(opt.joint_chi2, np.float64, ["C"]),
+        int(opt.min_match),
+        SINGULAR_RTOL,
+        eps_f2(lm),
+    )
+    vis = Visibility(
+        np.inf if s.reach_max is None else s.reach_max**2,
+        0.0 if s.reach_min is None else s.reach_min**2,
+        np.inf if s.half_fov is None else float(s.half_fov),
+        np.inf if s.plain_max is None else s.plain_max**2,
+        0.0 if s.plain_min is None else s.plain_min**2,
+    )
+    scoring = _scoring(opt)
+    max_nodes = 0 if opt.budget.max_nodes is None else opt.budget.max_nodes
+
+    def call(rows: slice, i0: int, i1: int, cap: tuple[int, int]) -> KernelResult:
+        """One kernel run; ``cap`` = (nodes, work) it may spend, 0 for no limit."""
+        seeds = Seeds(
+            triples[rows], relin[rows], np.where(relin[rows] > 0, narrow, wide).astype(float)
+        )
+        budget = Budget(cap[0], cap[1], stop_first, miss_allow, CAPACITY)
+        return hypotheses(nb, i0, i1, bearings, seeds, gate, vis, scoring, budget)
+
+    if lm.n <= 4 * CHUNK_ANCHORS:
+        work = _work_left(out, opt)
+        results = [call(slice(None), 0, lm.n, (max_nodes, 1 if work < 0 else work))]
+    else:
+        chunks = [
+            (slice(r, r + 1), i0, min(i0 + CHUNK_ANCHORS, lm.n))
+            for r in range(len(triples))
+            for i0 in range(0, lm.n, CHUNK_ANCHORS)
+        ]
+        results = _run_chunks(call, chunks, max_nodes, out, opt)
+    if not results:
+        # The time was up before the first chunk (a big map's neighbour lists took it).
+        out.complete = False
+        return
+    _collect(lm, beta, results, out, opt, stop_first, miss_allow)
+
+
+def _collect(
+    lm: LandmarkMap,
+    beta: FloatArray,
+    results: list[KernelResult],
+    out: Leaves,
+    opt: SearchOptions,
+    stop_first: bool,
+    miss_allow: int,
+) -> None:
+    """Sum the kernel runs' counters and hand their complete paths to ``out``."""
+    counts = [r[3] for r in results]
+    c = out.counts
+    c.nodes = sum(k.nodes for k in counts)
+    c.examined = sum(k.examined for k in counts)
+    c.triples = sum(k.triples for k in counts)
+    c.existence = sum(k.pruned_existence for k in counts)
+    c.gate = sum(k.pruned_gate for k in counts)
+    c.visibility = sum(k.pruned_visibility for k in counts)
+    c.bound = sum(k.pruned_bound for k in counts)
+    stopped = max(k.stopped for k in counts)
+    if any(k.stopped == 1 for k in counts):
+        out.complete = False
+    if stopped == 2:
+        out.exhaustive = False
+    assign = np.concatenate([r[0] for r in results])
+    if len(assign) == 0:
+        return
+    pose = np.concatenate([r[1] for r in results])
+    if stopped == 2:
+        # A first fit: what the other chunks in flight found counts only if it, too, is an
+        # acceptable fit (the rest would rank below it on negative evidence anyway).
+        fits = np.concatenate([r[2] for r in results]) <= miss_allow
+        assign, pose = assign[fits], pose[fits]
+    # One interpretation is often reached from several seeds.
+    assign, first = np.unique(assign, axis=0, return_index=True)
+    pose = pose[first]
+    if stop_first:
+        assign, pose = _polish(lm, beta, assign, pose, opt)
+    if opt.ordering:
+        from .tree import order_ok
+
+        w = (assign >= 0).astype(np.float64)
+        good = order_ok(
+            lm.xy[np.maximum(assign, 0)],
+            np.broadcast_to(beta, assign.shape),
+            w,
+            pose,
+            2.0 * opt.sensor.gate_width,
+        )
+        c.ordering += int((~good).sum())
+        assign, pose = assign[good], pose[good]
+    out.add(assign, pose)
+
+
+def _polish(
+    lm: LandmarkMap, beta: FloatArray, assign: IntArray, pose: FloatArray, opt: SearchOptions
+) -> tuple[IntArray, FloatArray]:
+    """Move a landmark to an unmatched bearing where that fits better (first fit).
+
+    Verification takes bearings in a fixed order and gives each the best landmark in its
+    gate, so a spurious bearing next to a true one can take the true one's landmark when the
+    true one is checked first and falls just outside its gate. The exhaustive search also
+    reaches the other interpretation (from another seed) and the ranking settles it; a first
+    fit instead tries every such swap on the interpretation it stops at.
+    """
+    s = opt.sensor
+    reach = 3.0 * math.sqrt(s.gate_chi2) * s.noise
+    L = lm.xy
+    assign, pose = assign.copy(), pose.copy()
+
+    def fit(a: IntArray, start: FloatArray, iters: int) -> tuple[FloatArray, float]:
+        p, sse = geo.gauss_newton(
+            np.ascontiguousarray(L[np.maximum(a, 0)][None]),
+            np.ascontiguousarray(beta[None]),
+            np.ascontiguousarray((a >= 0)[None] * 1.0),
+            np.ascontiguousarray(start[None]),
+            iters,
+        )
+        return p[0], float(sse[0])
+
+    for r in range(len(assign)):
+        a = assign[r]
+        _, sse0 = fit(a, pose[r], 0)
+        best = (sse0, a, pose[r])
+        for u in np.flatnonzero(a < 0):
+            for o in np.flatnonzero(a >= 0):
+                if abs(float(wrap(beta[u] - beta[o]))) > reach:
+                    continue
+                alt = a.copy()
+                alt[u], alt[o] = a[o], -1
+                p2, sse2 = fit(alt, pose[r], 10)
+                if sse2 < best[0]:
+                    best = (sse2, alt, p2)
+        assign[r], pose[r] = best[1], best[2]
+    return assign, pose
+
+
+def _work_left(out: Leaves, opt: SearchOptions) -> int:
+    """The kernel cannot read the clock: what is left of ``timeout_s`` becomes work at
+    HYPOTHESIS_WORK_PER_SECOND; 0 without a timeout, -1 when spent."""
+    left = out.time_left(opt.budget.timeout_s)
+    if left is None:
+        return 0
+    if left <= 0:
+        return -1
+    return max(1, int(min(left * HYPOTHESIS_WORK_PER_SECOND, 2**62)))
+
+
+def _run_chunks(
+    call: Callable[[slice, int, int, tuple[int, int]], KernelResult],
+    chunks: list[tuple[slice, int, int]],
+    max_nodes: int,
+    out: Leaves,
+    opt: SearchOptions,
+) -> list[KernelResult]:
+    """Run chunks on a small thread pool, in order; stop early on an answer (first fit),
+    when the node budget is spent (summed over chunks) or when the time is up (each chunk in
+    flight may use what is left of it: they run side by side)."""
+    results: list[KernelResult] = []
+    spent = 0
+    workers = max(1, min(THREADS, os.cpu_count() or 1))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        pending: list[Future[KernelResult]] = []
+        it = iter(chunks)
+        done = False
+        while True:
+            while not done and len(pending) < workers:
+                nxt = next(it, None)
+                if nxt is None:
+                    done = True
+                    break
+                work = _work_left(out, opt)
+                if work < 0:
+                    out.complete = False
+                    done = True
+                    break
+                left = 0 if max_nodes == 0 else max(1, max_nodes - spent)
+                pending.append(pool.submit(call, nxt[0], nxt[1], nxt[2], (left, work)))
+            if not pending:
+                break
+            r = pending.pop(0).result()
+            results.append(r)
+            spent += r[3].nodes
+            if r[3].stopped or (max_nodes and spent >= max_nodes):
+                done = True
+    return results

@@ -1,0 +1,69 @@
+"""Which landmarks can be seen together: neighbour lists of a map, built once per radius.
+
+With a range limit R, the landmarks a robot sees lie within R of it, so within 2R of each
+other: the hypotheses search pairs each landmark only with its neighbours within 2R. The
+lists are CSR arrays (memory linear in the number of neighbouring pairs, not N^2), built
+from the map's k-d tree and kept for the last few radii of each map.
+"""
+
+from __future__ import annotations
+
+import threading
+import weakref
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..maps import LandmarkMap
+
+__all__ = ["NeighbourLists", "neighbour_lists"]
+
+#: Radii kept per map.
+KEEP = 4
+
+_cache: weakref.WeakKeyDictionary[LandmarkMap, dict[float, NeighbourLists]]
+_cache = weakref.WeakKeyDictionary()
+_lock = threading.Lock()
+
+
+class NeighbourLists(NamedTuple):
+    """Landmarks within a radius of each landmark (itself excluded), as CSR lists: the
+    neighbours of landmark ``i`` are ``idx[ptr[i]:ptr[i + 1]]``, in increasing order, at
+    ``xy[ptr[i]:ptr[i + 1]]`` (their positions, contiguous for sequential reads)."""
+
+    ptr: NDArray[np.int64]
+    idx: NDArray[np.int64]
+    xy: NDArray[np.float64]
+
+
+def neighbour_lists(lm: LandmarkMap, radius: float) -> NeighbourLists:
+    """The neighbour lists of ``lm`` within ``radius`` (built once, then cached).
+
+    Examples
+    --------
+    >>> lm = LandmarkMap([[0, 0], [1, 0], [5, 0]])
+    >>> nb = neighbour_lists(lm, 2.0)
+    >>> nb.idx[nb.ptr[0]:nb.ptr[1]].tolist(), nb.idx[nb.ptr[2]:nb.ptr[3]].tolist()
+    ([1], [])
+    """
+    key = float(radius)
+    with _lock:
+        per_map = _cache.setdefault(lm, {})
+        found = per_map.get(key)
+    if found is not None:
+        return found
+    pairs = lm.kdtree.query_pairs(key, output_type="ndarray").astype(np.int64)
+    src = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    dst = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    del pairs
+    order = np.lexsort((dst, src))
+    ptr = np.zeros(lm.n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(src, minlength=lm.n), out=ptr[1:])
+    idx = dst[order]
+    lists = NeighbourLists(ptr, idx, np.ascontiguousarray(lm.xy[idx]))
+    with _lock:
+        if len(per_map) >= KEEP:
+            per_map.pop(next(iter(per_map)))
+        per_map[key] = lists
+    return lists

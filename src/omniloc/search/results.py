@@ -1,0 +1,176 @@
+"""What a search returns: solutions, statistics, and the choices of method and strategy."""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..maps import LandmarkMap
+from ..pose import Pose
+
+__all__ = ["LocalizationResult", "Method", "SearchStats", "Solution", "Strategy"]
+
+FloatArray = NDArray[np.float64]
+
+
+class Method(str, enum.Enum):
+    """Which search semantics :func:`localize` follows.
+
+    ``paper``
+        The published algorithm to the letter: observations in the order given, rules (i) and
+        (ii) with a fixed threshold, every consistent complete path reported as its own
+        solution (this reproduces the paper's Table 1). Robust options are refused.
+    ``robust``
+        The same tree with everything beyond the paper available (wildcards, chi-square
+        gating, ordering, visibility, negative evidence); the observation order is chosen to
+        prune early, and solutions that are the same pose are merged.
+    """
+
+    PAPER = "paper"
+    ROBUST = "robust"
+
+
+class Strategy(str, enum.Enum):
+    """How :func:`localize` runs a robust search (see its ``strategy`` parameter).
+
+    ``auto``
+        The compiled paper tree where the paper's rules alone apply, the hypotheses search
+        for the robust options when numba is installed, the tree otherwise.
+    ``tree``
+        The interpretation tree with wildcard branches (the reference).
+    ``hypotheses``
+        Compiled: a pose hypothesis from every landmark triple that can be seen together, for
+        a few seed triples of bearings, verified on the other bearings.
+    """
+
+    AUTO = "auto"
+    TREE = "tree"
+    HYPOTHESES = "hypotheses"
+
+
+@dataclass(frozen=True)
+class SearchStats:
+    """What the search did.
+
+    Attributes
+    ----------
+    total_paths : int
+        Complete paths of the tree without wildcards, ``N! / (N - m)!`` (the paper's Table 1,
+        second column).
+    examined_paths : int
+        Nodes visited at depth four or deeper: each is a path the search traced more than
+        three nodes deep (Table 1, third column). A wildcard node deeper than three counts too.
+    nodes : int
+        Every node visited, at any depth, wildcards included (a node is "visited" when its
+        pairing is generated and tested, whether it passes or not).
+    elapsed_s : float
+        Wall-clock time of the search and the final refinement, seconds.
+    triples_solved : int
+        Depth-3 pose solutions attempted (rule i).
+    pruned_existence, pruned_gate, pruned_ordering, pruned_visibility, pruned_bound : int
+        Nodes cut by rule (i), by rule (ii), by the ordering constraint, by range/field of
+        view, and paths cut by the match-count bound (wildcards).
+    complete : bool
+        False when a budget (``max_nodes``, ``timeout_s``) stopped the search early.
+    exhaustive : bool
+        False when the search stopped at a first fit (``exhaustive=False``) and so did not
+        look for rival interpretations.
+    """
+
+    total_paths: int
+    examined_paths: int
+    nodes: int
+    elapsed_s: float
+    triples_solved: int = 0
+    pruned_existence: int = 0
+    pruned_gate: int = 0
+    pruned_ordering: int = 0
+    pruned_visibility: int = 0
+    pruned_bound: int = 0
+    complete: bool = True
+    exhaustive: bool = True
+
+    def as_dict(self) -> dict[str, int | float | bool]:
+        """Plain-JSON dictionary of the statistics."""
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+@dataclass(frozen=True)
+class Solution:
+    """One consistent interpretation: which landmark each bearing is, and the pose.
+
+    Attributes
+    ----------
+    pose : Pose
+        Maximum-likelihood pose refined from all matched pairs.
+    assignment : tuple of (int or None)
+        For each observation, in the order given, the index of its landmark in the map, or
+        None when the observation was declared spurious (wildcard).
+    residual_rms : float
+        RMS of the wrapped bearing residuals over the matched observations, radians.
+    matched : int
+        Number of matched observations.
+    covariance : ndarray, shape (3, 3)
+        Covariance of (x, y, theta); from ``sigma`` when given, else from ``threshold / 3``.
+    cost : float
+        Negative log-likelihood used for ranking after ``matched`` (bearing residuals,
+        spurious observations and, with ``p_miss``, landmarks that should have been seen).
+    confidence : float
+        Normalised posterior weight among the returned solutions (they sum to 1).
+    missed : int
+        Landmarks plainly visible from ``pose`` (by ``max_range``/``fov``) but not observed.
+    """
+
+    pose: Pose
+    assignment: tuple[int | None, ...]
+    residual_rms: float
+    matched: int
+    covariance: FloatArray = field(repr=False, compare=False)
+    cost: float = 0.0
+    confidence: float = 1.0
+    missed: int = 0
+
+
+@dataclass(frozen=True)
+class LocalizationResult:
+    """The outcome of :func:`localize`; tests false when there is no solution.
+
+    Attributes
+    ----------
+    solutions : list of Solution
+        Best first: most matched observations, then lowest cost.
+    stats : SearchStats
+    landmarks : LandmarkMap
+        The map searched (for landmark ids).
+    ambiguous : bool
+        More than one distinct pose fits about as well as the best (same number of matches and
+        confidence at least 1 % of the best): symmetric maps, too few observations.
+    """
+
+    solutions: list[Solution]
+    stats: SearchStats
+    landmarks: LandmarkMap
+    ambiguous: bool = False
+
+    @property
+    def best(self) -> Solution | None:
+        """The best solution, or None."""
+        return self.solutions[0] if self.solutions else None
+
+    @property
+    def complete(self) -> bool:
+        """False when a budget stopped the search before the whole tree was walked."""
+        return self.stats.complete
+
+    def __bool__(self) -> bool:
+        return bool(self.solutions)
+
+    def __len__(self) -> int:
+        return len(self.solutions)
+
+    def assignment_ids(self, solution: Solution) -> list[int | str | None]:
+        """A solution's assignment as landmark ids (None for spurious observations)."""
+        return [None if i is None else self.landmarks.ids[i] for i in solution.assignment]
