@@ -19,6 +19,7 @@ from omniloc.vision import (
     render_omni_image,
     true_features,
 )
+from omniloc.vision.render import luminance, random_stripe_scene
 
 ROOM = (WallEdge(-4, -3), WallEdge(4, -3), WallEdge(4, 3), WallEdge(-4, 3))
 
@@ -166,3 +167,144 @@ def test_bad_scene_and_pose_raise() -> None:
         Pole(0.0, 0.0, 0.0)
     with pytest.raises(VisionError, match="wall_levels"):
         OmniScene(wall_levels=(10.0, 10.0, 20.0))
+
+
+def test_wall_edge_levels_paint_the_walls_they_start() -> None:
+    # Seen from the origin, edges at 0, 90, 200 deg: the wall from 0 to 90 deg is 60, from
+    # 90 to 200 deg is 180, from 200 to 360 deg is 120.
+    az = np.deg2rad([0.0, 90.0, 200.0])
+    levels = (60.0, 180.0, 120.0)
+    edges = tuple(
+        WallEdge(3 * np.cos(a), 3 * np.sin(a), level) for a, level in zip(az, levels, strict=True)
+    )
+    cam = clean_camera()
+    img = render_omni_image(OmniScene(edges=edges), (0.0, 0.0, 0.0), cam, rng=0)
+    cx, cy = cam.center
+    for bearing_deg, level in ((45.0, 60), (150.0, 180), (290.0, 120)):
+        phi = np.deg2rad(bearing_deg)
+        u = cx + cam.radius * 0.6 * np.cos(phi)
+        v = cy - cam.radius * 0.6 * np.sin(phi)
+        assert img[round(v), round(u)] == level
+
+
+def test_colour_camera_sees_colours_and_grey_camera_their_luminance() -> None:
+    red, blue, green = (200.0, 40.0, 40.0), (30.0, 60.0, 220.0), (50.0, 160.0, 60.0)
+    az = np.deg2rad([10.0, 130.0, 250.0])
+    edges = tuple(
+        WallEdge(3 * np.cos(a), 3 * np.sin(a), c)
+        for a, c in zip(az, (red, blue, green), strict=True)
+    )
+    pole = Pole(2.0 * np.cos(1.2), 2.0 * np.sin(1.2), 0.1, (240.0, 200.0, 20.0))
+    scene = OmniScene(poles=(pole,), edges=edges)
+    rgb = render_omni_image(scene, (0.0, 0.0, 0.0), clean_camera(color=True), rng=0)
+    grey = render_omni_image(scene, (0.0, 0.0, 0.0), clean_camera(), rng=0)
+    assert rgb.shape == (480, 640, 3) and rgb.dtype == np.uint8
+    assert grey.shape == (480, 640)
+    cam = clean_camera()
+    cx, cy = cam.center
+    for bearing_deg, paint in ((40.0, red), (190.0, blue), (300.0, green), (68.75, pole.intensity)):
+        phi = np.deg2rad(bearing_deg)
+        u = round(cx + cam.radius * 0.6 * np.cos(phi))
+        v = round(cy - cam.radius * 0.6 * np.sin(phi))
+        assert rgb[v, u].tolist() == [round(c) for c in paint]
+        assert grey[v, u] == round(luminance(paint))
+    # as_gray of the colour image is the grey image, up to the rounding of each channel.
+    from omniloc.vision.calibrate import as_gray
+
+    assert np.max(np.abs(as_gray(rgb) - grey.astype(np.float32))) <= 1.0
+
+
+def test_luminance() -> None:
+    assert luminance(77.0) == 77.0
+    assert luminance((77.0, 77.0, 77.0)) == 77.0
+    assert luminance((255.0, 0.0, 0.0)) == pytest.approx(0.299 * 255)
+    assert luminance((10.0, 20.0, 30.0)) == pytest.approx(0.299 * 10 + 0.587 * 20 + 0.114 * 30)
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: Pole(0.0, 0.0, 0.1, (10.0, 20.0)), "grey level or"),
+        (lambda: Pole(0.0, 0.0, 0.1, (10.0, 300.0, 20.0)), r"\[0, 255\]"),
+        (lambda: Pole(0.0, 0.0, 0.1, 256.0), r"\[0, 255\]"),
+        (lambda: WallEdge(1.0, 0.0, np.nan), "finite"),
+        (lambda: OmniScene(edges=(WallEdge(1, 0, 50.0), WallEdge(0, 1))), "1 of 2 edges"),
+        (lambda: OmniScene(edges=(WallEdge(1, 0, 50.0),)), ">= 2 edges"),
+    ],
+)
+def test_bad_paints_raise(make: object, message: str) -> None:
+    with pytest.raises(VisionError, match=message):
+        make()  # type: ignore[operator]
+
+
+def test_neighbouring_walls_with_one_level_raise() -> None:
+    edges = (WallEdge(3, 0, 100.0), WallEdge(0, 3, 100.0), WallEdge(-3, 0, 150.0))
+    with pytest.raises(VisionError, match="same level"):
+        render_omni_image(OmniScene(edges=edges), (0.0, 0.0, 0.0))
+
+
+def test_random_stripe_scene_draws_what_it_promises() -> None:
+    step = 30.0
+    for seed in range(6):
+        # Landmarks 9 deg apart: only the narrow segments are 5-8 deg wide.
+        scene, pose = random_stripe_scene(
+            seed, n_poles=3, n_segments=4, min_level_step=step, min_separation=np.deg2rad(9.0)
+        )
+        truth = true_features(scene, pose)
+        assert len(truth) == 3 + 4 + 2 * 4  # poles, corners, two edges per narrow segment
+        assert truth.ambiguous.size == 0
+        assert np.sum(truth.kind == "pole") == 3
+        x, y, _ = pose
+        # Pole widths as seen from the robot.
+        widths = [2 * np.arcsin(p.radius / np.hypot(p.x - x, p.y - y)) for p in scene.poles]
+        assert np.all((np.rad2deg(widths) >= 1.6 - 1e-9) & (np.rad2deg(widths) <= 5.0 + 1e-9))
+        # Walls in azimuth order: neighbours differ by >= step; exactly 4 are 5-8 deg wide.
+        az = np.array([np.arctan2(e.y - y, e.x - x) for e in scene.edges])
+        order = np.argsort(az)
+        lum = np.array([luminance(scene.edges[i].level) for i in order])  # type: ignore[arg-type]
+        assert np.all(np.abs(lum - np.roll(lum, 1)) >= step - 1e-6)
+        gaps = np.rad2deg(np.diff(np.concatenate([az[order], az[order][:1] + 2 * np.pi])))
+        narrow = (gaps >= 5.0 - 1e-9) & (gaps <= 8.0 + 1e-9)
+        assert narrow.sum() == 4
+        assert np.all(gaps[~narrow] >= 9.0)  # other walls are at least min_separation wide
+        # Each pole's level is >= step from the wall behind it.
+        for p in scene.poles:
+            a = np.arctan2(p.y - y, p.x - x)
+            behind = order[np.searchsorted(az[order], a) - 1]
+            wall = luminance(scene.edges[behind].level)  # type: ignore[arg-type]
+            assert abs(luminance(p.intensity) - wall) >= step - 1e-6
+    a = random_stripe_scene(3)
+    b = random_stripe_scene(np.random.default_rng(3))
+    assert a == b
+
+
+def test_random_stripe_scene_makes_pole_like_segments() -> None:
+    # A narrow segment is brighter or darker than both neighbours about 4 times in 5 (81 %
+    # over 300 other seeds), else between them: both kinds occur.
+    extreme = between = 0
+    for seed in range(10):
+        scene, pose = random_stripe_scene(seed, min_separation=np.deg2rad(9.0))
+        x, y, _ = pose
+        az = np.array([np.arctan2(e.y - y, e.x - x) for e in scene.edges])
+        order = np.argsort(az)
+        lum = np.array([luminance(scene.edges[i].level) for i in order])  # type: ignore[arg-type]
+        gaps = np.diff(np.concatenate([az[order], az[order][:1] + 2 * np.pi]))
+        for k in np.flatnonzero(gaps <= np.deg2rad(8.0) + 1e-9):
+            a, b, c = lum[k - 1], lum[k], lum[(k + 1) % len(lum)]
+            if (b - a) * (b - c) > 0:
+                extreme += 1
+            else:
+                between += 1
+    assert extreme + between == 40
+    assert 24 <= extreme <= 38
+
+
+def test_random_stripe_scene_bad_parameters_raise() -> None:
+    with pytest.raises(VisionError, match="n_poles"):
+        random_stripe_scene(0, n_poles=-1)
+    with pytest.raises(VisionError, match="segment_width"):
+        random_stripe_scene(0, segment_width=(0.2, 0.1))
+    with pytest.raises(VisionError, match="min_level_step"):
+        random_stripe_scene(0, min_level_step=120.0)
+    with pytest.raises(VisionError, match="could not draw"):
+        random_stripe_scene(0, n_segments=40, max_tries=3)

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import cv2
 import numpy as np
@@ -31,11 +32,14 @@ __all__ = [
     "DEMO_POSE",
     "OmniCamera",
     "OmniScene",
+    "Paint",
     "Pole",
     "TrueFeatures",
     "WallEdge",
     "demo_scene",
+    "luminance",
     "random_scene",
+    "random_stripe_scene",
     "render_omni_image",
     "true_features",
 ]
@@ -54,6 +58,57 @@ def _finite(name: str, value: float) -> float:
     return out
 
 
+#: A surface's paint: a grey level in [0, 255], or an RGB colour ``(r, g, b)`` in [0, 255].
+#: A grey camera sees a colour's luminance ``0.299 r + 0.587 g + 0.114 b`` (the weights
+#: :func:`omniloc.vision.calibrate.as_gray` uses); a grey level ``g`` is the colour ``(g, g, g)``.
+Paint = float | tuple[float, float, float]
+
+_LUMA = (0.299, 0.587, 0.114)
+
+
+def _check_paint(name: str, value: object) -> Paint:
+    """A grey level or an RGB triple, finite and in [0, 255]; raises VisionError otherwise."""
+    if isinstance(value, (tuple, list, np.ndarray)):
+        if len(value) != 3:
+            raise VisionError(f"{name} must be a grey level or (r, g, b), got {len(value)} values")
+        rgb = tuple(_finite(name, v) for v in value)
+        if not all(0 <= v <= 255 for v in rgb):
+            raise VisionError(f"{name} must lie in [0, 255], got {rgb}")
+        return (rgb[0], rgb[1], rgb[2])
+    grey = _finite(name, value)  # type: ignore[arg-type]
+    if not 0 <= grey <= 255:
+        raise VisionError(f"{name} must be in [0, 255], got {grey}")
+    return grey
+
+
+def _rgb(paint: Paint) -> tuple[float, float, float]:
+    return paint if isinstance(paint, tuple) else (paint, paint, paint)
+
+
+def luminance(paint: Paint) -> float:
+    """The grey level a grey camera sees for `paint` (a grey level is returned unchanged).
+
+    Parameters
+    ----------
+    paint : float or tuple of 3 float
+        A grey level, or an RGB colour, in [0, 255].
+
+    Returns
+    -------
+    float
+        ``0.299 r + 0.587 g + 0.114 b`` (exactly ``g`` for a grey ``(g, g, g)``).
+
+    Examples
+    --------
+    >>> luminance(120.0), round(luminance((200.0, 100.0, 50.0)), 3)
+    (120.0, 124.2)
+    """
+    r, g, b = _rgb(paint)
+    if r == g == b:
+        return float(r)
+    return _LUMA[0] * r + _LUMA[1] * g + _LUMA[2] * b
+
+
 @dataclass(frozen=True)
 class Pole:
     """A vertical cylinder seen as a narrow stripe.
@@ -64,22 +119,21 @@ class Pole:
         Position of the axis in the world frame, metres.
     radius : float
         Radius in metres (> 0).
-    intensity : float
-        Grey level of the pole in [0, 255].
+    intensity : float or tuple of 3 float
+        Paint of the pole: a grey level in [0, 255] or an RGB colour (see :data:`Paint`).
     """
 
     x: float
     y: float
     radius: float = 0.05
-    intensity: float = 30.0
+    intensity: Paint = 30.0
 
     def __post_init__(self) -> None:
-        for name in ("x", "y", "radius", "intensity"):
+        for name in ("x", "y", "radius"):
             _finite(f"pole {name}", getattr(self, name))
         if not self.radius > 0:
             raise VisionError(f"pole radius must be > 0 m, got {self.radius}")
-        if not 0 <= self.intensity <= 255:
-            raise VisionError(f"pole intensity must be in [0, 255], got {self.intensity}")
+        object.__setattr__(self, "intensity", _check_paint("pole intensity", self.intensity))
 
 
 @dataclass(frozen=True)
@@ -90,14 +144,22 @@ class WallEdge:
     ----------
     x, y : float
         Position in the world frame, metres.
+    level : float or tuple of 3 float, optional
+        Paint (grey level or RGB colour, see :data:`Paint`) of the wall that starts at this
+        edge and runs counter-clockwise, as seen from the robot, to the next edge. Give it
+        for every edge of a scene or for none (then the scene's ``wall_levels`` are used in
+        turn).
     """
 
     x: float
     y: float
+    level: Paint | None = None
 
     def __post_init__(self) -> None:
         _finite("wall edge x", self.x)
         _finite("wall edge y", self.y)
+        if self.level is not None:
+            object.__setattr__(self, "level", _check_paint("wall edge level", self.level))
 
 
 @dataclass(frozen=True)
@@ -110,10 +172,12 @@ class OmniScene:
         Cylinders, painted over the wall (nearer over farther).
     edges : tuple of WallEdge
         Vertical wall edges. Seen from the robot, the wall between two consecutive edges
-        (in azimuth) has one grey level taken in turn from `wall_levels`, chosen so that
-        neighbouring segments always differ.
+        (in azimuth) has the ``level`` of the edge where it starts (clockwise end) if the
+        edges carry levels, else one grey level taken in turn from `wall_levels`, chosen so
+        that neighbouring segments always differ.
     wall_levels : tuple of float
-        At least three distinct grey levels in [0, 255] for the wall segments.
+        At least three distinct grey levels in [0, 255] for the wall segments (used when the
+        edges carry no levels of their own).
     """
 
     poles: tuple[Pole, ...] = ()
@@ -134,6 +198,14 @@ class OmniScene:
             )
         if not all(0 <= w <= 255 for w in self.wall_levels):
             raise VisionError(f"wall_levels must lie in [0, 255], got {self.wall_levels}")
+        n_levels = sum(e.level is not None for e in self.edges)
+        if 0 < n_levels < len(self.edges):
+            raise VisionError(
+                f"wall edge levels must be given for every edge or for none: "
+                f"{n_levels} of {len(self.edges)} edges have one"
+            )
+        if n_levels == 1:
+            raise VisionError("a wall with one edge has no second wall: levels need >= 2 edges")
 
     @property
     def landmarks_xy(self) -> NDArray[np.float64]:
@@ -180,6 +252,10 @@ class OmniCamera:
         Amplitude of the random wall texture, grey levels.
     background_level, camera_level : float
         Grey levels outside the rim and of the camera's reflection.
+    color : bool
+        True for an RGB camera: :func:`render_omni_image` returns ``(H, W, 3)`` and every
+        paint keeps its colour; False for a grey camera, which sees each paint's luminance.
+        Noise is drawn per channel, texture and lighting are the same in all channels.
     """
 
     image_size: tuple[int, int] = (640, 480)
@@ -196,6 +272,7 @@ class OmniCamera:
     texture_sigma: float = 3.0
     background_level: float = 12.0
     camera_level: float = 45.0
+    color: bool = False
 
     def __post_init__(self) -> None:
         if len(self.image_size) != 2:
@@ -377,45 +454,72 @@ def true_features(
     )
 
 
+def _segment_paints(
+    scene: OmniScene, edge_levels: list[Paint | None]
+) -> list[tuple[float, float, float]]:
+    """RGB paint of each wall segment, given the levels of the edges where they start.
+
+    With levels on the edges, a segment has the level of the edge where it starts; else the
+    scene's ``wall_levels`` are used in turn, so that neighbouring segments always differ.
+    """
+    m = len(edge_levels)
+    if all(level is not None for level in edge_levels):
+        paints = [_rgb(level) for level in edge_levels if level is not None]
+        for i in range(m):
+            if paints[i] == paints[i - 1]:
+                raise VisionError(
+                    f"the walls on both sides of a wall edge have the same level {paints[i]}: "
+                    f"that edge would be invisible (neighbouring walls must differ)"
+                )
+        return paints
+    levels = scene.wall_levels
+    seg_levels = [levels[i % len(levels)] for i in range(m)]
+    if seg_levels[-1] == seg_levels[0] or m % len(levels) == 1:
+        prev, first = seg_levels[-2], seg_levels[0]
+        seg_levels[-1] = max(levels, key=lambda w: min(abs(w - prev), abs(w - first)))
+    return [_rgb(v) for v in seg_levels]
+
+
 def _wall_profile(
     scene: OmniScene, x: float, y: float
 ) -> tuple[NDArray[np.float32], NDArray[np.bool_]]:
-    """Grey level and is-wall flag over world azimuth, tables of `_PROFILE_BINS` bins.
+    """RGB paint and is-wall flag over world azimuth, tables of `_PROFILE_BINS` rows.
 
-    Bin ``i`` covers world azimuths ``[-pi + i * 2 pi / N, -pi + (i + 1) * 2 pi / N)``.
+    Row ``i`` covers world azimuths ``[-pi + i * 2 pi / N, -pi + (i + 1) * 2 pi / N)``; the
+    paint table has shape ``(N, 3)``.
     """
     n = _PROFILE_BINS
     levels = scene.wall_levels
-    table = np.full(n, levels[0], dtype=np.float32)
+    table = np.empty((n, 3), dtype=np.float32)
+    table[:] = levels[0]
     is_wall = np.ones(n, dtype=bool)
 
     def to_bin(a: float) -> int:
         # The bin whose lower boundary is nearest to azimuth a, so steps sit exactly at a.
         return round((float(wrap(a)) + math.pi) / (2 * math.pi) * n) % n
 
-    edge_bins = sorted({to_bin(math.atan2(e.y - y, e.x - x)) for e in scene.edges})
+    # Edges in one bin coincide: the last one's level counts.
+    bin_level = {to_bin(math.atan2(e.y - y, e.x - x)): e.level for e in scene.edges}
+    edge_bins = sorted(bin_level)
     m = len(edge_bins)
     if m == 1:
         # One edge only: ramp once round the robot so there is a step at the edge.
         start = edge_bins[0]
         ramp = np.linspace(levels[0], levels[1], n, dtype=np.float32)
-        table = np.roll(ramp, start)
+        table[:] = np.roll(ramp, start)[:, None]
     elif m > 1:
-        seg_levels = [levels[i % len(levels)] for i in range(m)]
-        if seg_levels[-1] == seg_levels[0] or m % len(levels) == 1:
-            prev, first = seg_levels[-2], seg_levels[0]
-            seg_levels[-1] = max(levels, key=lambda w: min(abs(w - prev), abs(w - first)))
-        for i in range(m):
+        paints = _segment_paints(scene, [bin_level[b] for b in edge_bins])
+        for i, paint in enumerate(paints):
             a, b = edge_bins[i], edge_bins[(i + 1) % m]
             if b > a:
-                table[a:b] = seg_levels[i]
+                table[a:b] = paint
             else:
-                table[a:] = seg_levels[i]
-                table[:b] = seg_levels[i]
+                table[a:] = paint
+                table[:b] = paint
     az, dist, half = _pole_geometry(scene, x, y)
     for i in np.argsort(-dist):  # far to near
         a, b = to_bin(az[i] - half[i]), to_bin(az[i] + half[i])
-        val = scene.poles[int(i)].intensity
+        val = _rgb(scene.poles[int(i)].intensity)
         if b >= a:
             table[a:b] = val
             is_wall[a:b] = False
@@ -427,6 +531,15 @@ def _wall_profile(
     return table, is_wall
 
 
+def _luminance_table(table: NDArray[np.float32]) -> NDArray[np.float32]:
+    """Grey levels of an ``(N, 3)`` paint table: the luminance, exact for grey paints."""
+    grey = table[:, 0].copy()
+    coloured = (table[:, 0] != table[:, 1]) | (table[:, 1] != table[:, 2])
+    if coloured.any():
+        grey[coloured] = (table[coloured] @ np.asarray(_LUMA)).astype(np.float32)
+    return grey
+
+
 def render_omni_image(
     scene: OmniScene,
     pose: object,
@@ -434,7 +547,7 @@ def render_omni_image(
     *,
     rng: np.random.Generator | int | None = None,
 ) -> NDArray[np.uint8]:
-    """Render the grey image the omnidirectional sensor sees.
+    """Render the image the omnidirectional sensor sees (grey, or RGB for a colour camera).
 
     Parameters
     ----------
@@ -449,13 +562,14 @@ def render_omni_image(
 
     Returns
     -------
-    ndarray of uint8, shape (height, width)
-        The image.
+    ndarray of uint8, shape (height, width) or (height, width, 3)
+        The image: grey, or RGB if ``camera.color``.
 
     Raises
     ------
     VisionError
-        If the pose is malformed or inside a pole.
+        If the pose is malformed or inside a pole, or two neighbouring walls have the same
+        level (the edge between them would be invisible).
 
     Examples
     --------
@@ -466,7 +580,13 @@ def render_omni_image(
     cam = OmniCamera() if camera is None else camera
     gen = np.random.default_rng(rng)
     x, y, theta = _check_pose(pose)
-    table, is_wall = _wall_profile(scene, x, y)
+    paints, is_wall = _wall_profile(scene, x, y)
+    table = paints if cam.color else _luminance_table(paints)
+
+    def per_pixel(a: NDArray[Any]) -> NDArray[Any]:
+        """A per-pixel factor or term, broadcast over the channels of a colour image."""
+        return a[..., None] if cam.color else a
+
     w, h = cam.image_size
     cx, cy = cam.center
     r_v = float(cam.radius)
@@ -497,7 +617,7 @@ def render_omni_image(
     band = np.ones_like(rho)
     band[(rho > rin + 0.08 * span) & (rho < rin + 0.16 * span)] = 0.8
     band[(rho > rin + 0.78 * span) & (rho < rin + 0.82 * span)] = 1.1
-    val = np.where(wall, val * band, val)
+    val = np.where(per_pixel(wall), val * per_pixel(band), val)
 
     # Weak random texture over (elevation, world azimuth), smooth but not radially coherent.
     if cam.texture_sigma > 0:
@@ -508,13 +628,13 @@ def render_omni_image(
         tex *= cam.texture_sigma / max(float(tex.std()), 1e-6)
         map_x = np.mod(t * f32(1024 / _PROFILE_BINS), f32(1024))
         map_y = np.clip((rho - f32(rin)) * f32(47 / span), 0, 47)
-        val += cv2.remap(tex, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP)
+        val += per_pixel(cv2.remap(tex, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_WRAP))
 
-    val = np.where(rho < rin, f32(cam.camera_level), val)
-    val = np.where(rho > 1.0, f32(cam.background_level), val)
+    val = np.where(per_pixel(rho < rin), f32(cam.camera_level), val)
+    val = np.where(per_pixel(rho > 1.0), f32(cam.background_level), val)
     gu, gv = cam.lighting_gradient
     light = 1.0 + (f32(gu / r_v) * du1)[None, :] + (f32(gv / r_v) * dv1)[:, None]
-    val = (val * light).astype(f32)
+    val = (val * per_pixel(light)).astype(f32)
 
     # Box average over each pixel's ss x ss samples (INTER_AREA is exact for integer factors).
     img = cv2.resize(val, (w, h), interpolation=cv2.INTER_AREA)
@@ -651,3 +771,224 @@ def random_scene(
 DEMO_CAMERA = OmniCamera(
     center=(324.6, 236.2), aspect=1.035, radius=212.0, forward=np.deg2rad(25.0)
 )
+
+
+def _ray_to_room(x: float, y: float, a: float, hw: float, hh: float) -> tuple[float, float, float]:
+    """Where the ray at world azimuth `a` from (x, y) meets the room's walls.
+
+    The room is ``|x| <= hw, |y| <= hh``; returns ``(px, py, distance)`` in metres.
+    """
+    c, s = math.cos(a), math.sin(a)
+    hits = []
+    if abs(c) > 1e-12:
+        hits.append(((hw if c > 0 else -hw) - x) / c)
+    if abs(s) > 1e-12:
+        hits.append(((hh if s > 0 else -hh) - y) / s)
+    t = min(hits)
+    return x + t * c, y + t * s, t
+
+
+def _place_block(
+    gen: np.random.Generator, blocks: list[tuple[float, float]], width: float, gap: float
+) -> float | None:
+    """Centre of a new block of azimuth `width` wide, at least `gap` clear of `blocks`.
+
+    `blocks` holds ``(centre, width)`` pairs in radians; the new block is appended to it.
+    None if 200 random centres all fail.
+    """
+    for _ in range(200):
+        centre = float(gen.uniform(-np.pi, np.pi))
+        if all(abs(float(wrap(centre - c))) >= (width + w) / 2 + gap for c, w in blocks):
+            blocks.append((centre, width))
+            return centre
+    return None
+
+
+def _tint(level: float, gen: np.random.Generator, chroma: float) -> Paint:
+    """A random colour of luminance `level` (a grey level if `chroma` is 0)."""
+    if chroma <= 0:
+        return level
+    c = gen.normal(size=3)
+    c -= float(c @ np.asarray(_LUMA))  # no luminance: the weights sum to 1
+    c *= gen.uniform(0.3, 1.0) * chroma / max(float(np.abs(c).max()), 1e-9)
+    room = [(255.0 - level) / v if v > 0 else level / -v for v in c if v != 0]
+    # Shrunk to stay in [0, 255]; the clip only removes rounding (~1e-14).
+    rgb = np.clip(level + min(1.0, *room) * c, 0.0, 255.0)
+    return (float(rgb[0]), float(rgb[1]), float(rgb[2]))
+
+
+def _stripe_wall_levels(
+    narrow: list[bool], gen: np.random.Generator, step: float, lo: float, hi: float
+) -> list[float] | None:
+    """Grey levels of the walls in azimuth order (wall i from edge i to edge i + 1).
+
+    Neighbouring walls differ by at least `step`. A narrow wall (its neighbours are wide) is
+    between its neighbours (two steps of the same sign) one time in three where they differ
+    by at least ``2 * step``, else brighter or darker than both (its two steps look like a
+    pole's). Returns None if these draws do not fit, so the caller draws again.
+    """
+    m = len(narrow)
+    levels = [math.nan] * m
+    for i in range(m):
+        if narrow[i]:
+            continue
+        near = [levels[i - 1]] if i > 0 and not narrow[i - 1] else []
+        if i == m - 1 and not narrow[0]:
+            near.append(levels[0])
+        for _ in range(100):
+            v = float(gen.uniform(lo, hi))
+            if all(abs(v - u) >= step for u in near):
+                levels[i] = v
+                break
+        else:
+            return None
+    for i in range(m):
+        if not narrow[i]:
+            continue
+        a, c = levels[i - 1], levels[(i + 1) % m]
+        extremes = [(max(a, c) + step, hi), (lo, min(a, c) - step)]
+        extremes = [(u, v) for u, v in extremes if u <= v]
+        between = (min(a, c) + step, max(a, c) - step)
+        if between[0] <= between[1] and (not extremes or gen.random() < 1 / 3):
+            levels[i] = float(gen.uniform(*between))
+        elif extremes:
+            levels[i] = float(gen.uniform(*extremes[int(gen.integers(len(extremes)))]))
+        else:
+            return None
+    return levels
+
+
+def random_stripe_scene(
+    rng: np.random.Generator | int | None = None,
+    *,
+    n_poles: int = 4,
+    n_segments: int = 4,
+    pole_width: tuple[float, float] = (np.deg2rad(1.6), np.deg2rad(5.0)),
+    segment_width: tuple[float, float] = (np.deg2rad(5.0), np.deg2rad(8.0)),
+    min_level_step: float = 30.0,
+    min_separation: float = np.deg2rad(6.0),
+    chroma: float = 40.0,
+    max_tries: int = 200,
+) -> tuple[OmniScene, tuple[float, float, float]]:
+    """A random room with narrow wall segments next to poles: stripes that look alike.
+
+    The room is 7-10 m by 5-8 m centred on the origin, the robot at least 1 m from its walls.
+    Besides the 4 corners, the walls have `n_segments` narrow segments (a run of wall between
+    two vertical wall edges, `segment_width` wide as seen from the robot), and `n_poles`
+    poles stand in the room, each `pole_width` wide as seen from the robot. Every wall has
+    its own grey level in [40, 215], at least `min_level_step` from each neighbouring wall;
+    a narrow segment is brighter or darker than both neighbours about four times in five
+    (then its two steps have opposite signs, like a pole's), else between them (one time in
+    three where the neighbours differ by at least ``2 * min_level_step``). Each pole's level
+    in [10, 250] is at least `min_level_step` from the wall behind it. Every paint has a
+    random colour of that luminance (up to `chroma` grey levels per channel), which a grey
+    camera does not see. Landmarks (a narrow segment counted as one block from its first
+    to its second edge, a pole from border to border) are at least `min_separation` apart,
+    none hides another and :func:`true_features` lists all of them: each pole once at its
+    centre, each wall edge (both edges of every narrow segment) at its bearing.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator or int or None
+        Passed through ``np.random.default_rng``.
+    n_poles, n_segments : int
+        Numbers of poles and of narrow wall segments (>= 0).
+    pole_width, segment_width : tuple of float
+        Ranges (radians) of the angular widths, drawn uniformly.
+    min_level_step : float
+        Smallest difference between neighbouring walls, and between a pole and the wall
+        behind it, grey levels.
+    min_separation : float
+        Smallest gap between landmarks, radians.
+    chroma : float
+        Largest colour deviation from grey per channel, grey levels (0: grey paints).
+    max_tries : int
+        Rooms drawn before giving up.
+
+    Returns
+    -------
+    scene : OmniScene
+        Wall edges carry their levels (see :class:`WallEdge`).
+    pose : tuple of float
+        ``(x, y, theta)`` in metres, metres, radians.
+
+    Raises
+    ------
+    VisionError
+        If the parameters are out of range or no room fits after `max_tries` draws.
+
+    Examples
+    --------
+    >>> scene, pose = random_stripe_scene(0)
+    >>> len(true_features(scene, pose)) == 4 + 2 * 4 + 4
+    True
+    """
+    gen = np.random.default_rng(rng)
+    if n_poles < 0 or n_segments < 0:
+        raise VisionError(f"need n_poles >= 0 and n_segments >= 0, got {n_poles}, {n_segments}")
+    for name, (w0, w1) in (("pole_width", pole_width), ("segment_width", segment_width)):
+        if not (0 < _finite(name, w0) <= _finite(name, w1) < np.pi / 2):
+            raise VisionError(f"{name} must satisfy 0 < low <= high < pi/2, got {(w0, w1)}")
+    if not 0 <= _finite("min_level_step", min_level_step) <= 80:
+        raise VisionError(f"min_level_step must be in [0, 80] grey levels, got {min_level_step}")
+    if not 0 <= _finite("min_separation", min_separation) < np.pi / 4:
+        raise VisionError(f"min_separation must be in [0, pi/4) radians, got {min_separation}")
+    for _ in range(max_tries):
+        hw, hh = float(gen.uniform(3.5, 5.0)), float(gen.uniform(2.5, 4.0))
+        x, y = float(gen.uniform(-hw + 1.0, hw - 1.0)), float(gen.uniform(-hh + 1.0, hh - 1.0))
+        theta = float(gen.uniform(-np.pi, np.pi))
+        corners = [(-hw, -hh), (hw, -hh), (hw, hh), (-hw, hh)]
+        # Blocks of azimuth (centre, width) that other landmarks must keep clear of.
+        blocks = [(math.atan2(cy - y, cx - x), 0.0) for cx, cy in corners]
+        edge_az = [(b[0], False) for b in blocks]  # (azimuth, starts a narrow segment)
+        ok = True
+        for _ in range(n_segments):
+            width = float(gen.uniform(*segment_width))
+            centre = _place_block(gen, blocks, width, min_separation)
+            if centre is None:
+                ok = False
+                break
+            edge_az += [(centre - width / 2, True), (centre + width / 2, False)]
+        pole_az: list[tuple[float, float]] = []
+        for _ in range(n_poles if ok else 0):
+            width = float(gen.uniform(*pole_width))
+            centre = _place_block(gen, blocks, width, min_separation)
+            if centre is None:
+                ok = False
+                break
+            pole_az.append((centre, width))
+        if not ok:
+            continue
+        edge_az.sort(key=lambda e: float(wrap(e[0])))
+        levels = _stripe_wall_levels(
+            [starts for _, starts in edge_az], gen, min_level_step, 40.0, 215.0
+        )
+        if levels is None:
+            continue
+        edges = []
+        for (a, _), level in zip(edge_az, levels, strict=True):
+            px, py, _ = _ray_to_room(x, y, a, hw, hh)
+            edges.append(WallEdge(px, py, _tint(level, gen, chroma)))
+        poles = []
+        starts = np.asarray([float(wrap(a)) for a, _ in edge_az])
+        for centre, width in pole_az:
+            # The wall behind the pole is the one starting at the last edge before it.
+            behind = levels[int(np.searchsorted(starts, float(wrap(centre)))) - 1]
+            dark = (10.0, behind - min_level_step)
+            bright = (behind + min_level_step, 250.0)
+            sides = [r for r in (dark, bright) if r[0] <= r[1]]
+            level = float(gen.uniform(*sides[int(gen.integers(len(sides)))]))
+            wall_dist = _ray_to_room(x, y, centre, hw, hh)[2]
+            d = float(gen.uniform(0.6, max(wall_dist - 0.4, 0.6)))
+            r = d * math.sin(width / 2)
+            poles.append(
+                Pole(
+                    x + d * math.cos(centre), y + d * math.sin(centre), r, _tint(level, gen, chroma)
+                )
+            )
+        scene = OmniScene(poles=tuple(poles), edges=tuple(edges))
+        pose = (x, y, theta)
+        truth = true_features(scene, pose)
+        if len(truth) == n_poles + len(edges) and truth.ambiguous.size == 0:
+            return scene, pose
+    raise VisionError(f"could not draw a room with these stripes in {max_tries} tries")
