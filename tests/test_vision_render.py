@@ -261,7 +261,7 @@ def test_random_stripe_scene_draws_what_it_promises() -> None:
         # Walls in azimuth order: neighbours differ by >= step; exactly 4 are 5-8 deg wide.
         az = np.array([np.arctan2(e.y - y, e.x - x) for e in scene.edges])
         order = np.argsort(az)
-        lum = np.array([luminance(scene.edges[i].level) for i in order])  # type: ignore[arg-type]
+        lum = np.array([luminance(scene.edges[i].level) for i in order])
         assert np.all(np.abs(lum - np.roll(lum, 1)) >= step - 1e-6)
         gaps = np.rad2deg(np.diff(np.concatenate([az[order], az[order][:1] + 2 * np.pi])))
         narrow = (gaps >= 5.0 - 1e-9) & (gaps <= 8.0 + 1e-9)
@@ -271,7 +271,7 @@ def test_random_stripe_scene_draws_what_it_promises() -> None:
         for p in scene.poles:
             a = np.arctan2(p.y - y, p.x - x)
             behind = order[np.searchsorted(az[order], a) - 1]
-            wall = luminance(scene.edges[behind].level)  # type: ignore[arg-type]
+            wall = luminance(scene.edges[behind].level)
             assert abs(luminance(p.intensity) - wall) >= step - 1e-6
     a = random_stripe_scene(3)
     b = random_stripe_scene(np.random.default_rng(3))
@@ -287,7 +287,7 @@ def test_random_stripe_scene_makes_pole_like_segments() -> None:
         x, y, _ = pose
         az = np.array([np.arctan2(e.y - y, e.x - x) for e in scene.edges])
         order = np.argsort(az)
-        lum = np.array([luminance(scene.edges[i].level) for i in order])  # type: ignore[arg-type]
+        lum = np.array([luminance(scene.edges[i].level) for i in order])
         gaps = np.diff(np.concatenate([az[order], az[order][:1] + 2 * np.pi]))
         for k in np.flatnonzero(gaps <= np.deg2rad(8.0) + 1e-9):
             a, b, c = lum[k - 1], lum[k], lum[(k + 1) % len(lum)]

@@ -17,15 +17,20 @@ Method: unwrap the mirror annulus (without the camera's own reflection and the r
 panorama whose columns are image angles and rows radii; take the azimuthal derivative of
 every row; combine the rows by their median and keep the peaks that most rows agree with in
 sign (so texture that varies along the radius cancels out); refine each peak to sub-column
-accuracy with a parabola; suppress duplicates (wrap-around aware); and merge a pair of
-opposite steps closer than ``max_pole_width`` into one pole at their middle.
+accuracy with a parabola; suppress duplicates (wrap-around aware); and read each pair of
+neighbouring opposite steps (a stripe) as a pole or as a narrow wall segment from what the
+image shows: whether the background continues on both sides of the stripe (a pole) or two
+different walls meet it (a wall segment), how well its two steps balance, and its width
+against the narrowest wall segment and the widest pole. A stripe the evidence cannot decide
+is reported as its two edges, flagged ``ambiguous``.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -77,6 +82,12 @@ class EdgeDetections:
         Image angle of the robot's forward axis, radians.
     mirrored : bool
         Whether the sense of rotation was flipped.
+    ambiguous : ndarray of bool, shape (k,)
+        True for the two edges of a stripe that could be a pole as well as a narrow wall
+        segment (see :func:`extract_bearings`): if it is a segment both are right, if it is
+        a pole both are off by half its width and the pole's centre is not reported. A
+        caller can allow for that with ``max_spurious`` (up to ``ambiguous.sum()`` more
+        bearings may be spurious). All False when not given.
 
     A result with no detections has length 0 and is falsy.
     """
@@ -88,12 +99,23 @@ class EdgeDetections:
     calibration: MirrorCalibration
     forward: float = 0.0
     mirrored: bool = False
+    ambiguous: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
     def __post_init__(self) -> None:
         for name in ("bearings", "strength", "kind", "image_angles"):
             arr = np.array(getattr(self, name))
             arr.setflags(write=False)
             object.__setattr__(self, name, arr)
+        k = self.bearings.shape[0]
+        flags = np.array(self.ambiguous, dtype=bool).reshape(-1)
+        if flags.size == 0:
+            flags = np.zeros(k, dtype=bool)
+        if flags.shape[0] != k:
+            raise VisionError(
+                f"ambiguous must have one flag per detection: expected {k}, got {flags.shape[0]}"
+            )
+        flags.setflags(write=False)
+        object.__setattr__(self, "ambiguous", flags)
 
     def __len__(self) -> int:
         return int(self.bearings.shape[0])
@@ -132,15 +154,29 @@ def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
     return img
 
 
-def _gray8(image: object) -> NDArray[np.float32]:
-    """Grey float32 image in 8-bit units (uint16 divided by 257, floats in [0, 1] scaled)."""
+def _to_8bit(image: object) -> tuple[NDArray[np.float32], NDArray[np.float32] | None]:
+    """Grey image and, for a colour image, its ``(H, W, 3)`` RGB, both float32 in 8-bit units.
+
+    uint16 is divided by 257; a float image is scaled by 255 when its grey maximum is <= 1.
+    """
     arr = image if isinstance(image, np.ndarray) else np.asarray(image)
     gray = as_gray(arr)
+    scale = 1.0
     if arr.dtype == np.uint16:
-        gray *= np.float32(1.0 / 257.0)
+        scale = 1.0 / 257.0
     elif np.issubdtype(arr.dtype, np.floating) and float(gray.max()) <= 1.0:
-        gray *= np.float32(255.0)
-    return gray
+        scale = 255.0
+    if scale != 1.0:
+        gray *= np.float32(scale)
+    rgb = None
+    if arr.ndim == 3 and arr.shape[2] in (3, 4):
+        rgb = arr[:, :, :3].astype(np.float32) * np.float32(scale)
+    return gray, rgb
+
+
+def _gray8(image: object) -> NDArray[np.float32]:
+    """Grey float32 image in 8-bit units (uint16 divided by 257, floats in [0, 1] scaled)."""
+    return _to_8bit(image)[0]
 
 
 def _panorama_size(cal: MirrorCalibration, radial_range: tuple[float, float]) -> tuple[int, int]:
@@ -321,35 +357,134 @@ def _find_steps(
     return p[idx], h[idx]
 
 
-def _pair_poles(
-    pos: NDArray[np.float64], height: NDArray[np.float64], n: int, max_width_cols: float
-) -> list[tuple[int, ...]]:
-    """Group steps: a pole is two neighbouring opposite steps closer than `max_width_cols`.
+# How much the two sides of one background may differ (grey levels): a floor, multiples of
+# the measured standard error, and a fraction of the background's level (lighting and shading
+# scale with it). On rendered images the two sides of a pole differ by at most 3 se + 3.4 %.
+_SIDE_FLOOR = 1.0
+_SIDE_SIGMAS = 3.0
+_SIDE_RELATIVE = 0.06
+# A stripe whose two steps differ by more than this fraction of the larger one contrasts with
+# one side only: two unrelated edges, not a stripe.
+_MAX_IMBALANCE = 0.6
+# Where a side cannot be seen (another step too close), the sides are taken to differ when
+# the steps differ by more than this fraction of the larger one (poles: at most 0.11).
+_BLIND_IMBALANCE = 0.25
+_SIDE_WINDOW = 10  # columns averaged on each side of a stripe, at most
 
-    The two steps of a pole have about the same height (the wall on both sides of it is the
-    same), so candidate pairs are taken in order of increasing imbalance
-    ``|h_i + h_j| / max(|h_i|, |h_j|)`` (pairs above 0.6 are refused), then of width.
+
+def _side_columns(
+    step: float, gap: float, outward: int, off: int, n: int
+) -> NDArray[np.int64] | None:
+    """Columns of the background next to a step, on the side away from the stripe.
+
+    They start `off` columns from the step (past its blur) and stop `off` columns short of
+    the next step, `gap` columns away, at most `_SIDE_WINDOW` wide; None if there is no room
+    (the next step is so close that its blur meets this one's).
+    """
+    width = int(min(_SIDE_WINDOW, math.floor(gap - 2 * off)))
+    if width < 1:
+        return None
+    return np.rint(step + outward * (off + np.arange(width))).astype(np.int64) % n
+
+
+def _sides_differ(
+    channels: NDArray[np.float32], left: NDArray[np.int64], right: NDArray[np.int64]
+) -> bool:
+    """Whether the backgrounds in columns `left` and `right` differ in some channel.
+
+    `channels` has shape ``(C, rows, columns)``. Each row's two levels are medians over the
+    columns, so the wall's horizontal bands and texture (which vary along the radius) cancel
+    in the row's difference; the difference is the median over the rows. It must exceed
+    ``floor + 3 se + 0.06 * level`` (``se`` its standard error from the rows' spread,
+    ``level`` the mean of the two sides) in at least one channel.
+    """
+    lb, rb = channels[:, :, left], channels[:, :, right]
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows: rim partly outside
+        median = np.nanmedian if np.isnan(lb).any() or np.isnan(rb).any() else np.median
+        lv, rv = median(lb, axis=2), median(rb, axis=2)
+        diff = lv - rv
+        med = median(diff, axis=1)
+        spread = 1.4826 * median(np.abs(diff - med[:, None]), axis=1)
+        rows = np.sum(np.isfinite(diff), axis=1)
+        se = 1.2533 * spread / np.sqrt(np.maximum(rows, 1))
+        level = 0.5 * (median(lv, axis=1) + median(rv, axis=1))
+        tol = _SIDE_FLOOR + _SIDE_SIGMAS * se + _SIDE_RELATIVE * level
+        return bool(np.any(np.abs(med) > tol))
+
+
+def _group_steps(
+    pos: NDArray[np.float64],
+    height: NDArray[np.float64],
+    n: int,
+    channels: NDArray[np.float32],
+    max_width_cols: float,
+    min_segment_cols: float,
+    off: int,
+) -> tuple[list[tuple[int, ...]], NDArray[np.bool_]]:
+    """Read each stripe (two neighbouring opposite steps) as a pole, a segment or either.
+
+    For the stripe between steps ``i`` and ``j`` (``j`` next counter-clockwise, at most
+    `max_width_cols` away) the background just outside each step is compared in every
+    channel (grey, and R, G, B for a colour image; see :func:`_sides_differ`). A pole stands
+    in front of one wall, so its two sides show the same background; a narrow wall segment
+    separates two walls, which usually differ but may happen to match. Where another step
+    is too close to see a side, the sides are taken to differ if the two steps do by more
+    than a quarter of the larger.
+
+    * narrower than `min_segment_cols` (plus half a column for the width's measurement):
+      sides the same: a **pole**; sides different, while the stripe contrasts with both
+      (imbalance ``|h_i + h_j| / max |h| <= 0.6``): a pole in front of a wall edge or a
+      wall segment narrower than expected: two **ambiguous** edges; else two edges;
+    * from `min_segment_cols` up: sides different: a wall segment, two edges; sides the
+      same: a pole as wide or a segment between two walls alike: two **ambiguous** edges.
+
+    Poles are taken in order of increasing imbalance (to 0.1), then width, each step used
+    once; an ambiguous flag is only set on steps no pole took.
+
+    Returns
+    -------
+    groups : list of tuple of int
+        ``(i, j)`` for a pole, ``(i,)`` for an edge.
+    ambiguous : ndarray of bool, shape (len(pos),)
+        Per step.
     """
     m = pos.shape[0]
-    pairs: list[tuple[float, float, int, int]] = []
+    poles: list[tuple[float, float, int, int]] = []
+    unsure: list[tuple[int, int]] = []
     for i in range(m if m > 2 else m - 1):
         j = (i + 1) % m
-        gap = (pos[j] - pos[i]) % n
+        width = (pos[j] - pos[i]) % n
         hi, hj = height[i], height[j]
-        if np.sign(hi) == np.sign(hj) or gap > max_width_cols:
+        if np.sign(hi) == np.sign(hj) or width > max_width_cols:
             continue
+        left = _side_columns(pos[i], (pos[i] - pos[(i - 1) % m]) % n, -1, off, n)
+        right = _side_columns(pos[j], (pos[(j + 1) % m] - pos[j]) % n, 1, off, n)
         imbalance = abs(hi + hj) / max(abs(hi), abs(hj))
-        if imbalance <= 0.6:
-            pairs.append((round(imbalance, 1), gap, i, j))
+        if left is None or right is None:
+            differ = imbalance > _BLIND_IMBALANCE
+        else:
+            differ = _sides_differ(channels, left, right)
+        if width < min_segment_cols + 0.5:
+            if not differ:
+                poles.append((round(imbalance, 1), width, i, j))
+            elif imbalance <= _MAX_IMBALANCE:
+                unsure.append((i, j))
+        elif not differ:
+            unsure.append((i, j))
     used: set[int] = set()
     groups: list[tuple[int, ...]] = []
-    for _, _, i, j in sorted(pairs):
+    for _, _, i, j in sorted(poles):
         if i in used or j in used:
             continue
         used.update((i, j))
         groups.append((i, j))
+    ambiguous = np.zeros(m, dtype=bool)
+    for i, j in unsure:
+        if i not in used and j not in used:
+            ambiguous[[i, j]] = True
     groups.extend((i,) for i in range(m) if i not in used)
-    return groups
+    return groups, ambiguous
 
 
 def extract_bearings(
@@ -366,6 +501,7 @@ def extract_bearings(
     max_pole_width: float = np.deg2rad(8.0),
     min_separation: float = np.deg2rad(1.0),
     smoothing: float = 1.0,
+    min_segment_width: float = np.deg2rad(5.0),
 ) -> EdgeDetections:
     """Detect radial edges and poles in an omnidirectional image and return their bearings.
 
@@ -394,16 +530,27 @@ def extract_bearings(
         Smallest fraction of panorama rows whose derivative has the sign of the median, in
         [0, 1]: a radial line is consistent along the radius, texture is not.
     max_pole_width : float
-        Widest stripe, radians, reported as one pole rather than two edges.
+        Widest stripe, radians, that may be a pole. Wider stripes are two plain edges.
     min_separation : float
         Same-sign steps closer than this (radians) are duplicates; the weaker is dropped.
     smoothing : float
         Gaussian smoothing along the azimuth before differentiation, panorama columns.
+    min_segment_width : float
+        Narrowest wall segment (a run of wall between two vertical wall edges) expected,
+        radians. A stripe (two neighbouring opposite steps: brighter or darker than both
+        sides) narrower than this whose two sides show the same background, in every colour
+        channel, is a pole, reported once at its centre. A stripe from this width up to
+        `max_pole_width` is a wall segment (two edges) if the walls on its two sides
+        clearly differ, and otherwise could be either: its two edges are reported with
+        ``ambiguous`` set, as are those of a narrower stripe whose sides differ (a pole in
+        front of a wall edge, or a segment narrower than expected). Set it to
+        `max_pole_width` to read every balanced stripe up to that width as a pole.
 
     Returns
     -------
     EdgeDetections
-        Bearings (radians, robot frame), strengths, kinds, sorted by bearing.
+        Bearings (radians, robot frame), strengths, kinds, ambiguity flags, sorted by
+        bearing.
 
     Raises
     ------
@@ -419,7 +566,7 @@ def extract_bearings(
     >>> len(det) == len(true_features(demo_scene(), DEMO_POSE))
     True
     """
-    gray = _gray8(image)
+    gray, rgb = _to_8bit(image)
     fwd = _finite_float("forward", forward)
     r0, r1 = _check_radial_range(radial_range)
     for name, val in (
@@ -428,6 +575,7 @@ def extract_bearings(
         ("max_pole_width", max_pole_width),
         ("min_separation", min_separation),
         ("smoothing", smoothing),
+        ("min_segment_width", min_segment_width),
     ):
         if _finite_float(name, val) < 0:
             raise VisionError(f"{name} must be >= 0, got {val}")
@@ -436,18 +584,22 @@ def extract_bearings(
     cal = _resolve_calibration(gray, center, aspect, calibration)
     rows, cols = _panorama_size(cal, (r0, r1))
     pano = _remap_panorama(gray, cal, r0, r1, rows, cols)
+    channels = [pano]  # grey, then R, G, B for a colour image: compared beside stripes
+    if rgb is not None:
+        channels += [_remap_panorama(rgb[:, :, c], cal, r0, r1, rows, cols) for c in range(3)]
     valid_rows = np.isfinite(pano).all(axis=1)
     if not valid_rows.any():
         # Rim partly outside the image: keep rows, ignoring the missing samples.
         deriv = _azimuth_derivative(np.nan_to_num(pano, nan=0.0), smoothing)
         deriv[~np.isfinite(pano)] = np.nan
-        with np.errstate(all="ignore"):
-            d_med = np.nanmedian(deriv, axis=0)
-        d_med = np.nan_to_num(d_med)
-        signs = np.sign(deriv) == np.sign(d_med)[None, :]
-        agree = np.nanmean(np.where(np.isfinite(deriv), signs, np.nan), axis=0)
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # columns wholly outside
+            d_med = np.nan_to_num(np.nanmedian(deriv, axis=0))
+            signs = np.sign(deriv) == np.sign(d_med)[None, :]
+            agree = np.nanmean(np.where(np.isfinite(deriv), signs, np.nan), axis=0)
         agree = np.nan_to_num(agree)
     else:
+        channels = [c[valid_rows] for c in channels]
         deriv = _azimuth_derivative(pano[valid_rows], smoothing)
         d_med = np.median(deriv, axis=0)
         agree = np.mean(np.sign(deriv) == np.sign(d_med)[None, :], axis=0)
@@ -459,20 +611,32 @@ def extract_bearings(
         float(min_agreement),
         float(min_separation) / col,
     )
+    groups, ambiguous_step = _group_steps(
+        pos,
+        height,
+        cols,
+        np.stack(channels),
+        float(max_pole_width) / col,
+        float(min_segment_width) / col,
+        off=math.ceil(2 + 2 * float(smoothing)),
+    )
     phis: list[float] = []
     strengths: list[float] = []
     kinds: list[str] = []
-    for group in _pair_poles(pos, height, cols, float(max_pole_width) / col):
+    flags: list[bool] = []
+    for group in groups:
         if len(group) == 2:
             i, j = group
             mid = pos[i] + ((pos[j] - pos[i]) % cols) / 2
             phis.append(mid * col)
             strengths.append(0.5 * (abs(height[i]) + abs(height[j])))
             kinds.append("pole")
+            flags.append(False)
         else:
             phis.append(pos[group[0]] * col)
             strengths.append(abs(height[group[0]]))
             kinds.append("edge")
+            flags.append(bool(ambiguous_step[group[0]]))
     phi_arr = np.asarray(wrap(np.asarray(phis, dtype=np.float64)), dtype=np.float64).reshape(-1)
     s = -1.0 if mirrored else 1.0
     bearings = np.asarray(wrap(s * phi_arr - fwd), dtype=np.float64).reshape(-1)
@@ -485,6 +649,7 @@ def extract_bearings(
         calibration=cal,
         forward=fwd,
         mirrored=bool(mirrored),
+        ambiguous=np.asarray(flags, dtype=bool)[order],
     )
 
 
