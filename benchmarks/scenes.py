@@ -9,6 +9,8 @@
     of the 10 bearings as well as the truth does -- so it is timed, not scored;
 (c) 10,000 landmarks uniform at 0.01 / m^2 (1 km square, 1 m apart at least), every landmark
     within 20 m observed plus 2 spurious bearings, sigma = 0.3 deg;
+(c-grid) as (c) on 10,000 landmarks laid on a jittered grid (0.01 / m^2, at least 2 m apart):
+    a warehouse of racks, where many poses see similar patterns;
 (d) the same as (c) with 100,000 landmarks (3.16 km square).
 
 Every trial draws its own observation (and for (b) its own map and pose) from a seed that
@@ -24,7 +26,15 @@ import numpy as np
 
 from omniloc.maps import LandmarkMap
 from omniloc.pose import Pose
-from omniloc.simulate import DEMO_POSE, DEMO_VISIBLE, Scene, demo_room, observe, random_map
+from omniloc.simulate import (
+    DEMO_POSE,
+    DEMO_VISIBLE,
+    Scene,
+    demo_room,
+    grid_map,
+    observe,
+    random_map,
+)
 
 __all__ = ["CASES", "GROUPS", "Case", "build_map", "make_trial"]
 
@@ -111,6 +121,14 @@ CASES["c"] = Case(
     LARGE_KWARGS,
     0.3 * DEG,
 )
+CASES["cgrid"] = Case(
+    "cgrid",
+    "cgrid",
+    "10,000 landmarks on a jittered grid (0.01/m^2, 2 m apart), all within 20 m + 2 spurious, "
+    "sigma 0.3 deg",
+    LARGE_KWARGS,
+    0.3 * DEG,
+)
 CASES["d"] = Case(
     "d",
     "d",
@@ -119,22 +137,27 @@ CASES["d"] = Case(
     0.3 * DEG,
 )
 GROUPS: dict[str, list[str]] = {
-    g: [c.name for c in CASES.values() if c.group == g] for g in ("a", "b", "c", "d")
+    g: [c.name for c in CASES.values() if c.group == g] for g in ("a", "b", "c", "cgrid", "d")
 }
 
 #: Landmark counts and seeds of the large maps.
-LARGE = {"c": (10_000, 10), "d": (100_000, 11)}
+LARGE = {"c": (10_000, 10), "cgrid": (10_000, 12), "d": (100_000, 11)}
 MAX_RANGE = 20.0
 #: Scene (b): map side and sensor range, metres.
 B_SIZE = 40.0
 B_RANGE = 12.0
 MIN_SEPARATION = 1.0
+#: Scene (c-grid): landmarks of the jittered grid are at least this far apart, metres.
+GRID_SEPARATION = 2.0
 
 
 def build_map(group: str) -> LandmarkMap | None:
     """The fixed map of a group (None for (b), whose map changes with every trial)."""
     if group == "a":
         return demo_room()
+    if group == "cgrid":
+        n, seed = LARGE[group]
+        return grid_map(n, density=0.01, min_separation=GRID_SEPARATION, rng=seed)
     if group in LARGE:
         n, seed = LARGE[group]
         return random_map(n, density=0.01, min_separation=MIN_SEPARATION, rng=seed)

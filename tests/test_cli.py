@@ -67,7 +67,8 @@ def test_localize_strategy_and_first_fit(room_files, capsys, strategy: str) -> N
     if strategy == "hypotheses":
         assert main([*args, "--first-fit"]) == 0
         out = capsys.readouterr().out
-        assert "x = 5.600 m, y = 2.100 m" in out and "first fit: rivals not sought" in out
+        # A first fit does not look for rivals: whatever it finds, it does not call decisive.
+        assert "AMBIGUOUS: first fit, rivals not sought" in out
 
 
 def test_no_solution_is_a_sentence_and_exit_0(tmp_path, capsys) -> None:

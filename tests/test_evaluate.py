@@ -115,8 +115,10 @@ def test_csv_and_json_round_trip(quick: SweepResult, tmp_path: Path) -> None:
 def test_summary_is_a_table(quick: SweepResult) -> None:
     text = quick.summary()
     lines = text.splitlines()
-    assert len(lines) == 2 + len(quick.rows)
-    assert "success" in lines[1] and "crlb_pos" in lines[1]
+    assert len(lines) == 3 + len(quick.rows)
+    assert "success" in lines[1] and "crlb_pos" in lines[1] and "conf_wrong" in lines[1]
+    h = quick.honesty()
+    assert f"confidently wrong {h['confidently_wrong_rate']:.4f}" in lines[-1]
 
 
 def test_save_report_writes_pngs(quick: SweepResult, tmp_path: Path) -> None:
@@ -125,7 +127,7 @@ def test_save_report_writes_pngs(quick: SweepResult, tmp_path: Path) -> None:
     for p in paths:
         assert p.is_file() and p.stat().st_size > 0
     png = [p for p in paths if p.suffix == ".png"]
-    assert len(png) == 2
+    assert [p.name for p in png] == ["quick_success.png", "quick_rmse.png", "quick_reliability.png"]
     assert all(p.read_bytes()[:4] == b"\x89PNG" for p in png)
 
 
@@ -171,8 +173,11 @@ def test_evaluate_mrclam_slice(tmp_path: Path) -> None:
     assert r.in_solutions_rate >= 0.3
     assert all(math.isfinite(t.oracle_pos_err_m) for t in r.trials)
     paths = save_report(r, tmp_path)
-    assert [p.name for p in paths] == ["mrclam.csv", "mrclam.json", "mrclam_errors.png"]
-    assert json.loads(paths[1].read_text())["n"] == 20
+    names = ["mrclam.csv", "mrclam.json", "mrclam_errors.png", "mrclam_reliability.png"]
+    assert [p.name for p in paths] == names
+    data = json.loads(paths[1].read_text())
+    assert data["n"] == 20
+    assert 0.0 <= data["ece"] <= 1.0 and 0.0 <= data["confidently_wrong_rate"] <= 1.0
 
 
 def test_evaluate_dataset_rejects_unknown_kind() -> None:
@@ -206,6 +211,57 @@ def test_sensor_range_holds_the_requested_landmarks_on_average() -> None:
     p = gen.uniform(r, 100.0 - r, (500, 2))
     counts = [(np.hypot(*(lm.xy - q).T) <= r).sum() for q in p]
     assert abs(float(np.mean(counts)) - 6.0) < 0.5
+
+
+def test_calibration_bins_and_error() -> None:
+    from omniloc.evaluate.common import calibration
+
+    conf = [0.05, 0.15, 0.15, 0.95, 0.95, 0.95, 0.95]
+    ok = [False, False, True, True, True, True, False]
+    c = calibration(conf, ok, bins=10)
+    assert c.counts.tolist() == [1, 2, 0, 0, 0, 0, 0, 0, 0, 4]
+    assert c.fraction_correct[1] == 0.5 and c.fraction_correct[9] == 0.75
+    assert c.mean_confidence[9] == pytest.approx(0.95)
+    want = (1 * 0.05 + 2 * abs(0.5 - 0.15) + 4 * abs(0.75 - 0.95)) / 7
+    assert c.ece == pytest.approx(want)
+    # Perfectly calibrated confidences: no error.
+    assert calibration([0.0, 1.0, 1.0], [False, True, True]).ece == 0.0
+    with pytest.raises(InputError, match="one correctness flag"):
+        calibration([0.5], [True, False])
+
+
+def test_honesty_figures_count_decisive_answers() -> None:
+    res = run_sweep(SweepConfig.targets_honest_room(trials=6), rng=3, progress=False)
+    for r in res.trials:
+        assert 0.0 <= r.best_confidence <= 1.0
+        assert r.decisive == (r.solved and not r.ambiguous)
+    h = res.honesty()
+    assert h["confidently_wrong_rate"] == np.mean(
+        [t.decisive and not t.correct for t in res.trials]
+    )
+    assert h["decisive_correct_rate"] == np.mean([t.decisive and t.correct for t in res.trials])
+    # Seven landmarks of the demo room: decisive and right, nearly always.
+    assert h["decisive_correct_rate"] >= 0.8 and h["confidently_wrong_rate"] == 0.0
+
+
+@needs_data
+def test_dataset_defaults_are_the_recordings_own_estimates() -> None:
+    # The sensor parameters of DATASET_DEFAULTS are what estimate_sensor finds in the data
+    # (the method documented in omniloc.sensor), not hand-tuned numbers.
+    from omniloc.datasets import load_mrclam, load_roh
+    from omniloc.evaluate import DATASET_DEFAULTS
+    from omniloc.evaluate.real import estimate_sensor
+
+    ds = load_mrclam(DATA / "mrclam-ds6", min_landmarks=1)
+    o = DATASET_DEFAULTS["mrclam"]["options"]
+    est = estimate_sensor(ds.landmarks, ds.frames, fov=o["fov"], max_range=o["max_range"])
+    assert est["p_detect"] == pytest.approx(o["p_detect"], abs=0.01)
+    assert est["clutter"] == pytest.approx(o["clutter"], abs=0.01)
+    assert est["sigma"] == pytest.approx(o["sigma"], rel=0.1)
+    roh = load_roh(DATA / "roh")
+    est = estimate_sensor(roh.landmarks, list(roh.samples(0)))
+    assert est["p_detect"] == 1.0 and est["clutter"] == 0.0
+    assert est["sigma"] == pytest.approx(DATASET_DEFAULTS["roh"]["options"]["sigma"], rel=0.1)
 
 
 def test_bad_sensing_is_refused() -> None:

@@ -366,8 +366,11 @@ def test_compiled_merge_matches_numpy(seed: int) -> None:
     A = rng.normal(size=(K, 3, 3))
     cov = (A @ A.transpose(0, 2, 1) + 0.1 * np.eye(3)) * scale
     rank = rng.permutation(K).astype(np.int64)
-    fast = scoring._merge(rank, poses, cov)
-    assert fast == scoring.merge_numpy(rank, poses, cov)
+    fast, owner = scoring._merge(rank, poses, cov)
+    slow, slow_owner = scoring.merge_numpy(rank, poses, cov)
+    assert fast == slow
+    assert owner.tolist() == slow_owner.tolist()  # each merged into the same kept one
+    assert set(owner.tolist()) == set(fast)
     assert 6 <= len(fast) < K - 50  # merges happened, and not everything merged
 
 
@@ -395,11 +398,11 @@ def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
 
 
 @pytest.mark.parametrize("p_miss", [None, 0.05])
-def test_with_p_miss_the_whole_cost_ranks(p_miss: float | None) -> None:
+def test_the_posterior_ranks_not_the_match_count(p_miss: float | None) -> None:
     # Two complete paths: the truth with its spurious bearing unmatched, and the same with
     # that bearing forced onto a far landmark (one match more, a residual of tens of
-    # degrees). Without p_miss matches rank first, as the robust issue specifies; with it,
-    # the negative log-likelihood does.
+    # degrees). Matching more bearings is not worth a residual far outside the noise: the
+    # truth ranks first and holds the posterior, with or without negative evidence.
     lm = random_map(60, size=40.0, rng=2)
     pose = Pose(20.0, 20.0, 0.4)
     sc = observe(lm, pose, max_range=12.0, n_spurious=1, rng=5)
@@ -410,9 +413,10 @@ def test_with_p_miss_the_whole_cost_ranks(p_miss: float | None) -> None:
     opt = _opts(len(truth), max_spurious=1, max_range=12.0, p_miss=p_miss)
     leaves = Leaves(len(truth), np.arange(len(truth)))
     leaves.add(np.stack([forced, truth]), np.stack([pose.as_array()] * 2))
-    sols, _ = scoring.finish(lm, sc.bearings, leaves, opt)
-    best = np.array([-1 if a is None else a for a in sols[0].assignment])
-    assert best.tolist() == (forced if p_miss is None else truth).tolist()
+    scored = scoring.finish(lm, sc.bearings, leaves, opt)
+    best = np.array([-1 if a is None else a for a in scored.solutions[0].assignment])
+    assert best.tolist() == truth.tolist()
+    assert scored.solutions[0].confidence > 0.99 and not scored.ambiguous
 
 
 def test_output_buffer_keeps_the_better_half_in_order() -> None:

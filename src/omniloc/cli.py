@@ -11,6 +11,7 @@ import argparse
 import functools
 import json
 import logging
+import math
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -53,6 +54,13 @@ def _positive(text: str) -> float:
     v = _number(text)
     if v <= 0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return v
+
+
+def _nonnegative(text: str) -> float:
+    v = _number(text)
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
     return v
 
 
@@ -115,6 +123,28 @@ def _build_parser() -> argparse.ArgumentParser:
     p.add_argument("--min-range", type=_positive, help="minimum sensor range, m")
     p.add_argument("--fov", type=_fov_deg, help="full field of view, deg (omit for 360)")
     p.add_argument("--p-miss", type=_probability, help="probability of missing a visible landmark")
+    p.add_argument(
+        "--p-detect",
+        type=_probability,
+        help="probability of detecting a plainly visible landmark (instead of --p-miss)",
+    )
+    p.add_argument(
+        "--clutter",
+        type=_nonnegative,
+        help="expected spurious bearings per frame (default: --max-spurious, at least 0.5)",
+    )
+    p.add_argument(
+        "--confidence",
+        type=_probability,
+        default=0.999,
+        help="confidence of the chi-square gates (default 0.999)",
+    )
+    p.add_argument(
+        "--decisive",
+        type=_probability,
+        default=0.95,
+        help="share of the posterior the best must hold not to be ambiguous (default 0.95)",
+    )
     p.add_argument("--max-nodes", type=int, help="node budget")
     p.add_argument("--timeout", type=_positive, help="time budget, s")
     p.add_argument(
@@ -154,6 +184,8 @@ def _build_parser() -> argparse.ArgumentParser:
             "targets-spurious-range",
             "targets-spurious-range-0.9999",
             "targets-crlb",
+            "targets-honest",
+            "targets-honest-room",
         ],
         default="quick",
         help="which sweep to run (default: quick)",
@@ -166,6 +198,12 @@ def _build_parser() -> argparse.ArgumentParser:
         help="evaluate on real data instead: KIND is roh or mrclam",
     )
     e.add_argument("--max-samples", type=int, help="use at most this many dataset samples")
+    e.add_argument(
+        "--min-landmarks",
+        type=int,
+        default=4,
+        help="MRCLAM: use the frames that see at least this many landmarks (default 4)",
+    )
     e.add_argument("--seed", type=int, default=0)
     e.add_argument("--workers", type=int, default=1, help="processes for a sweep (default 1)")
     e.add_argument("--out", type=Path, default=Path("evaluation"), help="folder for results")
@@ -202,10 +240,18 @@ def _cmd_localize(args: argparse.Namespace) -> int:
             raise InputError(
                 f"{args.image}: found {bearings.size} bearings in the image, need at least 3"
             )
+        # Edges of a stripe that could be a pole or a narrow wall segment are flagged: if it
+        # was a pole, both are wrong, so each flagged edge may be spurious.
+        flagged = int(np.count_nonzero(det.ambiguous))
     else:
         bearings = load_bearings(args.bearings, degrees=args.degrees)
+        flagged = 0
     ms = args.max_spurious
     max_spurious: int | float = int(ms) if float(ms).is_integer() else float(ms)
+    if flagged:
+        if isinstance(max_spurious, float):
+            max_spurious = math.floor(max_spurious * bearings.size)
+        max_spurious += flagged
     result = localize(
         lm,
         bearings,
@@ -218,6 +264,10 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         min_range=args.min_range,
         fov=None if args.fov is None else float(np.deg2rad(args.fov)),
         p_miss=args.p_miss,
+        p_detect=args.p_detect,
+        clutter=args.clutter,
+        confidence=args.confidence,
+        decisive=args.decisive,
         max_nodes=args.max_nodes,
         timeout_s=args.timeout,
         strategy=args.strategy,
@@ -239,11 +289,15 @@ def _cmd_localize(args: argparse.Namespace) -> int:
                     "assignment": result.assignment_ids(s),
                     "residual_rms": s.residual_rms,
                     "matched": s.matched,
+                    "missed": s.missed,
                     "confidence": s.confidence,
+                    "covariance": s.covariance,
                 }
                 for s in result.solutions
             ],
             "ambiguous": result.ambiguous,
+            "competing": result.competing,
+            "unexplained": result.unexplained,
             "complete": result.complete,
             "stats": result.stats.as_dict(),
         }
@@ -260,13 +314,23 @@ def _cmd_localize(args: argparse.Namespace) -> int:
             + ")."
         )
         return 0
+    best = result.solutions[0]
+    share = f"the best holds {100 * best.confidence:.1f} % of the posterior"
+    if not result.ambiguous:
+        verdict = f"decisive: {share}"
+    elif not st.complete:
+        verdict = (
+            f"AMBIGUOUS: the search was stopped by its budget (rivals may be missing); {share}"
+        )
+    elif not st.exhaustive:
+        verdict = f"AMBIGUOUS: first fit, rivals not sought; {share}"
+    else:
+        k = max(result.competing, 1)
+        verdict = f"AMBIGUOUS: {k} distinct pose{'s' if k != 1 else ''} compete; {share}"
     print(
         f"{len(result)} solution{'s' if len(result) != 1 else ''} for {n} bearings "
         f"({st.nodes} nodes, {st.examined_paths} paths examined, "
-        f"{st.elapsed_s * 1e3:.1f} ms)"
-        + (" -- AMBIGUOUS: several poses fit" if result.ambiguous else "")
-        + ("" if st.complete else " -- INCOMPLETE: stopped by the budget")
-        + ("" if st.exhaustive else " -- first fit: rivals not sought")
+        f"{st.elapsed_s * 1e3:.1f} ms) -- {verdict}"
     )
     shown = result.solutions[:MAX_PRINTED]
     for k, s in enumerate(shown, 1):
@@ -275,7 +339,7 @@ def _cmd_localize(args: argparse.Namespace) -> int:
             f"  #{k}: x = {s.pose.x:.3f} m, y = {s.pose.y:.3f} m, "
             f"theta = {_fmt_angle(s.pose.theta, deg)}; "
             f"landmarks [{', '.join(ids)}]; residual rms {_fmt_angle(s.residual_rms, deg)}; "
-            f"confidence {s.confidence:.2f}"
+            f"confidence {s.confidence:.3f}"
         )
     if len(result) > len(shown):
         print(f"  ... and {len(result) - len(shown)} more (all of them with --json)")
@@ -430,8 +494,15 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     progress = not args.quiet
     if args.dataset is not None:
         kind, path = args.dataset
+        if args.min_landmarks < 3:
+            raise InputError(f"--min-landmarks must be >= 3, got {args.min_landmarks}")
         res: Any = ev.evaluate_dataset(
-            kind, path, max_samples=args.max_samples, rng=args.seed, progress=progress
+            kind,
+            path,
+            max_samples=args.max_samples,
+            rng=args.seed,
+            progress=progress,
+            min_landmarks=args.min_landmarks,
         )
     else:
         presets: dict[str, Callable[[], ev.SweepConfig]] = {
@@ -445,6 +516,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
                 ev.SweepConfig.targets_spurious, sensing="range", confidence=0.9999
             ),
             "targets-crlb": ev.SweepConfig.targets_crlb,
+            "targets-honest": ev.SweepConfig.targets_honest,
+            "targets-honest-room": ev.SweepConfig.targets_honest_room,
         }
         config = presets[args.preset]()
         if args.trials is not None:

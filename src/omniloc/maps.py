@@ -51,7 +51,6 @@ COINCIDENCE_TOLERANCE = 1e-9
 """Two landmarks closer than this (metres) are the same place, which a map may not contain."""
 
 
-
 def _min_pair(pairs: NDArray[np.intp]) -> tuple[int, int]:
     """Lexicographically smallest (i, j) row of an (k, 2) array of index pairs with i < j."""
     k = np.lexsort((pairs[:, 1], pairs[:, 0]))[0]

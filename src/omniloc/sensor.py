@@ -116,9 +116,12 @@ class SensorModel:
     threshold : float, default 1 degree
         The paper's rule (ii): the largest accepted ``|predicted - measured|``, radians. Used
         only when ``sigma`` is None.
-    gate_confidence : float, default 0.99
+    gate_confidence : float, default 0.999
         Confidence of the chi-square gates (each bearing, and the joint test of a complete
-        interpretation).
+        interpretation). A true bearing falls outside its gate with probability ``1 -
+        gate_confidence``, and an interpretation that loses one is not found (unless a
+        wildcard is left for it): 0.999 keeps the true interpretation of 8 bearings in about
+        99.5 % of frames (0.99: 96-98 %) at a modest cost in time.
     fov : float, optional
         Full field of view, radians (None or 2 pi: omnidirectional), centred on forward.
     max_range, min_range : float, optional
@@ -144,14 +147,14 @@ class SensorModel:
     --------
     >>> s = SensorModel(sigma=np.deg2rad(0.5), fov=np.deg2rad(65), max_range=8.0)
     >>> round(float(np.rad2deg(s.gate_width)), 3)
-    1.288
+    1.645
     >>> s.half_fov is not None, s.reach_max
     (True, 8.4)
     """
 
     sigma: float | None = None
     threshold: float = DEFAULT_THRESHOLD
-    gate_confidence: float = 0.99
+    gate_confidence: float = 0.999
     fov: float | None = None
     max_range: float | None = None
     min_range: float | None = None
@@ -160,7 +163,7 @@ class SensorModel:
     allow_wide: bool = field(default=False, repr=False)
 
     #: p_detect assumed for the likelihood of a match when the sensor does not say.
-    DETECT_UNKNOWN = 0.5
+    DETECT_UNKNOWN = 0.15
     #: Expected clutter per frame assumed when neither ``clutter`` nor a spurious count says.
     CLUTTER_UNKNOWN = 0.5
 
@@ -209,7 +212,7 @@ class SensorModel:
         *,
         sigma: float | None = None,
         threshold: float = DEFAULT_THRESHOLD,
-        confidence: float = 0.99,
+        confidence: float = 0.999,
         fov: float | None = None,
         max_range: float | None = None,
         min_range: float | None = None,

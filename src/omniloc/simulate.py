@@ -25,6 +25,7 @@ __all__ = [
     "Scene",
     "Table1Row",
     "demo_room",
+    "grid_map",
     "make_map",
     "observe",
     "paper_experiment",
@@ -132,6 +133,48 @@ def random_map(
     )
 
 
+def grid_map(
+    n: int, *, density: float = 0.01, min_separation: float = 2.0, rng: RngLike = None
+) -> LandmarkMap:
+    """Landmarks on a jittered square grid: racks of a warehouse rather than a uniform spread.
+
+    The grid's spacing is ``1 / sqrt(density)``; each landmark lies uniformly within
+    ``(spacing - min_separation) / 2`` of its node in x and in y, so no two are closer than
+    ``min_separation``. The ``n`` landmarks fill the nodes of a square grid row by row.
+
+    Parameters
+    ----------
+    n : int
+        Number of landmarks, >= 3.
+    density : float
+        Landmarks per square metre (0.01: one per 10 m x 10 m cell).
+    min_separation : float
+        Metres, smaller than the spacing.
+    rng : Generator, int or None
+
+    Examples
+    --------
+    >>> lm = grid_map(100, density=0.01, min_separation=2.0, rng=0)
+    >>> lm.n, round(float(lm.kdtree.query(lm.xy, k=2)[0][:, 1].min()), 1) >= 2.0
+    (100, True)
+    """
+    n = _check_count("n", n, 3)
+    if not (isinstance(density, (int, float)) and math.isfinite(density) and density > 0):
+        raise InputError(f"density must be a positive number of landmarks per m^2, got {density!r}")
+    spacing = 1.0 / math.sqrt(density)
+    if not 0.0 <= min_separation < spacing:
+        raise InputError(
+            f"min_separation must lie in [0, {spacing:g}) m (the grid's spacing at density "
+            f"{density:g}), got {min_separation!r}"
+        )
+    gen = np.random.default_rng(rng)
+    side = math.ceil(math.sqrt(n))
+    k = np.arange(n)
+    nodes = np.stack([k % side, k // side], axis=1) * spacing
+    half = 0.5 * (spacing - min_separation)
+    return LandmarkMap(nodes + gen.uniform(-half, half, size=(n, 2)))
+
+
 def symmetric_map(kind: str = "square", *, size: float = 6.0) -> LandmarkMap:
     """A map with rotational symmetry, where bearings alone cannot tell poses apart.
 
@@ -151,9 +194,11 @@ def symmetric_map(kind: str = "square", *, size: float = 6.0) -> LandmarkMap:
     return LandmarkMap(xy)
 
 
-def make_map(kind: MapKind | str, n: int = 12, *, rng: RngLike = None) -> LandmarkMap:
-    """A map of a given kind: ``random`` (n landmarks in a 20 m square), ``room`` (the demo
-    room, n ignored) or ``symmetric`` (a 4 x 3 grid, n ignored)."""
+def make_map(
+    kind: MapKind | str, n: int = 12, *, rng: RngLike = None, size: float = 20.0
+) -> LandmarkMap:
+    """A map of a given kind: ``random`` (n landmarks in a ``size`` m square), ``room`` (the
+    demo room, n ignored) or ``symmetric`` (a 4 x 3 grid, n ignored)."""
     try:
         k = MapKind(kind)
     except ValueError as exc:
@@ -162,7 +207,7 @@ def make_map(kind: MapKind | str, n: int = 12, *, rng: RngLike = None) -> Landma
         return demo_room()
     if k is MapKind.SYMMETRIC:
         return symmetric_map("grid", size=12.0)
-    return random_map(n, size=20.0, rng=rng)
+    return random_map(n, size=size, rng=rng)
 
 
 def random_pose(

@@ -6,24 +6,27 @@ import csv
 import math
 import sys
 from collections.abc import Iterable, Sequence
-from dataclasses import fields
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..errors import OmnilocError
+from ..errors import InputError, OmnilocError
 from ..maps import LandmarkMap
 from ..pose import Pose, crlb, estimate_pose, refine_pose
 from ..search import LocalizationResult
 
 __all__ = [
     "NAN",
+    "Calibration",
+    "calibration",
     "fmt_value",
     "jsonable",
     "known_pairs_errors",
     "matching_solutions",
+    "oracle_pose",
     "progress_bar",
     "rms",
     "text_table",
@@ -117,7 +120,73 @@ def matching_solutions(
     ]
 
 
+def oracle_pose(
+    lm: LandmarkMap, bearings: FloatArray, assignment: Sequence[int | None]
+) -> Pose | None:
+    """The maximum-likelihood pose from the TRUE correspondences (None when fewer than 3
+    landmarks were observed or they fix no pose)."""
+    keep = [i for i, a in enumerate(assignment) if a is not None]
+    if len(keep) < 3:
+        return None
+    try:
+        rows = [int(a) for a in assignment if a is not None]
+        return refine_pose(lm.xy[rows], np.asarray(bearings)[keep])[0]
+    except OmnilocError:
+        return None
+
+
 def progress_bar(total: int, enabled: bool, desc: str) -> Any:
     from tqdm import tqdm
 
     return tqdm(total=total, desc=desc, disable=not (enabled and sys.stderr.isatty()))
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """How well the best solution's confidence predicts that it is correct.
+
+    Attributes
+    ----------
+    edges : ndarray, shape (bins + 1,)
+        Confidence bin edges over [0, 1].
+    mean_confidence, fraction_correct : ndarray, shape (bins,)
+        Per bin (NaN where empty): the mean confidence of the best solution, and the share of
+        those cases in which it was correct (the reliability diagram).
+    counts : ndarray of int, shape (bins,)
+    ece : float
+        Expected calibration error: ``sum_b n_b / n |fraction_correct_b - mean_confidence_b|``.
+    """
+
+    edges: FloatArray
+    mean_confidence: FloatArray
+    fraction_correct: FloatArray
+    counts: NDArray[np.int64]
+    ece: float
+
+
+def calibration(
+    confidence: Sequence[float], correct: Sequence[bool], bins: int = 10
+) -> Calibration:
+    """The reliability of a set of confidences (cases with no answer count as confidence 0,
+    not correct).
+
+    Examples
+    --------
+    >>> c = calibration([0.9, 0.9, 0.2, 0.2], [True, False, False, False], bins=5)
+    >>> round(c.ece, 3)
+    0.3
+    """
+    conf = np.nan_to_num(np.asarray(confidence, dtype=np.float64), nan=0.0)
+    ok = np.asarray(correct, dtype=bool)
+    if conf.shape != ok.shape:
+        raise InputError("calibration needs one correctness flag per confidence")
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    idx = np.clip(np.searchsorted(edges, conf, side="right") - 1, 0, bins - 1)
+    counts = np.bincount(idx, minlength=bins)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_c = np.bincount(idx, weights=conf, minlength=bins) / counts
+        frac = np.bincount(idx, weights=ok.astype(float), minlength=bins) / counts
+    n = max(int(conf.size), 1)
+    gaps = np.where(counts > 0, np.abs(frac - mean_c), 0.0)
+    ece = float(np.sum(counts / n * gaps))
+    return Calibration(edges, mean_c, frac, counts.astype(np.int64), ece)

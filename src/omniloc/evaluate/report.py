@@ -15,8 +15,10 @@ def save_report(result: SweepResult | DatasetResult, out_dir: str | Path) -> lis
     """Write CSV, JSON and PNG figures of a result into ``out_dir``; return the paths.
 
     A sweep gives ``<name>_rows.csv``, ``<name>_trials.csv``, ``<name>.json``,
-    ``<name>_success.png`` and ``<name>_rmse.png``; a dataset gives ``<kind>.csv``,
-    ``<kind>.json`` and ``<kind>_errors.png``.
+    ``<name>_success.png``, ``<name>_rmse.png`` and ``<name>_reliability.png``; a dataset
+    gives ``<kind>.csv``, ``<kind>.json``, ``<kind>_errors.png`` and
+    ``<kind>_reliability.png`` (the reliability diagram of the best solution's confidence,
+    with the expected calibration error).
     """
     from ..plot import evaluation as plot_eval
 
@@ -29,11 +31,21 @@ def save_report(result: SweepResult | DatasetResult, out_dir: str | Path) -> lis
         result.to_json(paths[2])
         paths.append(plot_eval.plot_success_vs_noise(result, d / f"{name}_success.png"))
         paths.append(plot_eval.plot_rmse_vs_crlb(result, d / f"{name}_rmse.png"))
+        paths.append(
+            plot_eval.plot_reliability(
+                result.calibration(), d / f"{name}_reliability.png", title=name
+            )
+        )
         return paths
     if isinstance(result, DatasetResult):
         paths = [d / f"{result.kind}.csv", d / f"{result.kind}.json"]
         result.to_csv(paths[0])
         result.to_json(paths[1])
         paths.append(plot_eval.plot_dataset_errors(result, d / f"{result.kind}_errors.png"))
+        paths.append(
+            plot_eval.plot_reliability(
+                result.calibration(), d / f"{result.kind}_reliability.png", title=result.kind
+            )
+        )
         return paths
     raise InputError(f"save_report takes a SweepResult or a DatasetResult, got {type(result)}")

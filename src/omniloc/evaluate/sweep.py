@@ -31,9 +31,12 @@ from ..search import localize
 from ..simulate import make_map, observe, random_pose, visible_landmarks
 from .common import (
     NAN,
+    Calibration,
+    calibration,
     jsonable,
     known_pairs_errors,
     matching_solutions,
+    oracle_pose,
     progress_bar,
     rms,
     text_table,
@@ -83,13 +86,18 @@ class SweepConfig:
     n_obs : tuple of int
         Number of observations requested (true + spurious), capped by the map size.
     map_sizes : tuple of int
-        Landmarks of a ``random`` map (20 m square); ignored by the other kinds.
+        Landmarks of a ``random`` map; ignored by the other kinds.
+    map_square_m : float
+        Side of a ``random`` map's square, metres (20 by default).
     map_kinds : tuple of str
         ``random``, ``room`` (the 12-landmark demo room) or ``symmetric`` (a 4 x 3 grid).
     trials : int
         Monte Carlo trials per condition.
     success_pos_m, success_heading_deg : float
         A trial succeeds when the best solution is within both of the true pose.
+    correct_pos_m, correct_heading_deg : float
+        The honesty figures' "correct" (0.3 m and 3 degrees): a best solution outside both is
+        *wrong*, and ``confidently wrong`` when the answer was not ambiguous.
     timeout_s, max_nodes : optional
         Search budget per localization.
     sensing : {"chosen", "range"}
@@ -116,6 +124,9 @@ class SweepConfig:
     trials: int = 20
     success_pos_m: float = 0.1
     success_heading_deg: float = 1.0
+    correct_pos_m: float = 0.3
+    correct_heading_deg: float = 3.0
+    map_square_m: float = 20.0
     timeout_s: float | None = 5.0
     max_nodes: int | None = None
     sensing: str = "chosen"
@@ -217,6 +228,38 @@ class SweepConfig:
         )
 
     @classmethod
+    def targets_honest(cls, trials: int = 250) -> SweepConfig:
+        """Honesty target: random maps of 12-30 landmarks in a 12 m square, the robot sees 6
+        of them (chosen at random, 360 degrees, no range) plus 2 spurious bearings, sigma 0.5
+        degrees, ``localize(map, b, sigma=..., max_spurious=2)``: 4 map sizes x ``trials``
+        (1,000 by default). Few bearings among many landmarks: mostly ambiguous, and the
+        answer must say so."""
+        return cls(
+            name="targets_honest_360",
+            sigmas_deg=(0.5,),
+            spurious_rates=(0.25,),
+            n_obs=(8,),
+            map_sizes=(12, 18, 24, 30),
+            map_kinds=("random",),
+            map_square_m=12.0,
+            trials=trials,
+            timeout_s=10.0,
+        )
+
+    @classmethod
+    def targets_honest_room(cls, trials: int = 500) -> SweepConfig:
+        """Honesty target: the demo room, 7 of the landmarks in view from random poses,
+        noise-free and sigma 0.2 degrees (decisive and correct in >= 99 %)."""
+        return cls(
+            name="targets_honest_room",
+            sigmas_deg=(0.0, 0.2),
+            n_obs=(7,),
+            map_kinds=("room",),
+            trials=trials,
+            timeout_s=5.0,
+        )
+
+    @classmethod
     def targets_crlb(cls, trials: int = 1000) -> SweepConfig:
         """Issue target: 8 correctly matched observations, sigma 1 degree; the refined
         estimate's position RMSE against 1.1 x sqrt(trace of the position CRLB)."""
@@ -267,6 +310,10 @@ class Trial:
     n_solutions: int
     pos_err_m: float
     heading_err_deg: float
+    correct: bool
+    decisive: bool
+    best_confidence: float
+    oracle_in_solutions: bool
     linear_pos_err_m: float
     linear_heading_err_deg: float
     refined_pos_err_m: float
@@ -292,6 +339,11 @@ class ConditionRow:
     in_solutions_rate: float
     ambiguous_rate: float
     complete_rate: float
+    correct_rate: float
+    confidently_wrong_rate: float
+    decisive_correct_rate: float
+    oracle_in_solutions_rate: float
+    ece: float
     pos_rmse_m: float
     heading_rmse_deg: float
     pos_rmse_success_m: float
@@ -314,6 +366,11 @@ def _aggregate(cond: Condition, trials: Sequence[Trial]) -> ConditionRow:
         in_solutions_rate=float(np.mean([r.in_solutions for r in trials])),
         ambiguous_rate=float(np.mean([r.ambiguous for r in trials])),
         complete_rate=float(np.mean([r.complete for r in trials])),
+        correct_rate=float(np.mean([r.correct for r in trials])),
+        confidently_wrong_rate=float(np.mean([r.decisive and not r.correct for r in trials])),
+        decisive_correct_rate=float(np.mean([r.decisive and r.correct for r in trials])),
+        oracle_in_solutions_rate=float(np.mean([r.oracle_in_solutions for r in trials])),
+        ece=calibration([r.best_confidence for r in trials], [r.correct for r in trials]).ece,
         pos_rmse_m=rms(r.pos_err_m for r in trials),
         heading_rmse_deg=rms(r.heading_err_deg for r in trials),
         pos_rmse_success_m=rms(r.pos_err_m for r in trials if r.success),
@@ -360,8 +417,26 @@ class SweepResult:
         p.parent.mkdir(parents=True, exist_ok=True)
         p.write_text(json.dumps(data, indent=1))
 
+    def calibration(self, bins: int = 10) -> Calibration:
+        """Reliability of the best solution's confidence over every trial."""
+        return calibration(
+            [t.best_confidence for t in self.trials], [t.correct for t in self.trials], bins
+        )
+
+    def honesty(self) -> dict[str, float]:
+        """Over every trial: correct, confidently wrong, decisive and correct, oracle among
+        the solutions (rates) and the expected calibration error."""
+        t = self.trials
+        return {
+            "correct_rate": float(np.mean([r.correct for r in t])),
+            "confidently_wrong_rate": float(np.mean([r.decisive and not r.correct for r in t])),
+            "decisive_correct_rate": float(np.mean([r.decisive and r.correct for r in t])),
+            "oracle_in_solutions_rate": float(np.mean([r.oracle_in_solutions for r in t])),
+            "ece": self.calibration().ece,
+        }
+
     def summary(self) -> str:
-        """A plain-text table of the per-condition rows."""
+        """A plain-text table of the per-condition rows, and the honesty figures."""
         cols = [
             ("map_kind", "map"),
             ("map_size", "N"),
@@ -373,6 +448,10 @@ class SweepResult:
             ("success_rate", "success"),
             ("in_solutions_rate", "in_sols"),
             ("ambiguous_rate", "ambig"),
+            ("confidently_wrong_rate", "conf_wrong"),
+            ("decisive_correct_rate", "dec_ok"),
+            ("oracle_in_solutions_rate", "oracle_in"),
+            ("ece", "ece"),
             ("complete_rate", "complete"),
             ("pos_rmse_success_m", "pos_rmse_ok"),
             ("refined_pos_rmse_m", "refined"),
@@ -383,10 +462,17 @@ class SweepResult:
             ("time_median_s", "t_med"),
             ("time_p95_s", "t_p95"),
         ]
+        h = self.honesty()
+        cfg = self.config
         return (
-            f"sweep {self.config.name}: {len(self.trials)} trials in {self.elapsed_s:.1f} s; "
-            f"success = best within {self.config.success_pos_m} m and "
-            f"{self.config.success_heading_deg} deg\n" + text_table(self.rows, cols)
+            f"sweep {cfg.name}: {len(self.trials)} trials in {self.elapsed_s:.1f} s; "
+            f"success = best within {cfg.success_pos_m} m and "
+            f"{cfg.success_heading_deg} deg\n" + text_table(self.rows, cols) + "\n"
+            f"honesty (correct = best within {cfg.correct_pos_m} m and "
+            f"{cfg.correct_heading_deg} deg): correct {h['correct_rate']:.3f}, confidently "
+            f"wrong {h['confidently_wrong_rate']:.4f}, decisive and correct "
+            f"{h['decisive_correct_rate']:.3f}, oracle among solutions "
+            f"{h['oracle_in_solutions_rate']:.4f}, calibration error {h['ece']:.3f}"
         )
 
 
@@ -416,7 +502,7 @@ def _range_pose(lm: LandmarkMap, n_true: int, gen: np.random.Generator) -> Pose 
 
 def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
     gen = np.random.default_rng(seed)
-    lm = make_map(cond.map_kind, cond.map_size, rng=gen)
+    lm = make_map(cond.map_kind, cond.map_size, rng=gen, size=cfg.map_square_m)
     n_obs = min(cond.n_obs, lm.n + round(cond.spurious_rate * cond.n_obs))
     n_spur = round(cond.spurious_rate * n_obs)
     n_real = min(n_obs - n_spur, lm.n)
@@ -431,7 +517,7 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
         for _ in range(20):
             if found is not None or cond.map_kind != "random":
                 break
-            lm = make_map(cond.map_kind, cond.map_size, rng=gen)
+            lm = make_map(cond.map_kind, cond.map_size, rng=gen, size=cfg.map_square_m)
             found = _range_pose(lm, n_real, gen)
         if found is None:
             raise InputError(f"no pose of the {cond.map_kind} map sees exactly {n_real} landmarks")
@@ -481,6 +567,10 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
             n_solutions=0,
             pos_err_m=NAN,
             heading_err_deg=NAN,
+            correct=False,
+            decisive=False,
+            best_confidence=0.0,
+            oracle_in_solutions=False,
             time_s=0.0,
         )
     t0 = time.perf_counter()
@@ -497,6 +587,8 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
     good = matching_solutions(res, pose, pos_tol, hdg_tol)
     best = res.best
     err = best.pose.distance_to(pose) if best is not None else (NAN, NAN)
+    c_pos, c_hdg = cfg.correct_pos_m, math.radians(cfg.correct_heading_deg)
+    oracle = oracle_pose(lm, scene.bearings, scene.assignment) or pose
     return Trial(
         **base,
         solved=bool(res),
@@ -507,6 +599,10 @@ def _run_trial(cfg: SweepConfig, cond: Condition, k: int, seed: int) -> Trial:
         n_solutions=len(res),
         pos_err_m=err[0],
         heading_err_deg=math.degrees(err[1]),
+        correct=bool(best is not None and err[0] <= c_pos and err[1] <= c_hdg),
+        decisive=bool(res) and not res.ambiguous,
+        best_confidence=best.confidence if best is not None else 0.0,
+        oracle_in_solutions=any(matching_solutions(res, oracle, c_pos, c_hdg)),
         time_s=dt,
     )
 

@@ -11,7 +11,12 @@ without a display and in threads.
 
 from __future__ import annotations
 
-from .evaluation import plot_dataset_errors, plot_rmse_vs_crlb, plot_success_vs_noise
+from .evaluation import (
+    plot_dataset_errors,
+    plot_reliability,
+    plot_rmse_vs_crlb,
+    plot_success_vs_noise,
+)
 from .scene import draw_scene, plot_localization, plot_solutions_grid
 from .vision import plot_conventions, plot_detections, vision_demo
 
@@ -21,6 +26,7 @@ __all__ = [
     "plot_dataset_errors",
     "plot_detections",
     "plot_localization",
+    "plot_reliability",
     "plot_rmse_vs_crlb",
     "plot_solutions_grid",
     "plot_success_vs_noise",

@@ -16,8 +16,14 @@ import numpy as np
 
 if TYPE_CHECKING:
     from ..evaluate import DatasetResult, SweepResult
+    from ..evaluate.common import Calibration
 
-__all__ = ["plot_dataset_errors", "plot_rmse_vs_crlb", "plot_success_vs_noise"]
+__all__ = [
+    "plot_dataset_errors",
+    "plot_reliability",
+    "plot_rmse_vs_crlb",
+    "plot_success_vs_noise",
+]
 
 
 def _figure(ncols: int = 1, width: float = 6.0) -> tuple[Any, list[Any]]:
@@ -125,4 +131,35 @@ def plot_dataset_errors(result: DatasetResult, path: str | Path) -> Path:
         ax.set_ylabel("samples")
         ax.legend(fontsize=7)
     axes[0].set_title(f"{result.kind}: {result.n} samples")
+    return _save(fig, path)
+
+
+def plot_reliability(calibration: Calibration, path: str | Path, *, title: str = "") -> Path:
+    """Reliability diagram: per confidence bin of the best solution, the fraction of cases in
+    which it was correct against the bin's mean confidence (the diagonal is perfect
+    calibration), with the number of cases per bin below and the expected calibration
+    error in the title."""
+    fig, axes = _figure(1, 5.0)
+    ax = axes[0]
+    c = calibration
+    centres = 0.5 * (c.edges[:-1] + c.edges[1:])
+    width = np.diff(c.edges)
+    filled = c.counts > 0
+    ax.plot([0, 1], [0, 1], color="0.6", ls="--", lw=1, label="perfect calibration")
+    ax.bar(
+        centres[filled],
+        c.fraction_correct[filled],
+        width=width[filled] * 0.9,
+        alpha=0.6,
+        label="fraction correct",
+    )
+    ax.plot(c.mean_confidence[filled], c.fraction_correct[filled], "o-", color="C3", label="by bin")
+    for x, n in zip(centres[filled], c.counts[filled], strict=True):
+        ax.annotate(str(int(n)), (x, 0.02), ha="center", fontsize=7, color="0.3")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.set_xlabel("confidence of the best solution")
+    ax.set_ylabel("fraction correct")
+    ax.set_title(f"{title + ': ' if title else ''}expected calibration error {c.ece:.3f}")
+    ax.legend(fontsize=7, loc="upper left")
     return _save(fig, path)

@@ -32,7 +32,7 @@ from ..sensor import SensorModel
 from .hypotheses import run_hypotheses
 from .options import Budget, Leaves, SearchOptions, make_options
 from .results import LocalizationResult, Method, SearchStats, Solution, Strategy
-from .scoring import MAX_LEAVES, finish
+from .scoring import DECISIVE, MAX_LEAVES, finish
 from .tree import TreeSearch, robust_order, run_paper_kernel
 
 __all__ = [
@@ -95,6 +95,7 @@ def localize(
     method: Method | str = Method.ROBUST,
     strategy: Strategy | str = Strategy.AUTO,
     exhaustive: bool = True,
+    decisive: float = DECISIVE,
     threshold: float | None = None,
     sigma: float | None = None,
     confidence: float | None = None,
@@ -102,6 +103,8 @@ def localize(
     min_range: float | None = None,
     fov: float | None = None,
     p_miss: float | None = None,
+    p_detect: float | None = None,
+    clutter: float | None = None,
     max_nodes: int | None = None,
     timeout_s: float | None = None,
 ) -> LocalizationResult:
@@ -147,21 +150,29 @@ def localize(
         visible landmarks unseen than the median of Binomial(m, p_miss)): much faster on large
         maps, but rival interpretations are not sought, so ``ambiguous`` cannot be trusted
         (``stats.exhaustive`` is then False). Needs the hypotheses strategy.
+    decisive : float, default 0.95
+        The answer is ``ambiguous`` unless the best solution holds at least this share of
+        the posterior (see :mod:`omniloc.search.scoring`).
     threshold : float, default 1 degree
         Rule (ii): largest accepted ``|predicted - measured|`` bearing, radians, when
         ``sigma`` is not given.
     sigma : float, optional
         Bearing noise standard deviation, radians: a chi-square gate on the innovation
         (its variance includes the pose's uncertainty) instead of the fixed threshold.
-    confidence : float, default 0.99
-        Confidence level of the chi-square gates.
+    confidence : float, default 0.999
+        Confidence level of the chi-square gates (see
+        :attr:`omniloc.sensor.SensorModel.gate_confidence`).
     max_range, min_range : float, optional
         Sensor range limits, metres.
     fov : float, optional
         Full field of view in radians (e.g. 65 degrees).
-    p_miss : float, optional
-        Probability that a plainly visible landmark is not detected (``1 - p_detect``):
-        every such landmark counts against a solution (negative evidence).
+    p_miss, p_detect : float, optional
+        Probability that a plainly visible landmark is not detected, or that it is (give one
+        of them): every plainly visible landmark not observed counts against a solution
+        (negative evidence), and each match is scored with ``p_detect``.
+    clutter : float, optional
+        Expected number of spurious bearings per frame (default: ``max_spurious``, at least
+        0.5), spread over the field of view: what a bearing left unmatched costs.
     max_nodes, timeout_s : optional
         The budget (see ``budget``).
 
@@ -208,6 +219,8 @@ def localize(
         "min_range": min_range,
         "fov": fov,
         "p_miss": p_miss,
+        "p_detect": p_detect,
+        "clutter": clutter,
         "max_nodes": max_nodes,
         "timeout_s": timeout_s,
     }
@@ -219,6 +232,7 @@ def localize(
         max_spurious=max_spurious,
         ordering=ordering,
         legacy=legacy,
+        decisive=decisive,
     )
     if opt.min_match > lm.n:
         raise InputError(
@@ -244,7 +258,7 @@ def localize(
         TreeSearch(lm, b[order], opt, leaves).run()
     else:
         run_hypotheses(lm, b, opt, leaves, stop_first=engine == "first")
-    solutions, ambiguous = finish(lm, b, leaves, opt)
+    scored = finish(lm, b, leaves, opt)
     c = leaves.counts
     stats = SearchStats(
         total_paths=math.perm(lm.n, m) if m <= lm.n else 0,
@@ -260,4 +274,4 @@ def localize(
         complete=leaves.complete,
         exhaustive=leaves.exhaustive,
     )
-    return LocalizationResult(solutions, stats, lm, ambiguous)
+    return LocalizationResult(scored.solutions, stats, lm, scored.ambiguous, scored.unexplained)

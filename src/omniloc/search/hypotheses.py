@@ -33,12 +33,13 @@ from .._kernels.hypotheses import (
     Visibility,
     hypotheses,
 )
-from ..angles import TWO_PI, wrap
+from ..angles import wrap
 from ..maps import LandmarkMap
 from ..pose import SINGULAR_RTOL
 from . import seeds as seeding
 from .neighbours import neighbour_lists
 from .options import Leaves, SearchOptions
+from .scoring import evidence_model
 from .tree import eps_f2
 
 __all__ = ["run_hypotheses"]
@@ -99,13 +100,12 @@ def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> Neighbours:
     return Neighbours(lm.xy, lo, lo + (N - 1), idx, np.ascontiguousarray(lm.xy[idx]))
 
 
-def _scoring(opt: SearchOptions) -> Scoring:
-    """The cost the kernel's buffer keeps the best paths by (as search.scoring ranks)."""
-    s = opt.sensor
-    if s.p_detect is None:
-        return Scoring(1e6, 0.0)  # matches first
-    spur_w = max(0.5 * math.log(TWO_PI) - math.log(s.noise), 0.0)
-    return Scoring(spur_w, -s.log_miss)
+def _scoring(lm: LandmarkMap, opt: SearchOptions) -> Scoring:
+    """The cost the kernel's buffer keeps the best paths by: minus the log evidence that
+    search.scoring ranks by, without its pose-volume term (a bearing left unmatched costs
+    what a match would have added; a plainly visible landmark missed, -ln(1 - p_detect))."""
+    ev = evidence_model(lm, opt.sensor, opt.max_wild)
+    return Scoring(ev.per_match, -ev.log_miss)
 
 
 def run_hypotheses(
@@ -154,7 +154,7 @@ def run_hypotheses(
         np.inf if s.plain_max is None else s.plain_max**2,
         0.0 if s.plain_min is None else s.plain_min**2,
     )
-    scoring = _scoring(opt)
+    scoring = _scoring(lm, opt)
     max_nodes = 0 if opt.budget.max_nodes is None else opt.budget.max_nodes
 
     def call(rows: slice, i0: int, i1: int, cap: tuple[int, int]) -> KernelResult:

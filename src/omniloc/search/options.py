@@ -79,6 +79,8 @@ class SearchOptions:
     merge : bool
         Merge solutions that are the same pose (``method="robust"``).
     budget : Budget
+    decisive : float
+        Share of the posterior the best solution must hold for the answer to be unambiguous.
     """
 
     sensor: SensorModel
@@ -87,6 +89,7 @@ class SearchOptions:
     ordering: bool
     merge: bool
     budget: Budget = field(default_factory=Budget)
+    decisive: float = 0.95
 
     @property
     def min_match(self) -> int:
@@ -142,15 +145,27 @@ def make_options(
     max_spurious: int | float,
     ordering: bool,
     legacy: dict[str, Any],
+    decisive: float = 0.95,
 ) -> SearchOptions:
     """Check a search's options and build its :class:`SearchOptions`.
 
     ``legacy`` holds the keyword arguments of :func:`~omniloc.localize` that describe the
     sensor or the budget (``threshold``, ``sigma``, ``confidence``, ``max_range``,
-    ``min_range``, ``fov``, ``p_miss``, ``max_nodes``, ``timeout_s``) that the caller actually
+    ``min_range``, ``fov``, ``p_miss``, ``p_detect``, ``clutter``, ``max_nodes``,
+    ``timeout_s``) that the caller actually
     gave; with ``sensor`` or ``budget`` also given, they may not repeat what those say.
     """
-    sensor_keys = ("threshold", "sigma", "confidence", "max_range", "min_range", "fov", "p_miss")
+    sensor_keys = (
+        "threshold",
+        "sigma",
+        "confidence",
+        "max_range",
+        "min_range",
+        "fov",
+        "p_miss",
+        "p_detect",
+        "clutter",
+    )
     budget_keys = ("max_nodes", "timeout_s")
     given = {k: v for k, v in legacy.items() if v is not None}
     if sensor is not None:
@@ -180,6 +195,13 @@ def make_options(
             f"max_spurious={max_spurious} leaves {m - k} matched bearings out of {m}; "
             "a pose needs at least 3"
         )
+    if isinstance(decisive, bool) or not isinstance(decisive, (int, float, np.number)):
+        raise InputError(f"decisive must be a share of the posterior in (0, 1), got {decisive!r}")
+    if not 0.5 <= float(decisive) < 1.0:
+        raise InputError(
+            f"decisive must lie in [0.5, 1): the best solution's share of the posterior for an "
+            f"unambiguous answer, got {decisive!r}"
+        )
     if not isinstance(ordering, (bool, np.bool_)):
         raise InputError(f"ordering must be True or False, got {ordering!r}")
     if method is Method.PAPER:
@@ -191,6 +213,7 @@ def make_options(
             "min_range": sensor.min_range is not None,
             "fov": sensor.fov is not None,
             "p_miss": sensor.p_detect is not None,
+            "clutter": sensor.clutter is not None,
         }
         used = [name for name, on in extras.items() if on]
         if used:
@@ -205,6 +228,7 @@ def make_options(
         ordering=bool(ordering),
         merge=method is Method.ROBUST,
         budget=budget,
+        decisive=float(decisive),
     )
 
 

@@ -116,12 +116,17 @@ class Solution:
     covariance : ndarray, shape (3, 3)
         Covariance of (x, y, theta); from ``sigma`` when given, else from ``threshold / 3``.
     cost : float
-        Negative log-likelihood used for ranking after ``matched`` (bearing residuals,
-        spurious observations and, with ``p_miss``, landmarks that should have been seen).
+        Minus the interpretation's log evidence under the sensor model (see
+        :mod:`omniloc.search.scoring`): residuals, matched and spurious bearings, plainly
+        visible landmarks not observed, the volume of poses it allows.
     confidence : float
-        Normalised posterior weight among the returned solutions (they sum to 1).
+        Posterior probability that the robot is at this pose: the evidence of this
+        interpretation and of the equivalent ones merged into it, normalised over every
+        solution and the null interpretation (every bearing clutter). The confidences and
+        :attr:`LocalizationResult.unexplained` sum to 1.
     missed : int
-        Landmarks plainly visible from ``pose`` (by ``max_range``/``fov``) but not observed.
+        Landmarks plainly visible from ``pose`` (by ``max_range``/``fov``) but not observed
+        (counted when the sensor's ``p_detect`` is known).
     """
 
     pose: Pose
@@ -141,19 +146,29 @@ class LocalizationResult:
     Attributes
     ----------
     solutions : list of Solution
-        Best first: most matched observations, then lowest cost.
+        Best first, by posterior confidence.
     stats : SearchStats
     landmarks : LandmarkMap
         The map searched (for landmark ids).
     ambiguous : bool
-        More than one distinct pose fits about as well as the best (same number of matches and
-        confidence at least 1 % of the best): symmetric maps, too few observations.
+        True unless the best solution holds at least ``decisive`` (0.95 by default) of the
+        posterior and the search looked for every rival (it was neither cut short by its
+        budget nor stopped at a first fit). Only an unambiguous answer should be acted on
+        without more evidence (symmetric maps, few bearings, clutter).
+    unexplained : float
+        Posterior probability that none of the solutions is right: every bearing clutter.
     """
 
     solutions: list[Solution]
     stats: SearchStats
     landmarks: LandmarkMap
     ambiguous: bool = False
+    unexplained: float = 0.0
+
+    @property
+    def competing(self) -> int:
+        """How many distinct poses hold at least 1 % of the posterior."""
+        return sum(s.confidence >= 0.01 for s in self.solutions)
 
     @property
     def best(self) -> Solution | None:

@@ -1,34 +1,73 @@
-"""From complete paths to solutions: refinement, the joint test, ranking, merging, ambiguity.
+"""From complete paths to solutions: refinement, the joint test, the posterior, ambiguity.
 
 What :func:`finish` does with the complete paths an engine found, in order:
 
-1. keeps at most MAX_LEAVES of them (the best by matches and fit);
+1. keeps at most MAX_LEAVES of them (the best by the evidence below without its pose-volume
+   term);
 2. refines each pose by Gauss-Newton on all its pairs and drops a pose that stands on one of
    its own landmarks; with ``sigma``, keeps the paths that pass the joint chi-square test on
    all their pairs (joint compatibility, as in JCBB);
-3. computes each pose's covariance and its cost (negative log-likelihood: bearing residuals,
-   spurious bearings, and, with ``p_detect``, plainly visible landmarks not observed);
-4. ranks, merges solutions that are the same pose (inside each other's confidence ellipsoid),
-   normalises the confidences and decides whether the answer is ambiguous.
+3. scores each interpretation ``a`` by its log evidence under the
+   :class:`~omniloc.sensor.SensorModel`, the standard multiple-hypothesis log-likelihood
+   ratio against "every bearing is clutter", integrated over the pose (Laplace)::
+
+       ln E(a) = sum_matched [ln p_detect - ln sqrt(2 pi sigma^2) - ln c]
+                 - SSE / (2 sigma^2)                   (the matched bearings' residuals)
+                 + missed * ln(1 - p_detect)           (plainly visible, not observed)
+                 + ln sqrt(det(2 pi Cov)) + ln prior(pose)   (Laplace: volume x prior)
+
+   with ``c`` the clutter density (expected spurious bearings per frame over the width of the
+   field of view) and ``prior`` the density of poses before the bearings are seen: uniform
+   over the region the robot may be in (by default the landmarks' bounding box, widened by
+   the range), falling off outside it (:class:`PosePrior`). The last term is what makes the
+   posterior honest about interpretations that fix the pose poorly (three bearings always
+   fit some pose) and about large maps where many poses could be tried; it equals the sum
+   over the matched bearings of ``ln p_detect - nu^2 / 2S - ln sqrt(2 pi S)`` with ``S`` the
+   innovation variance including the pose's uncertainty, taken in sequence (the form of the
+   multiple-hypothesis tracking literature), plus the prior density of the first three's
+   pose;
+4. ranks by evidence; merges solutions that are the same pose (inside each other's
+   confidence ellipsoid) and adds their evidence (the multiplicity of near-equivalent
+   assignments: a spurious bearing beside a true one, two landmarks on one ray); normalises
+   against the evidence of every solution and of the *null* interpretation (every bearing
+   clutter, every plainly visible landmark missed); a solution's ``confidence`` is its share
+   of that posterior, and the answer is ``ambiguous`` when the best holds less than
+   ``decisive`` (0.95) of it, or when the search was cut short by its budget or stopped at a
+   first fit (rivals may not have been found).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.special import logsumexp
+from scipy.stats import chi2
 
 from .._kernels import geometry as geo
 from .._kernels.merge import merge
 from ..angles import TWO_PI, wrap
 from ..maps import LandmarkMap
 from ..pose import Pose
+from ..sensor import SensorModel
 from .options import Leaves, SearchOptions
 from .results import Solution
 from .tree import map_scale, path_sse
 
-__all__ = ["MAX_LEAVES", "SAME_POSE_CHI2", "finish", "same_pose"]
+__all__ = [
+    "DECISIVE",
+    "MAX_LEAVES",
+    "SAME_POSE_CHI2",
+    "EvidenceModel",
+    "PosePrior",
+    "Scored",
+    "evidence_model",
+    "finish",
+    "pose_prior",
+    "same_pose",
+]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -39,11 +78,149 @@ IntArray = NDArray[np.int64]
 #: the solutions 87.9 % at 2,000, 90.0 % at 8,000, 90.1 % at 16,000 and 32,000.
 MAX_LEAVES = 8000
 
-#: Two solutions are "the same pose" when each lies within one standard deviation (Mahalanobis
-#: distance 1) of the other: equivalent assignments (a spurious bearing that also matches a
-#: landmark, two landmarks on one ray) land far closer than that, while distinct nearby poses
-#: (tubes of one cluster swapped) stay apart so that the true one is not hidden behind another.
+#: Two solutions are one answer, and their evidence adds up, when each lies within one
+#: standard deviation (Mahalanobis distance 1) of the other -- equivalent assignments (a
+#: spurious bearing that also matches a landmark, two landmarks on one ray) land far closer
+#: than that, while distinct nearby poses (tubes of one cluster swapped) stay apart so that
+#: the true one is not hidden behind another --
 SAME_POSE_CHI2 = 1.0
+#: ... or when they are one place: within SAME_PLACE (metres, radians) of each other, and the
+#: data cannot tell them apart (their gap passes the joint test ``d^T (C_1 + C_2)^-1 d`` at
+#: 99.99 %, 3 degrees of freedom). A bearing given to either of two landmarks on nearly one ray
+#: gives two such poses a few centimetres apart: one answer, not an ambiguity.
+SAME_PLACE = (0.1, float(np.deg2rad(1.0)))
+SAME_PLACE_CHI2 = float(chi2.ppf(0.9999, 3))
+
+#: ``ambiguous`` unless the best solution holds at least this share of the posterior.
+DECISIVE = 0.95
+
+#: Outside the region where the robot may be (the landmarks' bounding box, widened by the
+#: sensor's range when there is one), the prior density of poses falls off as a Gaussian of
+#: this fraction of the map's extent (at least PRIOR_EDGE_MIN metres): a robot seldom stands
+#: far outside the landmarks it localizes with, and a pose out there sees them all from one
+#: side, poorly fixed -- a vague pose the evidence would otherwise reward for its volume.
+PRIOR_EDGE = 0.05
+PRIOR_EDGE_MIN = 0.5
+
+
+@dataclass(frozen=True)
+class PosePrior:
+    """Where the robot may be before the bearings are seen: uniform over ``region``
+    (xmin, ymin, xmax, ymax; any heading), with Gaussian edges of scale ``edge`` metres."""
+
+    region: tuple[float, float, float, float]
+    edge: float
+
+    @property
+    def log_volume(self) -> float:
+        """ln of the prior's normalisation: ``(W + edge sqrt(2 pi)) (H + edge sqrt(2 pi))
+        2 pi``, m^2 rad."""
+        x0, y0, x1, y1 = self.region
+        skirt = self.edge * math.sqrt(TWO_PI)
+        return math.log((x1 - x0 + skirt) * (y1 - y0 + skirt) * TWO_PI)
+
+    def log_density(self, poses: FloatArray) -> FloatArray:
+        """ln of the prior density at poses (K, 3)."""
+        x0, y0, x1, y1 = self.region
+        dx = np.maximum(0.0, np.maximum(x0 - poses[:, 0], poses[:, 0] - x1))
+        dy = np.maximum(0.0, np.maximum(y0 - poses[:, 1], poses[:, 1] - y1))
+        return np.asarray(-self.log_volume - (dx * dx + dy * dy) / (2.0 * self.edge**2))
+
+
+def pose_prior(
+    lm: LandmarkMap, sensor: SensorModel, region: tuple[float, float, float, float] | None = None
+) -> PosePrior:
+    """The default prior of poses for a map and a sensor (see PRIOR_EDGE), or ``region``."""
+    if region is None:
+        x0, y0, x1, y1 = lm.bounds
+        r = sensor.max_range or 0.0
+        region = (x0 - r, y0 - r, x1 + r, y1 + r)
+    x0, y0, x1, y1 = region
+    edge = max(PRIOR_EDGE * max(x1 - x0, y1 - y0), PRIOR_EDGE_MIN)
+    return PosePrior((x0, y0, x1, y1), edge)
+
+
+@dataclass(frozen=True)
+class EvidenceModel:
+    """The constants of the posterior of one search (see the module's documentation).
+
+    Attributes
+    ----------
+    per_match : float
+        ``ln p_detect - ln sqrt(2 pi sigma^2) - ln c``: what a matched bearing adds, before
+        its residual, relative to calling it clutter.
+    log_miss : float
+        ``ln(1 - p_detect)`` for each plainly visible landmark not observed (0 without
+        ``p_detect``: nothing is inferred from what the sensor did not report).
+    prior : PosePrior
+    log_null : float
+        Log evidence of the null interpretation (every bearing clutter).
+    sig2 : float
+        Bearing variance, rad^2.
+    """
+
+    per_match: float
+    log_miss: float
+    prior: PosePrior
+    log_null: float
+    sig2: float
+
+
+def evidence_model(
+    lm: LandmarkMap,
+    sensor: SensorModel,
+    max_wild: int,
+    region: tuple[float, float, float, float] | None = None,
+) -> EvidenceModel:
+    """The posterior's constants for a search of ``lm`` with ``sensor`` (``max_wild``: the
+    spurious bearings allowed, which stand for the clutter rate when the sensor has none)."""
+    sig2 = sensor.noise**2
+    per_match = (
+        sensor.log_detect - 0.5 * math.log(TWO_PI * sig2) - sensor.log_clutter_density(max_wild)
+    )
+    prior = pose_prior(lm, sensor, region)
+    log_null = 0.0
+    if sensor.p_detect is not None:
+        x0, y0, x1, y1 = prior.region
+        area = (x1 - x0) * (y1 - y0)
+        if sensor.limits_visibility:
+            # Plainly visible landmarks at a random pose: about Poisson with this mean, and
+            # E[(1 - p)^K] = exp(-mu p) for K ~ Poisson(mu).
+            r = sensor.plain_max if sensor.plain_max is not None else math.sqrt(area)
+            seen = math.pi * r * r * (sensor.fov_width / TWO_PI)
+            mu = lm.n * min(1.0, seen / area)
+            log_null = -mu * sensor.p_detect
+        else:
+            log_null = lm.n * sensor.log_miss
+    return EvidenceModel(per_match, sensor.log_miss, prior, log_null, sig2)
+
+
+def log_evidence(
+    ev: EvidenceModel,
+    nmatch: IntArray,
+    sse: FloatArray,
+    cov: FloatArray,
+    missed: IntArray,
+    poses: FloatArray,
+) -> FloatArray:
+    """Each interpretation's log evidence (see the module's documentation)."""
+    sign, logdet = np.linalg.slogdet(cov)
+    # Laplace: the likelihood's volume around the pose times the prior's density there. A
+    # covariance that is not positive definite (a pose the pairs do not fix) is as vague as
+    # the prior; no integral of a likelihood times a prior exceeds the likelihood's peak.
+    vol = np.where(sign > 0, 0.5 * (3.0 * math.log(TWO_PI) + logdet), np.inf)
+    occam = np.minimum(vol + ev.prior.log_density(poses), 0.0)
+    return np.asarray(nmatch * ev.per_match - 0.5 * sse / ev.sig2 + missed * ev.log_miss + occam)
+
+
+@dataclass(frozen=True)
+class Scored:
+    """What :func:`finish` returns: the solutions, best first, and the posterior's verdict."""
+
+    solutions: list[Solution]
+    ambiguous: bool
+    unexplained: float
+
 
 #: Negative evidence works on all poses x all landmarks at once up to this many pairs (scene
 #: b: 30 landmarks x a few hundred poses), else pose by pose on the landmarks within range ...
@@ -53,21 +230,23 @@ MISSED_DENSE = 200_000
 MISSED_DENSE_MAP = 256
 
 
-def finish(
-    lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOptions
-) -> tuple[list[Solution], bool]:
-    """Solutions, best first, from an engine's complete paths; and whether it is ambiguous."""
+def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOptions) -> Scored:
+    """Solutions, best first, from an engine's complete paths, with the posterior's verdict
+    (see the module's documentation for the steps)."""
     level_assign, level_pose = leaves.arrays()
     if len(level_assign) == 0:
-        return [], False
+        return Scored([], False, 1.0)
     m = leaves.m
     order = leaves.order
+    s = opt.sensor
+    ev = evidence_model(lm, s, opt.max_wild)
     if len(level_assign) > MAX_LEAVES:
         # Pathological inputs (huge gates, tiny maps) can leave very many paths; only the best
-        # MAX_LEAVES by matches and fit are refined, merged and returned.
+        # MAX_LEAVES by matches and fit (the evidence without the volume term) are refined.
         sse0 = path_sse(lm.xy, bearings[order], level_assign, level_pose)
         nm = (level_assign >= 0).sum(axis=1)
-        keep0 = np.lexsort((sse0, -nm))[:MAX_LEAVES]
+        keep0 = np.argsort(-(nm * ev.per_match - 0.5 * sse0 / ev.sig2), kind="stable")
+        keep0 = keep0[:MAX_LEAVES]
         level_assign, level_pose = level_assign[keep0], level_pose[keep0]
     # Back from level order to observation order.
     assign = np.full((len(level_assign), m), -1, dtype=np.int64)
@@ -83,7 +262,6 @@ def finish(
         10,
     )
     nmatch = w.sum(axis=1).astype(np.int64)
-    s = opt.sensor
     # A pose on one of its own landmarks has no bearing to it (atan2(0, 0) = 0 can pass a gate
     # by accident on a grid map): not a pose.
     gap2 = ((Lm - poses[:, None, :2]) ** 2).sum(axis=2)
@@ -93,38 +271,33 @@ def finish(
         # together must also fit one pose: sse / sigma^2 ~ chi-square with n - 3 dof.
         joint &= sse / s.sigma**2 <= opt.joint_chi2[nmatch]
     if not joint.any():
-        return [], False
+        return Scored([], False, 1.0)
     if not joint.all():
         k = np.flatnonzero(joint)
         assign, w, Lm, poses, sse, nmatch = assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k]
     rms = np.sqrt(sse / nmatch)
-    sig = s.noise
     # Covariance at the refined pose: sigma^2 (G^T G)^-1 over the matched pairs.
     cov = geo.covariances(
         np.require(Lm, np.float64, ["C", "W"]),
         np.require(w, np.float64, ["C", "W"]),
         np.require(poses, np.float64, ["C", "W"]),
-        sig * sig,
+        ev.sig2,
         geo.COVARIANCE_FLOOR,
     )
-    # Cost: Gaussian bearing residuals, plus clutter for each spurious observation (uniform on
-    # the circle against the matched bearing's density), plus missed landmarks.
-    spur = max(0.5 * math.log(TWO_PI) - math.log(sig), 0.0)  # ln(density ratio) at the peak
-    cost = 0.5 * sse / (sig * sig) + (m - nmatch) * spur
     missed = np.zeros(len(poses), dtype=np.int64)
     if s.p_detect is not None:
         missed = missed_landmarks(lm, poses, assign, bearings, opt)
-        cost = cost + missed * -s.log_miss + nmatch * -math.log(s.p_detect)
-        # With negative evidence a match is no longer worth more than any number of landmarks
-        # left unseen: the whole cost ranks (a pose that explains one more bearing but should
-        # have seen eight more landmarks is worse than one that explains all it should see).
-        rank = np.lexsort((-nmatch, cost))
+    ln_e = log_evidence(ev, nmatch, sse, cov, missed, poses)
+    rank = np.argsort(-ln_e, kind="stable")
+    if opt.merge:
+        keep, owner = _merge(rank, poses, cov)
+        mass = np.full(len(ln_e), -np.inf)
+        np.logaddexp.at(mass, owner, ln_e)
+        mass = mass[keep]
     else:
-        rank = np.lexsort((cost, -nmatch))
-    keep = _merge(rank, poses, cov) if opt.merge else [int(i) for i in rank]
-    c = cost[keep]
-    lik = np.exp(-(c - c.min()))
-    conf = lik / lik.sum()
+        keep, mass = [int(i) for i in rank], ln_e[rank]
+    total = float(logsumexp(np.append(mass, ev.log_null)))
+    conf = np.exp(mass - total)
     sols = [
         Solution(
             pose=Pose.from_array(poses[i]),
@@ -132,20 +305,18 @@ def finish(
             residual_rms=float(rms[i]),
             matched=int(nmatch[i]),
             covariance=cov[i],
-            cost=float(cost[i]),
+            cost=float(-ln_e[i]),
             confidence=float(cf),
             missed=int(missed[i]),
         )
         for i, cf in zip(keep, conf, strict=True)
     ]
-    top = sols[0]
-    rivals = any(
-        (t.matched == top.matched or s.p_detect is not None)
-        and t.confidence >= 0.01 * top.confidence
-        and not same_pose(t.pose.as_array(), t.covariance, top.pose.as_array(), top.covariance)
-        for t in sols[1:]
-    )
-    return sols, rivals
+    # The merge may have put a solution with more evidence behind the one it absorbed.
+    sols.sort(key=lambda sol: -sol.confidence)
+    # A search cut short by its budget, or stopped at a first fit, has not looked for every
+    # rival: whatever the best's share among what was found, it is not a decisive answer.
+    ambiguous = sols[0].confidence < opt.decisive or not leaves.complete or not leaves.exhaustive
+    return Scored(sols, bool(ambiguous), float(math.exp(ev.log_null - total)))
 
 
 def _regularised(cov: FloatArray) -> FloatArray:
@@ -154,58 +325,58 @@ def _regularised(cov: FloatArray) -> FloatArray:
     return np.asarray(cov + (1e-12 * scale + 1e-24)[:, None, None] * np.eye(3))
 
 
-def _merge(rank: IntArray, poses: FloatArray, cov: FloatArray) -> list[int]:
-    """Greedy merge in rank order (see :func:`omniloc._kernels.merge.merge`): a solution
-    indistinguishable from a better one (inside the confidence ellipsoid of each, or within a
-    micrometre) is dropped."""
+def _merge(rank: IntArray, poses: FloatArray, cov: FloatArray) -> tuple[list[int], IntArray]:
+    """Greedy merge in rank order (see :func:`omniloc._kernels.merge.merge`, SAME_POSE_CHI2
+    and SAME_PLACE): a solution that is the same answer as a better one is merged into it.
+    Returns the kept indices and, for each solution, the one it went to."""
     if len(rank) == 1:
-        return [int(rank[0])]
+        return [int(rank[0])], np.arange(len(poses))
     reg = _regularised(cov)
-    inv = np.asarray(np.linalg.inv(reg))
-    # d^T C^-1 d >= |d|^2 / lambda_max(C) >= |d|^2 / trace(C): beyond that reach no merge is
-    # possible. (A covariance that is not finite gives no reach and is left to the forms.)
-    with np.errstate(invalid="ignore", over="ignore"):
-        reach2 = SAME_POSE_CHI2 * np.trace(reg, axis1=1, axis2=2) * (1.0 + 1e-9)
-    kept = merge(
+    kept, owner = merge(
         np.ascontiguousarray(rank, dtype=np.int64),
         np.ascontiguousarray(poses),
-        np.ascontiguousarray(inv),
-        reach2,
+        np.ascontiguousarray(reg),
+        np.ascontiguousarray(np.linalg.inv(reg)),
         SAME_POSE_CHI2,
+        SAME_PLACE_CHI2,
+        *SAME_PLACE,
     )
-    return [int(i) for i in kept]
+    return [int(i) for i in kept], owner
 
 
-def merge_numpy(rank: IntArray, poses: FloatArray, cov: FloatArray) -> list[int]:
-    """:func:`_merge` read plainly, pair by pair (the compiled merge's test oracle)."""
-    inv = np.asarray(np.linalg.inv(_regularised(cov)))
-    keep: list[int] = []
-    for i in rank:
-        if keep:
-            k = np.asarray(keep)
-            d = poses[k] - poses[i]
-            d[:, 2] = np.asarray(wrap(d[:, 2]))
-            tiny = (np.abs(d[:, :2]).max(axis=1) < 1e-6) & (np.abs(d[:, 2]) < 1e-6)
-            m_k = np.einsum("ki,kij,kj->k", d, inv[k], d)
-            m_i = np.einsum("ki,ij,kj->k", d, inv[i], d)
-            if (tiny | (np.maximum(m_k, m_i) <= SAME_POSE_CHI2)).any():
-                continue
-        keep.append(int(i))
-    return keep
+def _gap(p: FloatArray, q: FloatArray) -> FloatArray:
+    d = np.asarray(q - p, dtype=np.float64)
+    d[..., 2] = np.asarray(wrap(d[..., 2]))
+    return d
 
 
 def same_pose(p: FloatArray, cp: FloatArray, q: FloatArray, cq: FloatArray) -> bool:
-    """Two poses indistinguishable at the uncertainty of each (see SAME_POSE_CHI2).
-
-    Both must lie inside the other's confidence ellipsoid: a vague solution cannot swallow a
-    precise one that happens to fall inside its own wide ellipsoid.
-    """
-    d = q - p
-    d[2] = float(wrap(d[2]))
+    """Whether two poses (with their covariances) are one answer: within a micrometre of
+    each other, inside each other's one-sigma ellipsoid, or one place (SAME_PLACE)."""
+    d = _gap(p, q)
     if np.abs(d[:2]).max() < 1e-6 and abs(d[2]) < 1e-6:
         return True
-    inv = np.linalg.inv(_regularised(np.stack([cp, cq])))
-    return max(float(d @ inv[0] @ d), float(d @ inv[1] @ d)) <= SAME_POSE_CHI2
+    reg = _regularised(np.stack([cp, cq]))
+    with np.errstate(all="ignore"):
+        inv = np.linalg.inv(reg)
+        if max(float(d @ inv[0] @ d), float(d @ inv[1] @ d)) <= SAME_POSE_CHI2:
+            return True
+        near = float(np.hypot(d[0], d[1])) <= SAME_PLACE[0] and abs(d[2]) <= SAME_PLACE[1]
+        return near and float(d @ np.linalg.solve(reg[0] + reg[1], d)) <= SAME_PLACE_CHI2
+
+
+def merge_numpy(rank: IntArray, poses: FloatArray, cov: FloatArray) -> tuple[list[int], IntArray]:
+    """:func:`_merge` read plainly, pair by pair (the compiled merge's test oracle)."""
+    keep: list[int] = []
+    owner = np.arange(len(poses))
+    for i in rank:
+        for k in keep:
+            if same_pose(poses[k], cov[k], poses[i], cov[i]):
+                owner[i] = k
+                break
+        else:
+            keep.append(int(i))
+    return keep, owner
 
 
 def missed_landmarks(
