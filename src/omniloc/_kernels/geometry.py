@@ -39,6 +39,7 @@ __all__ = [
     "GATE_FLOOR",
     "GN_HALVINGS",
     "covariances",
+    "det3",
     "distance_ratio",
     "gauss_newton",
     "gn_refine",
@@ -169,6 +170,16 @@ def pose_exists(
 
 
 @_jit
+def det3(h00: Any, h01: Any, h02: Any, h11: Any, h12: Any, h22: Any) -> Any:
+    """Determinant of a symmetric 3x3 given by its upper triangle."""
+    return (
+        h00 * (h11 * h22 - h12 * h12)
+        + h01 * (h02 * h12 - h01 * h22)
+        + h02 * (h01 * h12 - h02 * h11)
+    )
+
+
+@_jit
 def inv3(
     h00: Any, h01: Any, h02: Any, h11: Any, h12: Any, h22: Any, scale: Any, floor: float
 ) -> tuple[Any, Any, Any, Any, Any, Any, Any]:
@@ -184,7 +195,7 @@ def inv3(
     c11 = h00 * h22 - h02 * h02
     c12 = h01 * h02 - h00 * h12
     c22 = h00 * h11 - h01 * h01
-    f = scale / (h00 * c00 + h01 * c01 + h02 * c02)
+    f = scale / det3(h00, h01, h02, h11, h12, h22)
     return c00 * f, c01 * f, c02 * f, c11 * f, c12 * f, c22 * f, (c00 + c11 + c22) * f
 
 

@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 
 from .geometry import (
     GATE_FLOOR,
+    det3,
     gn_refine,
     information,
     inv3,
@@ -125,10 +126,20 @@ class Visibility(NamedTuple):
 
 class Scoring(NamedTuple):
     """The cost that orders complete paths in the bounded buffer (lower is better):
-    ``(m - n) spur_w + sse / (2 sigma^2) + missed miss_w``."""
+    ``(m - n) spur_w + sse / (2 sigma^2) + missed miss_w`` -- minus the log evidence of
+    omniloc.search.scoring without its pose-volume term; and what a first fit needs to stop:
+    that evidence, volume term included, above the null interpretation's by ``stop_margin``.
+    """
 
     spur_w: float  #: an unmatched bearing, relative to a matched one
     miss_w: float  #: a plainly visible landmark not observed (0: not counted)
+    log_null: float  #: log evidence of the null interpretation (every bearing clutter)
+    region: tuple[float, float, float, float]  #: the prior's region of poses (x0, y0, x1, y1)
+    edge: float  #: its Gaussian edges, metres
+    log_volume: float  #: ln of its normalisation
+    stop_margin: float  #: a first fit stops only this far above the null (nats) ...
+    total_units: float  #: ... plus ln of the hypotheses the whole search would try, estimated
+    #: from the rate so far over this many (seed, anchor) units (all seeds x the map)
 
 
 class Budget(NamedTuple):
@@ -511,6 +522,23 @@ def _missed_count(
 
 
 @_jit
+def _occam(path: _Path, n: int, x: float, y: float, sig2: float, scoring: Scoring) -> float:
+    """The pose-volume term of the log evidence (as omniloc.search.scoring.log_evidence): ln
+    sqrt(det(2 pi Cov)) of the pose at (x, y) from the path's n pairs, plus the prior's log
+    density there, at most 0."""
+    h00, h01, h02, h11, h12, h22 = information(path.lx, path.ly, path.ones, n, x, y)
+    det_h = det3(h00, h01, h02, h11, h12, h22)
+    if not det_h > 0:
+        return 0.0
+    vol = 0.5 * (3.0 * np.log(2.0 * np.pi * sig2) - np.log(det_h))
+    x0, y0, x1, y1 = scoring.region
+    dx = max(0.0, x0 - x, x - x1)
+    dy = max(0.0, y0 - y, y - y1)
+    prior = -scoring.log_volume - (dx * dx + dy * dy) / (2.0 * scoring.edge * scoring.edge)
+    return min(vol + prior, 0.0)
+
+
+@_jit
 def _keep(
     out: _Out,
     n_out: int,
@@ -643,6 +671,7 @@ def _verify(
     node_budget: int,
     work_budget: int,
     relin: int,
+    look: float,
     cnt: IntArray,
 ) -> tuple[int, int]:
     """Verify one hypothesis: a depth-first walk over the other bearings (``rest``), each
@@ -663,7 +692,10 @@ def _verify(
     The hypothesis's three seed pairs are ``path.*[:3]``, its pose and covariance
     ``walk.pose[0]`` / ``walk.cov[0]``. Adds [nodes, examined, gate, bound, complete paths]
     to ``cnt``; returns the new output count and 2 when ``stop_first`` found its fit (1 when
-    ``node_budget`` nodes or ``work_budget`` work ran out; 0 for no limit).
+    ``node_budget`` nodes or ``work_budget`` work ran out; 0 for no limit). A fit stops a
+    first fit only when it is decisive against the null interpretation even after the
+    look-elsewhere allowance ``look`` (ln of the hypotheses the whole search would try: among
+    that many, chance alone makes some fits).
     """
     beta, contested = bearings.beta, bearings.contested
     m = beta.shape[0]
@@ -703,6 +735,12 @@ def _verify(
                         key += missed * scoring.miss_w
                         cnt[4] += 1
                         fits = budget.stop_first and missed <= budget.miss_allow
+                        if fits:
+                            # A fit worth stopping for is decisive against the null: every
+                            # bearing clutter (a chance fit on a large map is not).
+                            ln_e = m * scoring.spur_w - key
+                            ln_e += _occam(path, n, qx, qy, d.sig2, scoring)
+                            fits = ln_e - scoring.log_null >= scoring.stop_margin + look
                         n_out = _keep(out, n_out, path, n, m, (qx, qy, qt), missed, key, fits)
                         if fits:
                             return n_out, 2
@@ -1012,9 +1050,11 @@ def hypotheses(
                     # Budgets left to the verification (0: no limit; at least 1 when limited).
                     left = max(1, max_nodes - nodes) if max_nodes > 0 else 0
                     left_work = max(1, max_work - work) if max_work > 0 else 0
+                    units = s * (i1 - i0) + (i - i0 + 1)
+                    look = np.log(hyp * scoring.total_units / units)
                     n_out, stop = _verify(
                         bearings, rest, nr, path, hyp, near, nn, walk, d, gate, vis, scoring,
-                        budget, out, n_out, left, left_work, seeds.relin[s], cnt,
+                        budget, out, n_out, left, left_work, seeds.relin[s], look, cnt,
                     )  # fmt: skip
                     nodes += cnt[0]
                     work += _walk_work(cnt[0], cnt[4], nn, scoring.miss_w)

@@ -51,20 +51,36 @@ log = logging.getLogger("omniloc.search")
 #: Maps larger than this, searched without max_range or a budget, get a warning in the log.
 LARGE_MAP = 1000
 
+#: With ``exhaustive=None`` (the default), maps of more than this many landmarks searched with
+#: a range stop at the first fit: on 10,000 landmarks the exhaustive search solves every
+#: co-visible landmark triple for every seed (~15 million), about six times the work of a
+#: first fit, whose answer was right in every measured scene (docs/evaluation.md). The answer
+#: is then flagged ambiguous ("first fit: rivals not sought"); ``exhaustive=True`` buys a
+#: decisive verdict.
+AUTO_FIRST_FIT = 2000
+
 
 def choose_engine(
-    strategy: Strategy | str, method: Method, opt: SearchOptions, exhaustive: Any
+    strategy: Strategy | str,
+    method: Method,
+    opt: SearchOptions,
+    exhaustive: Any,
+    n_landmarks: int = 0,
 ) -> str:
     """``"paper"`` (the compiled paper tree), ``"tree"`` (the readable tree), ``"hypotheses"``
-    or ``"first"`` (hypotheses, stopping at the first fit)."""
+    or ``"first"`` (hypotheses, stopping at the first fit). ``exhaustive=None`` chooses: a
+    first fit for a robust search of more than AUTO_FIRST_FIT landmarks with a range."""
     try:
         strat = Strategy(strategy)
     except ValueError as exc:
         raise InputError(
             f"strategy must be one of {[s.value for s in Strategy]}, got {strategy!r}"
         ) from exc
+    if exhaustive is None:
+        large = n_landmarks > AUTO_FIRST_FIT and opt.sensor.max_range is not None
+        exhaustive = not (large and method is Method.ROBUST and strat is not Strategy.TREE)
     if not isinstance(exhaustive, (bool, np.bool_)):
-        raise InputError(f"exhaustive must be True or False, got {exhaustive!r}")
+        raise InputError(f"exhaustive must be True, False or None (auto), got {exhaustive!r}")
     if method is Method.PAPER:
         if strat is Strategy.HYPOTHESES or not exhaustive:
             raise InputError(
@@ -94,7 +110,7 @@ def localize(
     ordering: bool = False,
     method: Method | str = Method.ROBUST,
     strategy: Strategy | str = Strategy.AUTO,
-    exhaustive: bool = True,
+    exhaustive: bool | None = None,
     decisive: float = DECISIVE,
     threshold: float | None = None,
     sigma: float | None = None,
@@ -144,12 +160,15 @@ def localize(
         far faster when there are wildcards, a chi-square gate or a large map. ``"auto"``
         uses the compiled paper tree where the paper's rules alone apply, else
         ``"hypotheses"``. ``method="paper"`` always walks the tree.
-    exhaustive : bool, default True
+    exhaustive : bool or None, default None
         False stops at the first interpretation that explains ``m - max_spurious`` bearings
         (and passes the joint test with ``sigma``; with ``p_miss``, leaves no more plainly
         visible landmarks unseen than the median of Binomial(m, p_miss)): much faster on large
-        maps, but rival interpretations are not sought, so ``ambiguous`` cannot be trusted
-        (``stats.exhaustive`` is then False). Needs the hypotheses strategy.
+        maps, but rival interpretations are not sought, so the answer is flagged
+        ``ambiguous`` (``stats.exhaustive`` is False, ``stats.stopped`` says why). A first
+        fit that finds nothing searches again exhaustively. None (default): a first fit on
+        maps of more than AUTO_FIRST_FIT landmarks searched with a range, else True. Needs
+        the hypotheses strategy.
     decisive : float, default 0.95
         The answer is ``ambiguous`` unless the best solution holds at least this share of
         the posterior (see :mod:`omniloc.search.scoring`).
@@ -247,7 +266,7 @@ def localize(
             lm.n,
             float(lm.n) ** 3,
         )
-    engine = choose_engine(strategy, meth, opt, exhaustive)
+    engine = choose_engine(strategy, meth, opt, exhaustive, lm.n)
     # The robust tree starts with the best-spread triple; the paper's takes the given order.
     robust_tree = engine in ("paper", "tree") and meth is Method.ROBUST
     order = robust_order(b) if robust_tree else np.arange(m)
@@ -273,5 +292,10 @@ def localize(
         pruned_bound=c.bound,
         complete=leaves.complete,
         exhaustive=leaves.exhaustive,
+        stopped=(
+            "budget"
+            if not leaves.complete
+            else ("first fit: rivals not sought" if not leaves.exhaustive else "")
+        ),
     )
     return LocalizationResult(scored.solutions, stats, lm, scored.ambiguous, scored.unexplained)

@@ -12,6 +12,7 @@ threads, turns a time budget into a budget of work, and polishes a first fit.
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 from collections.abc import Callable
@@ -47,6 +48,8 @@ __all__ = ["run_hypotheses"]
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 KernelResult = tuple[IntArray, FloatArray, IntArray, HypothesisCounts]
+
+log = logging.getLogger("omniloc.search")
 
 #: Rate at which a time budget becomes a budget of work in the kernel (candidate landmarks
 #: looked at, a verification node once per landmark near its hypothesis plus NODE_WORK, a
@@ -100,12 +103,20 @@ def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> Neighbours:
     return Neighbours(lm.xy, lo, lo + (N - 1), idx, np.ascontiguousarray(lm.xy[idx]))
 
 
-def _scoring(lm: LandmarkMap, opt: SearchOptions) -> Scoring:
+def _scoring(lm: LandmarkMap, opt: SearchOptions, n_seeds: int) -> Scoring:
     """The cost the kernel's buffer keeps the best paths by: minus the log evidence that
     search.scoring ranks by, without its pose-volume term (a bearing left unmatched costs
-    what a match would have added; a plainly visible landmark missed, -ln(1 - p_detect))."""
+    what a match would have added; a plainly visible landmark missed, -ln(1 - p_detect));
+    and the first fit's condition to stop: a fit decisive against the null interpretation at
+    ``opt.decisive``, after a look-elsewhere allowance for the hypotheses of all ``n_seeds``
+    seeds over the whole map (see omniloc._kernels.hypotheses._verify)."""
     ev = evidence_model(lm, opt.sensor, opt.max_wild)
-    return Scoring(ev.per_match, -ev.log_miss)
+    p = ev.prior
+    margin = math.log(opt.decisive / (1.0 - opt.decisive))
+    units = float(n_seeds * lm.n)
+    return Scoring(
+        ev.per_match, -ev.log_miss, ev.log_null, p.region, p.edge, p.log_volume, margin, units
+    )
 
 
 def run_hypotheses(
@@ -154,7 +165,7 @@ def run_hypotheses(
         np.inf if s.plain_max is None else s.plain_max**2,
         0.0 if s.plain_min is None else s.plain_min**2,
     )
-    scoring = _scoring(lm, opt)
+    scoring = _scoring(lm, opt, len(triples))
     max_nodes = 0 if opt.budget.max_nodes is None else opt.budget.max_nodes
 
     def call(rows: slice, i0: int, i1: int, cap: tuple[int, int]) -> KernelResult:
@@ -179,7 +190,15 @@ def run_hypotheses(
         # The time was up before the first chunk (a big map's neighbour lists took it).
         out.complete = False
         return
+    found = any(len(r[0]) for r in results)
     _collect(lm, beta, results, out, opt, stop_first, miss_allow)
+    if stop_first and not found and out.complete:
+        # A first fit takes shortcuts (a tighter cheap test, wildcards reserved in advance)
+        # that can lose an interpretation the exhaustive search finds. Finding nothing is
+        # rare and must not be a silent "no pose": search again, exhaustively.
+        log.debug("localize: the first fit found nothing; searching exhaustively")
+        out.exhaustive = True
+        run_hypotheses(lm, beta, opt, out, stop_first=False)
 
 
 def _collect(
@@ -194,13 +213,13 @@ def _collect(
     """Sum the kernel runs' counters and hand their complete paths to ``out``."""
     counts = [r[3] for r in results]
     c = out.counts
-    c.nodes = sum(k.nodes for k in counts)
-    c.examined = sum(k.examined for k in counts)
-    c.triples = sum(k.triples for k in counts)
-    c.existence = sum(k.pruned_existence for k in counts)
-    c.gate = sum(k.pruned_gate for k in counts)
-    c.visibility = sum(k.pruned_visibility for k in counts)
-    c.bound = sum(k.pruned_bound for k in counts)
+    c.nodes += sum(k.nodes for k in counts)
+    c.examined += sum(k.examined for k in counts)
+    c.triples += sum(k.triples for k in counts)
+    c.existence += sum(k.pruned_existence for k in counts)
+    c.gate += sum(k.pruned_gate for k in counts)
+    c.visibility += sum(k.pruned_visibility for k in counts)
+    c.bound += sum(k.pruned_bound for k in counts)
     stopped = max(k.stopped for k in counts)
     if any(k.stopped == 1 for k in counts):
         out.complete = False

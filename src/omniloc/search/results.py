@@ -78,6 +78,9 @@ class SearchStats:
     exhaustive : bool
         False when the search stopped at a first fit (``exhaustive=False``) and so did not
         look for rival interpretations.
+    stopped : str
+        Why the search stopped before looking at everything: ``"budget"`` (``max_nodes`` or
+        ``timeout_s``), ``"first fit: rivals not sought"``, or ``""`` (it did not).
     """
 
     total_paths: int
@@ -92,8 +95,9 @@ class SearchStats:
     pruned_bound: int = 0
     complete: bool = True
     exhaustive: bool = True
+    stopped: str = ""
 
-    def as_dict(self) -> dict[str, int | float | bool]:
+    def as_dict(self) -> dict[str, int | float | bool | str]:
         """Plain-JSON dictionary of the statistics."""
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
