@@ -286,6 +286,42 @@ def test_no_solution_is_falsy() -> None:
     lm = symmetric_map("square")
     res = localize(lm, np.deg2rad([0.0, 5.0, 10.0, 180.0]))
     assert not res and res.best is None and len(res) == 0
+    # Nothing found decides nothing: "not ambiguous" always has a best to read.
+    assert res.ambiguous
+
+
+def test_unknown_detection_rate_with_a_range_counts_landmarks_left_unseen() -> None:
+    # As test_visibility_prunes_and_negative_evidence_ranks, but without p_miss: with a
+    # range, the detection rate is integrated out and the poses that would see the far
+    # landmark without reporting it fall behind (not to zero: the rate might be low).
+    L = np.array([[0, 0], [6, 0], [6, 6], [0, 6], [3, -8]], float)
+    truth = Pose(1.5, 4.5, 0.3)
+    z = predict_bearings(L[:4], truth)
+    res = localize(L, z, sigma=0.1 * DEG, max_range=11.0)
+    assert sorted(s.missed for s in res.solutions) == [0, 0, 1, 1]
+    assert res.ambiguous and _has_pose(res, truth)
+    top2 = res.solutions[:2]
+    assert all(s.missed == 0 for s in top2)
+    # Four matched: B(5, 1) / B(5, 2) = (1/5) / (1/30) = 6, a fifth landmark in plain view
+    # left unseen costs a factor 6.
+    assert res.solutions[2].confidence == pytest.approx(top2[0].confidence / 6.0, rel=1e-6)
+    # Without a range there is no plainly visible set: nothing is counted.
+    assert all(s.missed == 0 for s in localize(L, z, sigma=0.1 * DEG).solutions)
+
+
+def test_a_weak_fit_after_a_large_search_is_not_decisive() -> None:
+    # Three exact bearings always fit some pose: alone against the null it may hold most of
+    # the posterior, but a chance fit among the hypotheses tried is as likely.
+    lm = random_map(400, density=0.05, rng=3)
+    truth = random_pose(lm, rng=4)
+    sc = observe(lm, truth, max_range=10.0, n_obs=3, rng=5)
+    res = localize(lm, sc.bearings, sigma=0.5 * DEG, max_range=10.0, exhaustive=True)
+    assert res.ambiguous
+    # The same search with many bearings is decisive.
+    sc = observe(lm, truth, max_range=10.0, rng=5)
+    assert sc.bearings.size >= 8
+    res = localize(lm, sc.bearings, sigma=0.5 * DEG, max_range=10.0, exhaustive=True)
+    assert not res.ambiguous and res.best.pose.distance_to(truth)[0] < 0.1
 
 
 def test_paper_method_refuses_robust_options() -> None:

@@ -27,6 +27,7 @@ threads. The readable description of the same search, and its driver, is
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -126,13 +127,15 @@ class Visibility(NamedTuple):
 
 class Scoring(NamedTuple):
     """The cost that orders complete paths in the bounded buffer (lower is better):
-    ``(m - n) spur_w + sse / (2 sigma^2) + missed miss_w`` -- minus the log evidence of
+    ``(m - n) spur_w + sse / (2 sigma^2) + missed miss_w`` (or ``- ln B(n + 1, missed + 1)``
+    when the detection rate is unknown) -- minus the log evidence of
     omniloc.search.scoring without its pose-volume term; and what a first fit needs to stop:
     that evidence, volume term included, above the null interpretation's by ``stop_margin``.
     """
 
     spur_w: float  #: an unmatched bearing, relative to a matched one
     miss_w: float  #: a plainly visible landmark not observed (0: not counted)
+    unknown_rate: bool  #: detection rate unknown: missed count as -ln B(n + 1, missed + 1)
     log_null: float  #: log evidence of the null interpretation (every bearing clutter)
     region: tuple[float, float, float, float]  #: the prior's region of poses (x0, y0, x1, y1)
     edge: float  #: its Gaussian edges, metres
@@ -476,11 +479,11 @@ def _tally(status: IntArray, lo: int, hi: int) -> tuple[int, int, int]:
 
 
 @_jit
-def _walk_work(nodes: int, leaves: int, nn: int, miss_w: float) -> int:
+def _walk_work(nodes: int, leaves: int, nn: int, counts_missed: bool) -> int:
     """The work of a verification that visited ``nodes`` nodes and reached ``leaves``
     complete paths among ``nn`` near landmarks: each node scans them (plus NODE_WORK), each
     complete path is refined (LEAF_WORK) and, with negative evidence, scans them again."""
-    return nodes * (nn + NODE_WORK) + leaves * (LEAF_WORK + (nn if miss_w > 0.0 else 0))
+    return nodes * (nn + NODE_WORK) + leaves * (LEAF_WORK + (nn if counts_missed else 0))
 
 
 @_jit
@@ -519,6 +522,18 @@ def _missed_count(
         if alone:
             missed += 1
     return missed
+
+
+@_jit
+def _counts_missed(scoring: Scoring) -> bool:
+    """Whether complete paths count the plainly visible landmarks they leave unseen."""
+    return scoring.miss_w > 0.0 or scoring.unknown_rate
+
+
+@_jit
+def _log_beta(a: float, b: float) -> float:
+    """ln B(a, b) (scipy.special.betaln, which numba cannot call)."""
+    return math.lgamma(a) + math.lgamma(b) - math.lgamma(a + b)
 
 
 @_jit
@@ -722,17 +737,21 @@ def _verify(
                         path.lx, path.ly, path.bearing, path.ones, n, px, py, pt, 10
                     )
                     if not d.use_sigma or sse / d.sig2 <= gate.joint_chi2[n]:
-                        # Negative evidence only where it is asked for (miss_w > 0); without
-                        # a range it would look at the whole map for every path.
+                        # Negative evidence only where it is asked for (miss_w > 0, or an
+                        # unknown rate with a range); without a range it would look at the
+                        # whole map for every path.
                         missed = 0
-                        if scoring.miss_w > 0.0:
+                        if _counts_missed(scoring):
                             missed = _missed_count(
                                 near, nn, path, hyp, qx, qy, qt, beta, vis, d.margin
                             )
                         # Keep the best ``capacity`` by the ranking's cost: when full, the
                         # worse half goes and the bar for entry rises.
                         key = (m - n) * scoring.spur_w + 0.5 * sse / d.sig2
-                        key += missed * scoring.miss_w
+                        if scoring.unknown_rate:
+                            key -= _log_beta(n + 1.0, missed + 1.0)
+                        else:
+                            key += missed * scoring.miss_w
                         cnt[4] += 1
                         fits = budget.stop_first and missed <= budget.miss_allow
                         if fits:
@@ -751,7 +770,8 @@ def _verify(
             cnt[1] += 1
             if node_budget > 0 and cnt[0] >= node_budget:
                 return n_out, 1
-            if work_budget > 0 and _walk_work(cnt[0], cnt[4], nn, scoring.miss_w) >= work_budget:
+            work_now = _walk_work(cnt[0], cnt[4], nn, _counts_missed(scoring))
+            if work_budget > 0 and work_now >= work_budget:
                 return n_out, 1
             walk.n_cand[level] = _gate_level(
                 level, o, near, nn, path, hyp, walk, d, gate, vis,
@@ -1057,7 +1077,7 @@ def hypotheses(
                         budget, out, n_out, left, left_work, seeds.relin[s], look, cnt,
                     )  # fmt: skip
                     nodes += cnt[0]
-                    work += _walk_work(cnt[0], cnt[4], nn, scoring.miss_w)
+                    work += _walk_work(cnt[0], cnt[4], nn, _counts_missed(scoring))
                     examined += cnt[1]
                     n_gate += cnt[2]
                     bound += cnt[3]

@@ -188,7 +188,9 @@ def localize(
     p_miss, p_detect : float, optional
         Probability that a plainly visible landmark is not detected, or that it is (give one
         of them): every plainly visible landmark not observed counts against a solution
-        (negative evidence), and each match is scored with ``p_detect``.
+        (negative evidence), and each match is scored with ``p_detect``. Neither but a
+        ``max_range``: the rate is unknown and integrated out (uniform prior), so landmarks
+        left unseen still count against a pose, as much as the bearings allow.
     clutter : float, optional
         Expected number of spurious bearings per frame (default: ``max_spurious``, at least
         0.5), spread over the field of view: what a bearing left unmatched costs.

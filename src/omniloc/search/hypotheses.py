@@ -115,7 +115,15 @@ def _scoring(lm: LandmarkMap, opt: SearchOptions, n_seeds: int) -> Scoring:
     margin = math.log(opt.decisive / (1.0 - opt.decisive))
     units = float(n_seeds * lm.n)
     return Scoring(
-        ev.per_match, -ev.log_miss, ev.log_null, p.region, p.edge, p.log_volume, margin, units
+        ev.per_match,
+        -ev.log_miss,
+        ev.unknown_rate,
+        ev.log_null,
+        p.region,
+        p.edge,
+        p.log_volume,
+        margin,
+        units,
     )
 
 

@@ -130,7 +130,7 @@ class Solution:
         :attr:`LocalizationResult.unexplained` sum to 1.
     missed : int
         Landmarks plainly visible from ``pose`` (by ``max_range``/``fov``) but not observed
-        (counted when the sensor's ``p_detect`` is known).
+        (counted when the sensor's ``p_detect`` is known, or its ``max_range`` is).
     """
 
     pose: Pose
@@ -156,9 +156,11 @@ class LocalizationResult:
         The map searched (for landmark ids).
     ambiguous : bool
         True unless the best solution holds at least ``decisive`` (0.95 by default) of the
-        posterior and the search looked for every rival (it was neither cut short by its
-        budget nor stopped at a first fit). Only an unambiguous answer should be acted on
-        without more evidence (symmetric maps, few bearings, clutter).
+        posterior, beats the null interpretation by the decisive odds times the hypotheses
+        the search tried (a weak fit after a search of millions may be chance), and the search
+        looked for every rival (it was neither cut short by its budget nor stopped at a first
+        fit). Only an unambiguous answer should be acted on without more evidence (symmetric
+        maps, few bearings, clutter). True when there is no solution.
     unexplained : float
         Posterior probability that none of the solutions is right: every bearing clutter.
     """

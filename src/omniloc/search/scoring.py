@@ -13,7 +13,9 @@ What :func:`finish` does with the complete paths an engine found, in order:
 
        ln E(a) = sum_matched [ln p_detect - ln sqrt(2 pi sigma^2) - ln c]
                  - SSE / (2 sigma^2)                   (the matched bearings' residuals)
-                 + missed * ln(1 - p_detect)           (plainly visible, not observed)
+                 + missed * ln(1 - p_detect)           (plainly visible, not observed;
+                                                        p_detect unknown but a range given:
+                                                        ln B(matched + 1, missed + 1))
                  + ln sqrt(det(2 pi Cov)) + ln prior(pose)   (Laplace: volume x prior)
 
    with ``c`` the clutter density (expected spurious bearings per frame over the width of the
@@ -42,8 +44,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
-from scipy.special import logsumexp
+from numpy.typing import ArrayLike, NDArray
+from scipy.special import betaln, logsumexp
 from scipy.stats import chi2
 
 from .._kernels import geometry as geo
@@ -63,6 +65,7 @@ __all__ = [
     "EvidenceModel",
     "PosePrior",
     "Scored",
+    "detection_evidence",
     "evidence_model",
     "finish",
     "pose_prior",
@@ -151,12 +154,19 @@ class EvidenceModel:
         its residual, relative to calling it clutter.
     log_miss : float
         ``ln(1 - p_detect)`` for each plainly visible landmark not observed (0 without
-        ``p_detect``: nothing is inferred from what the sensor did not report).
+        ``p_detect``).
     prior : PosePrior
     log_null : float
         Log evidence of the null interpretation (every bearing clutter).
     sig2 : float
         Bearing variance, rad^2.
+    unknown_rate : bool
+        ``p_detect`` is unknown but the sensor's range bounds what it can see: the detection
+        rate is integrated out over a uniform prior (:func:`detection_evidence`) instead of
+        fixed, so the plainly visible landmarks a pose leaves unseen count against it as much
+        as the bearings allow. Without ``p_detect`` and without a range, nothing is inferred
+        from what the sensor did not report, and each match is scored with
+        :attr:`~omniloc.sensor.SensorModel.DETECT_UNKNOWN`.
     """
 
     per_match: float
@@ -164,6 +174,19 @@ class EvidenceModel:
     prior: PosePrior
     log_null: float
     sig2: float
+    unknown_rate: bool = False
+
+
+def detection_evidence(ev: EvidenceModel, matched: ArrayLike, missed: ArrayLike) -> FloatArray:
+    """ln P(which plainly visible landmarks were detected): ``missed ln(1 - p_detect)`` with a
+    known rate (the matches' ``ln p_detect`` is in ``per_match``), else the rate integrated
+    over a uniform prior, ``ln B(matched + 1, missed + 1)`` (a pose that explains 8 bearings
+    but leaves 30 landmarks in plain view unseen is unlikely whatever the rate)."""
+    k = np.asarray(matched, dtype=np.float64)
+    u = np.asarray(missed, dtype=np.float64)
+    if ev.unknown_rate:
+        return np.asarray(betaln(k + 1.0, u + 1.0))
+    return np.asarray(u * ev.log_miss)
 
 
 def evidence_model(
@@ -175,24 +198,29 @@ def evidence_model(
     """The posterior's constants for a search of ``lm`` with ``sensor`` (``max_wild``: the
     spurious bearings allowed, which stand for the clutter rate when the sensor has none)."""
     sig2 = sensor.noise**2
-    per_match = (
-        sensor.log_detect - 0.5 * math.log(TWO_PI * sig2) - sensor.log_clutter_density(max_wild)
-    )
+    unknown_rate = sensor.p_detect is None and sensor.plain_max is not None
+    log_detect = 0.0 if unknown_rate else sensor.log_detect
+    per_match = log_detect - 0.5 * math.log(TWO_PI * sig2) - sensor.log_clutter_density(max_wild)
     prior = pose_prior(lm, sensor, region)
     log_null = 0.0
-    if sensor.p_detect is not None:
+    if sensor.p_detect is not None or unknown_rate:
         x0, y0, x1, y1 = prior.region
         area = (x1 - x0) * (y1 - y0)
+        # Plainly visible landmarks at a random pose: about Poisson with mean mu.
+        mu = float(lm.n)
         if sensor.limits_visibility:
-            # Plainly visible landmarks at a random pose: about Poisson with this mean, and
-            # E[(1 - p)^K] = exp(-mu p) for K ~ Poisson(mu).
             r = sensor.plain_max if sensor.plain_max is not None else math.sqrt(area)
             seen = math.pi * r * r * (sensor.fov_width / TWO_PI)
             mu = lm.n * min(1.0, seen / area)
-            log_null = -mu * sensor.p_detect
+        if unknown_rate:
+            # Every one of K visible missed, the rate uniform: E[1 / (K + 1)] = (1 - e^-mu) / mu.
+            log_null = math.log(-math.expm1(-mu) / mu) if mu > 0 else 0.0
+        elif sensor.limits_visibility:
+            # E[(1 - p)^K] = exp(-mu p) for K ~ Poisson(mu).
+            log_null = -mu * sensor.p_detect  # type: ignore[operator]
         else:
             log_null = lm.n * sensor.log_miss
-    return EvidenceModel(per_match, sensor.log_miss, prior, log_null, sig2)
+    return EvidenceModel(per_match, sensor.log_miss, prior, log_null, sig2, unknown_rate)
 
 
 def log_evidence(
@@ -210,7 +238,8 @@ def log_evidence(
     # the prior; no integral of a likelihood times a prior exceeds the likelihood's peak.
     vol = np.where(sign > 0, 0.5 * (3.0 * math.log(TWO_PI) + logdet), np.inf)
     occam = np.minimum(vol + ev.prior.log_density(poses), 0.0)
-    return np.asarray(nmatch * ev.per_match - 0.5 * sse / ev.sig2 + missed * ev.log_miss + occam)
+    detect = detection_evidence(ev, nmatch, missed)
+    return np.asarray(nmatch * ev.per_match - 0.5 * sse / ev.sig2 + detect + occam)
 
 
 @dataclass(frozen=True)
@@ -234,8 +263,10 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     """Solutions, best first, from an engine's complete paths, with the posterior's verdict
     (see the module's documentation for the steps)."""
     level_assign, level_pose = leaves.arrays()
+    # No solution decides nothing: ambiguous, so that ``not result.ambiguous`` always has a
+    # best to read.
     if len(level_assign) == 0:
-        return Scored([], False, 1.0)
+        return Scored([], True, 1.0)
     m = leaves.m
     order = leaves.order
     s = opt.sensor
@@ -271,7 +302,7 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         # together must also fit one pose: sse / sigma^2 ~ chi-square with n - 3 dof.
         joint &= sse / s.sigma**2 <= opt.joint_chi2[nmatch]
     if not joint.any():
-        return Scored([], False, 1.0)
+        return Scored([], True, 1.0)
     if not joint.all():
         k = np.flatnonzero(joint)
         assign, w, Lm, poses, sse, nmatch = assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k]
@@ -285,7 +316,7 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         geo.COVARIANCE_FLOOR,
     )
     missed = np.zeros(len(poses), dtype=np.int64)
-    if s.p_detect is not None:
+    if s.p_detect is not None or ev.unknown_rate:
         missed = missed_landmarks(lm, poses, assign, bearings, opt)
     ln_e = log_evidence(ev, nmatch, sse, cov, missed, poses)
     rank = np.argsort(-ln_e, kind="stable")
@@ -316,7 +347,23 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     # A search cut short by its budget, or stopped at a first fit, has not looked for every
     # rival: whatever the best's share among what was found, it is not a decisive answer.
     ambiguous = sols[0].confidence < opt.decisive or not leaves.complete or not leaves.exhaustive
-    return Scored(sols, bool(ambiguous), float(math.exp(ev.log_null - total)))
+    # Nor is a best that beats the null by less than a chance fit among all the hypotheses the
+    # search tried could (look-elsewhere): when the true interpretation is out of reach (a
+    # real bearing outside its gate, more clutter than max_spurious), a modest chance fit on a
+    # large map would otherwise hold all the posterior.
+    unexplained = float(math.exp(ev.log_null - total))
+    ambiguous |= not convincing(sols[0].confidence, unexplained, leaves.counts.triples, opt)
+    return Scored(sols, bool(ambiguous), unexplained)
+
+
+def convincing(confidence: float, unexplained: float, hypotheses: int, opt: SearchOptions) -> bool:
+    """Whether a solution's evidence beats the null interpretation's by the decisive odds
+    times the number of hypotheses tried: ``confidence / unexplained >= decisive / (1 -
+    decisive) * hypotheses`` (as the first fit's condition to stop)."""
+    if unexplained <= 0.0:
+        return True
+    need = math.log(opt.decisive / (1.0 - opt.decisive)) + math.log(max(1, hypotheses))
+    return math.log(max(confidence, 1e-300)) - math.log(unexplained) >= need
 
 
 def _regularised(cov: FloatArray) -> FloatArray:
