@@ -38,12 +38,15 @@ from scenes import CASES, GROUPS, LARGE, MAX_RANGE, build_map, make_trial  # noq
 
 DEG = float(np.deg2rad(1.0))
 POS_TOL, ANG_TOL = 0.1, DEG
+#: An unambiguous answer is confidently wrong beyond these (the honest-answers tolerance).
+WRONG_POS, WRONG_ANG = 0.3, 3 * DEG
 
 #: Per group: trials (full, quick), per-localization budget (s), scene cap (s, full, quick).
 CONFIG: dict[str, dict[str, Any]] = {
     "a": {"trials": (20, 3), "timeout": 5.0, "cap": (150.0, 30.0)},
     "b": {"trials": (10, 2), "timeout": 10.0, "cap": (300.0, 45.0)},
     "c": {"trials": (20, 2), "timeout": 10.0, "cap": (150.0, 30.0)},
+    "cgrid": {"trials": (20, 2), "timeout": 10.0, "cap": (150.0, 30.0)},
     "d": {"trials": (4, 1), "timeout": 60.0, "cap": (300.0, 90.0)},
 }
 #: RANSAC iteration ladders searched for the count that matches omniloc's success rate.
@@ -77,6 +80,7 @@ def _run_localize(
     case: Any, trials: list[tuple[Any, Any]], timeout: float, deadline: float, **extra: Any
 ) -> dict[str, Any]:
     times, succ, complete, n_sol, nodes = [], 0, 0, [], []
+    decisive = wrong = empty = 0
     for lm, sc in trials:
         if time.perf_counter() > deadline:
             break
@@ -88,11 +92,19 @@ def _run_localize(
         complete += bool(res.stats.complete)
         n_sol.append(len(res))
         nodes.append(res.stats.nodes)
+        empty += not res
+        if not res.ambiguous:
+            decisive += 1
+            d, dth = res.best.pose.distance_to(sc.pose)
+            wrong += bool(d > WRONG_POS or dth > WRONG_ANG)
     return {
         "trials": len(times),
         "planned": len(trials),
         "success": succ,
         "complete": complete,
+        "decisive": decisive,
+        "confidently_wrong": wrong,
+        "empty": empty,
         "timeout_s": timeout,
         "median_solutions": float(np.median(n_sol)) if n_sol else None,
         "median_nodes": float(np.median(nodes)) if nodes else None,
@@ -453,22 +465,27 @@ def targets(groups: dict[str, Any]) -> list[dict[str, str]]:
                 "status": "met" if ok else "missed",
             }
         )
-    if "c" in rows:
-        r = rows["c"]["robust"]
+    for case in ("c", "c-default", "cgrid", "cgrid-default"):
+        if case not in rows:
+            continue
+        r = rows[case]["robust"]
         ok = (
             r["median_ms"] is not None
             and r["median_ms"] <= 250
             and r["trials"]
             and r["success"] / r["trials"] >= 0.99
             and r["complete"] == r["trials"]
+            and r.get("confidently_wrong", 0) == 0
         )
         out.append(
             {
-                "scene": "c",
-                "target": "median <= 250 ms with success >= 99 %",
+                "scene": case,
+                "target": "median <= 250 ms with success >= 99 %, never confidently wrong"
+                + (" (localize's default options)" if case.endswith("default") else ""),
                 "measured": f"median {_fmt_ms(r['median_ms'])} ms, success "
                 f"{_rate(r['success'], r['trials'])}, complete {r['complete']}/"
-                f"{r['trials']} (budget {r['timeout_s']:.0f} s)",
+                f"{r['trials']} (budget {r['timeout_s']:.0f} s), decisive / confidently "
+                f"wrong {_honesty(r)}",
                 "status": "met" if ok else "missed",
             }
         )
@@ -502,6 +519,13 @@ def targets(groups: dict[str, Any]) -> list[dict[str, str]]:
     return out
 
 
+def _honesty(r: dict[str, Any]) -> str:
+    """'decisive / confidently wrong' counts of a row (older results files have neither)."""
+    if "decisive" not in r:
+        return "-"
+    return f"{r['decisive']} / {r['confidently_wrong']}"
+
+
 def markdown(result: dict[str, Any]) -> str:
     m = result["machine"]
     lines = [
@@ -513,9 +537,9 @@ def markdown(result: dict[str, Any]) -> str:
         '**omniloc `localize` (default `method="robust"`)**; success = best solution within '
         "0.1 m and 1 deg of the truth.",
         "",
-        "| scene | N | obs | trials | median ms | p95 ms | success | tracemalloc peak MiB "
-        "| maxrss delta MiB | paper-mode median ms | notes |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "| scene | N | obs | trials | median ms | p95 ms | success | decisive / confidently "
+        "wrong | tracemalloc peak MiB | maxrss delta MiB | paper-mode median ms | notes |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for g in result["groups"].values():
         for r in g["rows"]:
@@ -525,8 +549,8 @@ def markdown(result: dict[str, Any]) -> str:
             lines.append(
                 f"| {r['case']}: {r['label']} | {r['n_landmarks']} | {r['n_obs']:.0f} "
                 f"| {rb['trials']} | {med} | {p95} | {_rate(rb['success'], rb['trials'])} "
-                f"| {r['tracemalloc_peak_mib']:.1f} | {r['maxrss_delta_mib']:.1f} | {pm} "
-                f"| {note} |"
+                f"| {_honesty(rb)} | {r['tracemalloc_peak_mib']:.1f} "
+                f"| {r['maxrss_delta_mib']:.1f} | {pm} | {note} |"
             )
     lines += [
         "",
@@ -573,7 +597,9 @@ def markdown(result: dict[str, Any]) -> str:
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="short smoke run")
-    ap.add_argument("--scenes", default="a,b,c,d", help="comma-separated subset of a,b,c,d")
+    ap.add_argument(
+        "--scenes", default="a,b,c,cgrid,d", help="comma-separated subset of a,b,c,cgrid,d"
+    )
     ap.add_argument("--trials", type=int, default=None, help="trials per scene (override)")
     ap.add_argument(
         "--out",
@@ -606,7 +632,7 @@ def main(argv: list[str] | None = None) -> int:
     groups = [g.strip() for g in args.scenes.split(",") if g.strip()]
     bad = [g for g in groups if g not in CONFIG]
     if bad:
-        ap.error(f"unknown scene(s) {bad}; choose from a,b,c,d")
+        ap.error(f"unknown scene(s) {bad}; choose from {','.join(CONFIG)}")
     result: dict[str, Any] = {
         "machine": _machine(),
         "quick": args.quick,

@@ -10,7 +10,9 @@
 (c) 10,000 landmarks uniform at 0.01 / m^2 (1 km square, 1 m apart at least), every landmark
     within 20 m observed plus 2 spurious bearings, sigma = 0.3 deg;
 (c-grid) as (c) on 10,000 landmarks laid on a jittered grid (0.01 / m^2, at least 2 m apart):
-    a warehouse of racks, where many poses see similar patterns;
+    a warehouse of racks, where many poses see similar patterns; (c) and (c-grid) run twice,
+    with the tuned options above and with localize's defaults (only sigma, max_spurious and
+    max_range given);
 (d) the same as (c) with 100,000 landmarks (3.16 km square).
 
 Every trial draws its own observation (and for (b) its own map and pose) from a seed that
@@ -59,6 +61,9 @@ class Case:
         Bearing noise of the simulation, radians.
     m : int or None
         Number of bearings when fixed (scene a), else None.
+    scenes_of : str
+        Draw the trials of this case instead (the same scenes under other options); empty:
+        the case's own.
     """
 
     name: str
@@ -67,6 +72,7 @@ class Case:
     kwargs: dict[str, Any] = field(default_factory=dict)
     sigma: float = 0.0
     m: int | None = None
+    scenes_of: str = ""
 
 
 def _a_cases() -> list[Case]:
@@ -102,10 +108,11 @@ CASES["b360"] = Case(
     {"sigma": 0.5 * DEG, "max_spurious": 3},
     0.5 * DEG,
 )
-#: Large maps: the first interpretation that explains all but two bearings and leaves no
-#: plainly visible landmark unexplained (beyond what p_miss allows) ends the search
+#: Large maps, tuned: the first interpretation that explains all but two bearings and leaves
+#: no plainly visible landmark unexplained (beyond what p_miss allows) ends the search
 #: (exhaustive=False); gates at 0.9999, since with max_spurious equal to the true count a
-#: single real bearing outside its gate would sink the answer.
+#: single real bearing outside its gate would sink the answer. (c-default) and
+#: (cgrid-default) run the same trials with the default options.
 LARGE_KWARGS: dict[str, Any] = {
     "sigma": 0.3 * DEG,
     "max_spurious": 2,
@@ -129,6 +136,19 @@ CASES["cgrid"] = Case(
     LARGE_KWARGS,
     0.3 * DEG,
 )
+#: What a user types for (c) and (c-grid): the scene's noise, spurious count and range, every
+#: other option at its default (p_detect unknown, gates at 0.999, exhaustive=None: a first fit
+#: on a map this large, which says it did not look for rivals).
+DEFAULT_KWARGS: dict[str, Any] = {"sigma": 0.3 * DEG, "max_spurious": 2, "max_range": 20.0}
+for _g in ("c", "cgrid"):
+    CASES[f"{_g}-default"] = Case(
+        f"{_g}-default",
+        _g,
+        f"the trials of ({_g}), localize's default options",
+        DEFAULT_KWARGS,
+        0.3 * DEG,
+        scenes_of=_g,
+    )
 CASES["d"] = Case(
     "d",
     "d",
@@ -176,7 +196,7 @@ def _interior_pose(lm: LandmarkMap, gen: np.random.Generator) -> Pose:
 
 def make_trial(case: Case, trial: int, lm: LandmarkMap | None) -> tuple[LandmarkMap, Scene]:
     """The map and the simulated observation of one trial of a case."""
-    gen = np.random.default_rng([ord(c) for c in case.name] + [trial])
+    gen = np.random.default_rng([ord(c) for c in (case.scenes_of or case.name)] + [trial])
     if case.group == "a":
         assert lm is not None and case.m is not None
         sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=case.m, sigma=case.sigma, rng=gen)
