@@ -31,13 +31,32 @@ from .errors import (
 )
 from .io import check_bearings, load_bearings, save_bearings
 from .maps import LandmarkMap, as_landmark_map
-from .pose import Pose, crlb, estimate_pose, fisher_information, predict_bearings, refine_pose
-from .search import LocalizationResult, Method, SearchStats, Solution, Strategy, localize
-from .simulate import demo_room, observe, random_map, random_pose, symmetric_map
+from .pose import (
+    Pose,
+    bearing_jacobian,
+    crlb,
+    estimate_pose,
+    fisher_information,
+    pose_covariance,
+    predict_bearings,
+    refine_pose,
+)
+from .search import (
+    Budget,
+    LocalizationResult,
+    Method,
+    SearchStats,
+    Solution,
+    Strategy,
+    localize,
+)
+from .sensor import SensorModel
+from .simulate import demo_room, grid_map, observe, random_map, random_pose, symmetric_map
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "Budget",
     "DegenerateGeometryError",
     "InputError",
     "LandmarkMap",
@@ -48,20 +67,24 @@ __all__ = [
     "OmnilocError",
     "Pose",
     "SearchStats",
+    "SensorModel",
     "Solution",
     "Strategy",
     "VisionError",
     "__version__",
     "angdiff",
     "as_landmark_map",
+    "bearing_jacobian",
     "check_bearings",
     "crlb",
     "demo_room",
     "estimate_pose",
     "fisher_information",
+    "grid_map",
     "load_bearings",
     "localize",
     "observe",
+    "pose_covariance",
     "predict_bearings",
     "random_map",
     "random_pose",
