@@ -27,13 +27,13 @@ threads. The readable description of the same search, and its driver, is
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from .evidence import detection_term, prior_log_density
 from .geometry import (
     GATE_FLOOR,
     det3,
@@ -531,12 +531,6 @@ def _counts_missed(scoring: Scoring) -> bool:
 
 
 @_jit
-def _log_beta(a: float, b: float) -> float:
-    """ln B(a, b) (scipy.special.betaln, which numba cannot call)."""
-    return math.lgamma(a) + math.lgamma(b) - math.lgamma(a + b)
-
-
-@_jit
 def _occam(path: _Path, n: int, x: float, y: float, sig2: float, scoring: Scoring) -> float:
     """The pose-volume term of the log evidence (as omniloc.search.scoring.log_evidence): ln
     sqrt(det(2 pi Cov)) of the pose at (x, y) from the path's n pairs, plus the prior's log
@@ -546,10 +540,7 @@ def _occam(path: _Path, n: int, x: float, y: float, sig2: float, scoring: Scorin
     if not det_h > 0:
         return 0.0
     vol = 0.5 * (3.0 * np.log(2.0 * np.pi * sig2) - np.log(det_h))
-    x0, y0, x1, y1 = scoring.region
-    dx = max(0.0, x0 - x, x - x1)
-    dy = max(0.0, y0 - y, y - y1)
-    prior = -scoring.log_volume - (dx * dx + dy * dy) / (2.0 * scoring.edge * scoring.edge)
+    prior = prior_log_density(x, y, scoring.region, scoring.edge, scoring.log_volume)
     return min(vol + prior, 0.0)
 
 
@@ -748,10 +739,7 @@ def _verify(
                         # Keep the best ``capacity`` by the ranking's cost: when full, the
                         # worse half goes and the bar for entry rises.
                         key = (m - n) * scoring.spur_w + 0.5 * sse / d.sig2
-                        if scoring.unknown_rate:
-                            key -= _log_beta(n + 1.0, missed + 1.0)
-                        else:
-                            key += missed * scoring.miss_w
+                        key -= detection_term(n, missed, -scoring.miss_w, scoring.unknown_rate)
                         cnt[4] += 1
                         fits = budget.stop_first and missed <= budget.miss_allow
                         if fits:

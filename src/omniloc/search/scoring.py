@@ -44,10 +44,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-from scipy.special import betaln, logsumexp
+from numpy.typing import NDArray
 from scipy.stats import chi2
 
+from .._kernels import evidence as _evidence
 from .._kernels import geometry as geo
 from .._kernels.merge import merge
 from ..angles import TWO_PI, wrap
@@ -65,7 +65,6 @@ __all__ = [
     "EvidenceModel",
     "PosePrior",
     "Scored",
-    "detection_evidence",
     "evidence_model",
     "finish",
     "pose_prior",
@@ -124,10 +123,13 @@ class PosePrior:
 
     def log_density(self, poses: FloatArray) -> FloatArray:
         """ln of the prior density at poses (K, 3)."""
-        x0, y0, x1, y1 = self.region
-        dx = np.maximum(0.0, np.maximum(x0 - poses[:, 0], poses[:, 0] - x1))
-        dy = np.maximum(0.0, np.maximum(y0 - poses[:, 1], poses[:, 1] - y1))
-        return np.asarray(-self.log_volume - (dx * dx + dy * dy) / (2.0 * self.edge**2))
+        p = np.asarray(poses, dtype=np.float64).reshape(-1, 3)
+        return np.array(
+            [
+                _evidence.prior_log_density(x, y, self.region, self.edge, self.log_volume)
+                for x, y in p[:, :2].tolist()
+            ]
+        )
 
 
 def pose_prior(
@@ -162,7 +164,7 @@ class EvidenceModel:
         Bearing variance, rad^2.
     unknown_rate : bool
         ``p_detect`` is unknown but the sensor's range bounds what it can see: the detection
-        rate is integrated out over a uniform prior (:func:`detection_evidence`) instead of
+        rate is integrated out over a uniform prior (``ln B(matched + 1, missed + 1)``) instead of
         fixed, so the plainly visible landmarks a pose leaves unseen count against it as much
         as the bearings allow. Without ``p_detect`` and without a range, nothing is inferred
         from what the sensor did not report, and each match is scored with
@@ -175,18 +177,6 @@ class EvidenceModel:
     log_null: float
     sig2: float
     unknown_rate: bool = False
-
-
-def detection_evidence(ev: EvidenceModel, matched: ArrayLike, missed: ArrayLike) -> FloatArray:
-    """ln P(which plainly visible landmarks were detected): ``missed ln(1 - p_detect)`` with a
-    known rate (the matches' ``ln p_detect`` is in ``per_match``), else the rate integrated
-    over a uniform prior, ``ln B(matched + 1, missed + 1)`` (a pose that explains 8 bearings
-    but leaves 30 landmarks in plain view unseen is unlikely whatever the rate)."""
-    k = np.asarray(matched, dtype=np.float64)
-    u = np.asarray(missed, dtype=np.float64)
-    if ev.unknown_rate:
-        return np.asarray(betaln(k + 1.0, u + 1.0))
-    return np.asarray(u * ev.log_miss)
 
 
 def evidence_model(
@@ -231,15 +221,25 @@ def log_evidence(
     missed: IntArray,
     poses: FloatArray,
 ) -> FloatArray:
-    """Each interpretation's log evidence (see the module's documentation)."""
-    sign, logdet = np.linalg.slogdet(cov)
-    # Laplace: the likelihood's volume around the pose times the prior's density there. A
-    # covariance that is not positive definite (a pose the pairs do not fix) is as vague as
-    # the prior; no integral of a likelihood times a prior exceeds the likelihood's peak.
-    vol = np.where(sign > 0, 0.5 * (3.0 * math.log(TWO_PI) + logdet), np.inf)
-    occam = np.minimum(vol + ev.prior.log_density(poses), 0.0)
-    detect = detection_evidence(ev, nmatch, missed)
-    return np.asarray(nmatch * ev.per_match - 0.5 * sse / ev.sig2 + detect + occam)
+    """Each interpretation's log evidence (see the module's documentation and
+    :func:`omniloc._kernels.evidence.log_evidence`)."""
+    p = ev.prior
+    return np.asarray(
+        _evidence.log_evidence(
+            np.ascontiguousarray(nmatch, dtype=np.int64),
+            np.ascontiguousarray(sse, dtype=np.float64),
+            np.ascontiguousarray(cov, dtype=np.float64),
+            np.ascontiguousarray(missed, dtype=np.int64),
+            np.ascontiguousarray(poses, dtype=np.float64),
+            ev.per_match,
+            ev.sig2,
+            ev.log_miss,
+            ev.unknown_rate,
+            p.region,
+            p.edge,
+            p.log_volume,
+        )
+    )
 
 
 @dataclass(frozen=True)
@@ -284,14 +284,8 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     assign[:, order] = level_assign
     w = (assign >= 0).astype(np.float64)
     Lm = lm.xy[np.maximum(assign, 0)]
-    bm = np.ascontiguousarray(np.broadcast_to(bearings, assign.shape))
-    poses, sse = geo.gauss_newton(
-        np.require(Lm, np.float64, ["C", "W"]),
-        bm,
-        w,
-        np.require(level_pose, np.float64, ["C", "W"]),
-        10,
-    )
+    bm = np.repeat(bearings[None, :], len(assign), axis=0)
+    poses, sse = geo.gauss_newton(Lm, bm, w, np.array(level_pose, dtype=np.float64), 10)
     nmatch = w.sum(axis=1).astype(np.int64)
     # A pose on one of its own landmarks has no bearing to it (atan2(0, 0) = 0 can pass a gate
     # by accident on a grid map): not a pose.
@@ -308,26 +302,23 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         assign, w, Lm, poses, sse, nmatch = assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k]
     rms = np.sqrt(sse / nmatch)
     # Covariance at the refined pose: sigma^2 (G^T G)^-1 over the matched pairs.
-    cov = geo.covariances(
-        np.require(Lm, np.float64, ["C", "W"]),
-        np.require(w, np.float64, ["C", "W"]),
-        np.require(poses, np.float64, ["C", "W"]),
-        ev.sig2,
-        geo.COVARIANCE_FLOOR,
-    )
+    cov = geo.covariances(Lm, w, poses, ev.sig2, geo.COVARIANCE_FLOOR)
     missed = np.zeros(len(poses), dtype=np.int64)
     if s.p_detect is not None or ev.unknown_rate:
         missed = missed_landmarks(lm, poses, assign, bearings, opt)
     ln_e = log_evidence(ev, nmatch, sse, cov, missed, poses)
     rank = np.argsort(-ln_e, kind="stable")
-    if opt.merge:
+    if opt.merge and len(rank) > 1:
         keep, owner = _merge(rank, poses, cov)
         mass = np.full(len(ln_e), -np.inf)
         np.logaddexp.at(mass, owner, ln_e)
         mass = mass[keep]
     else:
         keep, mass = [int(i) for i in rank], ln_e[rank]
-    total = float(logsumexp(np.append(mass, ev.log_null)))
+    # ln sum exp, by hand: scipy.special.logsumexp's array-API layer cost 1 ms per call, as
+    # much as the whole search of seven bearings in the demo room.
+    top = max(float(mass.max()), ev.log_null)
+    total = top + math.log(float(np.exp(mass - top).sum()) + math.exp(ev.log_null - top))
     conf = np.exp(mass - total)
     sols = [
         Solution(
