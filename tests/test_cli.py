@@ -71,6 +71,21 @@ def test_localize_strategy_and_first_fit(room_files, capsys, strategy: str) -> N
         assert "AMBIGUOUS: first fit, rivals not sought" in out
 
 
+def test_human_output_says_why_an_answer_is_not_decisive(tmp_path, capsys) -> None:
+    # Four bearings on a map of 400 landmarks: many poses fit about as well.
+    from omniloc.simulate import observe, random_map, random_pose
+
+    lm = random_map(400, density=0.05, rng=3)
+    sc = observe(lm, random_pose(lm, rng=4), n_obs=4, max_range=10.0, rng=5)
+    m, b = tmp_path / "map.csv", tmp_path / "b.txt"
+    lm.to_csv(m)
+    b.write_text("\n".join(f"{v:.9f}" for v in sc.bearings) + "\n")
+    args = ["localize", "--map", str(m), "--bearings", str(b), "--sigma", "0.01"]
+    assert main([*args, "--max-range", "10"]) == 0
+    out = capsys.readouterr().out
+    assert "AMBIGUOUS" in out and ("distinct poses compete" in out or "chance fit" in out)
+
+
 def test_no_solution_is_a_sentence_and_exit_0(tmp_path, capsys) -> None:
     m = tmp_path / "sq.csv"
     m.write_text("id,x,y\n1,0,0\n2,6,0\n3,6,6\n4,0,6\n")

@@ -309,9 +309,23 @@ def test_unknown_detection_rate_with_a_range_counts_landmarks_left_unseen() -> N
     assert all(s.missed == 0 for s in localize(L, z, sigma=0.1 * DEG).solutions)
 
 
+def test_convincing_needs_the_decisive_odds_per_place() -> None:
+    from omniloc.search.options import make_options
+    from omniloc.search.scoring import convincing
+
+    opt = make_options(
+        5, method=Method.ROBUST, sensor=None, budget=None, max_spurious=0, ordering=False,
+        legacy={},
+    )  # fmt: skip
+    # decisive 0.95: odds 19 per place.
+    assert convincing(0.999, 0.999 / 19 / 100 / 1.01, 100, opt)
+    assert not convincing(0.999, 0.999 / 19 / 100 * 1.1, 100, opt)
+    assert convincing(0.5, 0.0, 10**6, opt)
+
+
 def test_a_weak_fit_after_a_large_search_is_not_decisive() -> None:
     # Three exact bearings always fit some pose: alone against the null it may hold most of
-    # the posterior, but a chance fit among the hypotheses tried is as likely.
+    # the posterior, but a chance fit somewhere on a map of 400 landmarks is as likely.
     lm = random_map(400, density=0.05, rng=3)
     truth = random_pose(lm, rng=4)
     sc = observe(lm, truth, max_range=10.0, n_obs=3, rng=5)

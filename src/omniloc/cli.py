@@ -324,9 +324,13 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         )
     elif not st.exhaustive:
         verdict = f"AMBIGUOUS: first fit, rivals not sought; {share}"
+    elif result.competing > 1:
+        verdict = f"AMBIGUOUS: {result.competing} distinct poses compete; {share}"
     else:
-        k = max(result.competing, 1)
-        verdict = f"AMBIGUOUS: {k} distinct pose{'s' if k != 1 else ''} compete; {share}"
+        verdict = (
+            f"AMBIGUOUS: {share}, too little to rule out that none is right (a chance fit "
+            "elsewhere on the map; more bearings, --max-range or --p-detect help)"
+        )
     print(
         f"{len(result)} solution{'s' if len(result) != 1 else ''} for {n} bearings "
         f"({st.nodes} nodes, {st.examined_paths} paths examined, "

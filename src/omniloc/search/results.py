@@ -156,8 +156,8 @@ class LocalizationResult:
         The map searched (for landmark ids).
     ambiguous : bool
         True unless the best solution holds at least ``decisive`` (0.95 by default) of the
-        posterior, beats the null interpretation by the decisive odds times the hypotheses
-        the search tried (a weak fit after a search of millions may be chance), and the search
+        posterior, beats the null interpretation by the decisive odds times the map's
+        landmark count (a weak fit on a map of thousands may be chance), and the search
         looked for every rival (it was neither cut short by its budget nor stopped at a first
         fit). Only an unambiguous answer should be acted on without more evidence (symmetric
         maps, few bearings, clutter). True when there is no solution.

@@ -338,22 +338,26 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     # A search cut short by its budget, or stopped at a first fit, has not looked for every
     # rival: whatever the best's share among what was found, it is not a decisive answer.
     ambiguous = sols[0].confidence < opt.decisive or not leaves.complete or not leaves.exhaustive
-    # Nor is a best that beats the null by less than a chance fit among all the hypotheses the
-    # search tried could (look-elsewhere): when the true interpretation is out of reach (a
-    # real bearing outside its gate, more clutter than max_spurious), a modest chance fit on a
-    # large map would otherwise hold all the posterior.
+    # Nor is a best that beats the null by less than a chance fit somewhere on the map could
+    # (look-elsewhere over its landmarks): when the true interpretation is out of reach (a
+    # real bearing outside its gate, more clutter than max_spurious), a modest chance fit on
+    # a large map would otherwise hold all the posterior.
     unexplained = float(math.exp(ev.log_null - total))
-    ambiguous |= not convincing(sols[0].confidence, unexplained, leaves.counts.triples, opt)
+    ambiguous |= not convincing(sols[0].confidence, unexplained, lm.n, opt)
     return Scored(sols, bool(ambiguous), unexplained)
 
 
-def convincing(confidence: float, unexplained: float, hypotheses: int, opt: SearchOptions) -> bool:
+def convincing(confidence: float, unexplained: float, places: int, opt: SearchOptions) -> bool:
     """Whether a solution's evidence beats the null interpretation's by the decisive odds
-    times the number of hypotheses tried: ``confidence / unexplained >= decisive / (1 -
-    decisive) * hypotheses`` (as the first fit's condition to stop)."""
+    times the number of places a chance fit could come from (the map's landmarks):
+    ``confidence / unexplained >= decisive / (1 - decisive) * places``.
+
+    On scene c (10,000 landmarks, default options) the one wrong best in 40 scenes beat the
+    null by 8 nats (the truth out of reach, 11 of 13 bearings fitted by chance 129 m away);
+    the true poses, by 15 to 80 nats."""
     if unexplained <= 0.0:
         return True
-    need = math.log(opt.decisive / (1.0 - opt.decisive)) + math.log(max(1, hypotheses))
+    need = math.log(opt.decisive / (1.0 - opt.decisive)) + math.log(max(1, places))
     return math.log(max(confidence, 1e-300)) - math.log(unexplained) >= need
 
 
