@@ -9,7 +9,7 @@
 
 from __future__ import annotations
 
-from .real import DATASET_DEFAULTS, DatasetResult, DatasetTrial, evaluate_dataset
+from .real import DATASET_DEFAULTS, DatasetResult, DatasetTrial, estimate_sensor, evaluate_dataset
 from .report import save_report
 from .sweep import (
     Condition,
@@ -30,6 +30,7 @@ __all__ = [
     "SweepConfig",
     "SweepResult",
     "Trial",
+    "estimate_sensor",
     "evaluate_dataset",
     "run_sweep",
     "save_report",
