@@ -414,6 +414,51 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def tuning_summary(rec: dict[str, Any]) -> str:
+    """The tuning record in short: each search's best and its runners-up."""
+
+    def opts(o: dict[str, Any]) -> str:
+        return ", ".join(f"{k} {v}" for k, v in o.items())
+
+    lines = [
+        "**How the baselines were tuned** (`baselines_track/tuning.json`; J = correct - "
+        "confidently wrong, pooled over frames)",
+        "",
+    ]
+    for key, v in rec.items():
+        rows = v.get("rows", [])
+        if key.startswith("recovery_"):
+            lines.append(
+                f"* `{key}` ({v['streams']} kidnapped + {v['streams']} plain tuning streams, "
+                f"seed + 1000): best {opts(v['best']['options'])} (J {v['best']['J']}, "
+                f"recovery median {_f(v['best']['recovery_median_s'], '{:.0f}')} s, "
+                f"unrecovered {v['best']['unrecovered']:.0f}); kidnap threshold "
+                f"{v['kidnap_ratio']['kidnap_ratio']} (false-alarm run rate "
+                f"{v['kidnap_ratio']['false_alarm_run_rate']}, flagged within 30 s "
+                f"{v['kidnap_ratio']['flagged_within_30s']}). Thresholds: "
+                + "; ".join(
+                    f"{r['kidnap_ratio']}: FA {r['false_alarm_run_rate']}, "
+                    f"30 s {r['flagged_within_30s']}"
+                    for r in v["kidnap_rows"]
+                )
+            )
+            continue
+        if key.startswith("kidnap_"):
+            b = v["best"]
+            lines.append(
+                f"* `{key}`: threshold {b['kidnap_ratio']} (false-alarm run rate "
+                f"{b['false_alarm_run_rate']}, flagged within 30 s {b['flagged_within_30s']})"
+            )
+            continue
+        top = sorted(rows, key=lambda r: -r["J"])[:4]
+        lines.append(
+            f"* `{key}` ({len(rows)} settings): best {opts(v['best']['options'])}: J "
+            f"{v['best']['J']} (correct {v['best']['correct']}, wrong {v['best']['wrong']}); "
+            "next: " + "; ".join(f"{opts(r['options'])}: J {r['J']}" for r in top[1:])
+        )
+    return "\n".join(lines)
+
+
 # --------------------------------------------------------------------------------------------
 # Tuning
 # --------------------------------------------------------------------------------------------
@@ -584,6 +629,8 @@ def main(argv: list[str] | None = None) -> int:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps({"meta": meta, "results": results}, indent=1, default=str) + "\n")
     md = tables(results)
+    if TUNING_RECORD.is_file():
+        md += "\n\n" + tuning_summary(json.loads(TUNING_RECORD.read_text()))
     head = (
         f"Measured {meta['when']} ({meta['machine']}, Python {meta['python']}, numpy "
         f"{meta['numpy']}): `{meta['command']}`, {meta['wall_s']:.0f} s.\n\n"
