@@ -1,9 +1,10 @@
 """Baselines for localization over time on MRCLAM set 6, scored by omniloc's one scoring code.
 
 Run:  python benchmarks/track_baselines.py [--quick] [--particles 2000,10000,50000]
-                                           [--kidnap N] [--seed S] [--out PATH]
+                                           [--kidnap N] [--large-streams N] [--seed S]
+                                           [--out PATH]
       python benchmarks/track_baselines.py --tune {ekf,pf-track,pf-global,recovery,kidnap}
-                                           [--particles N]
+                                           [--particles N] [--tune-streams N] [--passes N]
 
 What runs (every localizer through :func:`omniloc.evaluate.tracking.evaluate_tracking`, on the
 same streams, in this one process):
@@ -25,26 +26,36 @@ same streams, in this one process):
   :func:`make_tracker`, the one place to adapt), else skipped with a note.
 
 Streams: the five whole runs, ``--kidnap`` kidnapped streams and as many plain streams of the
-same lengths without a jump (``kidnap_streams``, seeded by ``--seed``).
+same lengths without a jump (``kidnap_streams``, seeded by ``--seed``). From
+:data:`LARGE` particles on, the filter is scored on the whole runs and the first
+``--large-streams`` kidnapped and plain streams only (the bound on its time), and its
+truth-start check is skipped.
 
 How the baselines were tuned (``--tune``; the record is ``baselines_track/tuning.json``)
 -----------------------------------------------------------------------------------------
-Both use the odometry noise model fitted to the recording's ground truth
-(:func:`baselines_track.motion.calibrate_motion_noise`, 1-s windows) times a tuned
-multiplier. The objective everywhere is J = share of frames correct - share confidently
-wrong (pooled over the five whole runs).
+On TUNING streams, never on the scored ones: ``--tune-streams`` kidnapped and plain
+stretches drawn with seed ``--seed + 1000`` (:func:`tuning_streams`). There is no second
+recording, so they are other stretches of the same five runs, started at other times -- what
+a user tuning on their own robot's logs would have. Both filters use the odometry noise model
+fitted to the recording's ground truth (:func:`baselines_track.motion.calibrate_motion_noise`,
+1-s windows) times a tuned multiplier. The objective everywhere is J = share of frames
+correct - share confidently wrong, pooled over the tuning streams' frames.
 
-* EKF: the full grid noise multiplier x bearing sigma x gate (see :data:`EKF_GRID`);
-  chosen :data:`EKF_TUNED`.
-* PF: (1) started at the truth, no random particles, 2,000 particles: a grid over the
-  association (mean / sum / nearest), the bearing sigma, the clutter weight and the noise
-  multiplier (:data:`PF_TRACK_GRIDS`); (2) from a uniform start, coordinate descent over
-  those and alpha_slow / alpha_fast and the resampling threshold (:data:`PF_GLOBAL_AXES`) at
-  each particle count; (3) the kidnap threshold replayed on tuning streams drawn with seed
-  ``--seed + 1000`` (never the evaluation's), the most kidnappings flagged within 30 s at a
-  false-alarm run rate <= 10 %. Chosen: :data:`PF_TUNED`.
+* EKF: the grid noise multiplier x bearing sigma x gate (:data:`EKF_GRID`) on the plain
+  tuning streams, started at the truth.
+* PF: (1) the start of the search: started at the truth, without random particles, 2,000
+  particles, grids over the association (mean / sum / nearest), the bearing sigma, the
+  clutter weight and the noise multiplier (:data:`PF_TRACK_GRIDS`), and a first descent
+  from a uniform start (both on the whole runs: the record marks them; only the start of
+  the search comes from them); (2) from a uniform start on the plain tuning streams,
+  coordinate descent over :data:`PF_GLOBAL_AXES` at 2,000 particles, over sigma and clutter
+  from 10,000 on (starting from the nearest count's best); (3) the random particles
+  (:data:`PF_RECOVERY_AXES`) on the kidnapped and plain tuning streams, and the kidnap
+  threshold replayed on the same runs: the most kidnappings flagged within 30 s at a
+  false-alarm run rate <= 10 %. Counts not tuned take the nearest tuned count's options
+  (:func:`tuned_options`); the options used are in the results' ``meta``.
 
-Time: see ``benchmarks/README.md`` (the full run takes about ... on 2 cores).
+Time: see ``benchmarks/README.md``.
 """
 
 from __future__ import annotations
@@ -90,14 +101,17 @@ from omniloc.pose import Pose  # noqa: E402
 DEFAULT_DATA = HERE.parents[1] / "shared" / "data" / "mrclam-ds6"
 DEFAULT_OUT = HERE / "results_tracking.json"
 TUNING_RECORD = HERE / "baselines_track" / "tuning.json"
+#: The tuning streams are drawn with the evaluation's seed plus this.
+TUNING_SEED_OFFSET = 1000
 
-#: The EKF's tuning grid and the values it chose (``--tune ekf``).
+#: The EKF's tuning grid (``--tune ekf``; what it chose is in the record).
+#: (A first, full grid -- noise 1-64, sigma 0.25-2 deg, gates 3, 5, 10, none -- on the whole
+#: runs put the best at noise 8, sigma 0.25 deg, gate 10: this grid spans that region.)
 EKF_GRID: dict[str, list[Any]] = {
-    "noise_scale": [1, 2, 4, 8, 16, 32, 64],
-    "sigma_deg": [0.25, 0.5, 1.0, 2.0],
-    "gate_sigmas": [3.0, 5.0, 10.0, math.inf],
+    "noise_scale": [2, 4, 8, 16, 32],
+    "sigma_deg": [0.25, 0.5, 1.0],
+    "gate_sigmas": [5.0, 10.0],
 }
-EKF_TUNED: dict[str, Any] = {"noise_scale": 8, "sigma_deg": 0.5, "gate_sigmas": 5.0}
 
 #: The particle filter's tracking grids (``--tune pf-track --grid coarse|refine``): the
 #: coarse grid's best lay on its edges (clutter 0.99, sigma 0.5 deg), so a second grid
@@ -129,36 +143,23 @@ PF_GLOBAL_AXES: dict[str, list[Any]] = {
     "association": ["sum", "nearest"],
     "resample_ess": [0.25, 0.5, 1.0],
 }
-PF_GLOBAL_AXES_LARGE = ("noise_scale", "sigma_deg", "clutter")
+PF_GLOBAL_AXES_LARGE = ("sigma_deg", "clutter")
+#: From this many particles on, the evaluation scores the whole runs and only the first
+#: ``--large-streams`` kidnapped and plain streams, and skips the truth-start check (50,000
+#: particles cost about 0.07 CPU s per second of recording: all 200 streams would take an
+#: hour on this machine).
 LARGE = 50_000
 #: The random particles, on the tuning streams (``--tune recovery``).
 PF_RECOVERY_AXES: dict[str, list[Any]] = {
-    "alphas": [(0.0, 0.0), (0.001, 0.1), (0.01, 0.1), (0.001, 0.02), (0.0001, 0.01)],
+    "alphas": [(0.0, 0.0), (0.001, 0.1), (0.01, 0.1), (0.001, 0.02)],
     "per_bearing": [True, False],
 }
 KIDNAP_THRESHOLDS = [0.99, 0.95, 0.9, 0.8, 0.7, 0.6, 0.5, 0.4, 0.3, 0.2]
 
-#: The particle filter's options chosen per particle count (on top of :class:`PfConfig`'s
-#: defaults; ``noise_scale`` multiplies the calibrated noise, ``alphas`` is (slow, fast)).
-PF_TUNED: dict[int, dict[str, Any]] = {
-    n: {
-        "association": "sum",
-        "sigma_deg": 1.0,
-        "clutter": 0.9,
-        "noise_scale": 1,
-        "alphas": (0.001, 0.1),
-        "resample_ess": 0.5,
-        "kidnap_ratio": 0.5,
-    }
-    for n in (2000, 10_000, 50_000)
-}
 
-
-def pf_config(n: int, noise: MotionNoise, opts: dict[str, Any] | None = None) -> PfConfig:
-    """The tuned :class:`PfConfig` for ``n`` particles (the nearest tuned count's options)."""
-    if opts is None:
-        near = min(PF_TUNED, key=lambda k: abs(math.log(k / n)))
-        opts = PF_TUNED[near]
+def pf_config(n: int, noise: MotionNoise, opts: dict[str, Any]) -> PfConfig:
+    """The :class:`PfConfig` for ``n`` particles with ``opts`` on top of its defaults
+    (``noise_scale`` multiplies the calibrated noise, ``alphas`` is (slow, fast))."""
     o = dict(opts)
     slow, fast = o.pop("alphas", (0.001, 0.1))
     return PfConfig(
@@ -171,7 +172,7 @@ def pf_config(n: int, noise: MotionNoise, opts: dict[str, Any] | None = None) ->
     )
 
 
-def ekf_config(noise: MotionNoise, opts: dict[str, Any] = EKF_TUNED) -> EkfConfig:
+def ekf_config(noise: MotionNoise, opts: dict[str, Any]) -> EkfConfig:
     return EkfConfig(
         noise=noise.scaled(float(opts["noise_scale"])),
         sigma=math.radians(float(opts["sigma_deg"])),
@@ -236,6 +237,9 @@ def run_all(
     noise: MotionNoise,
     seed: int,
     log: Callable[[str], None],
+    *,
+    chosen: dict[str, Any],
+    large_streams: int,
 ) -> dict[str, dict[str, Any]]:
     streams = [*runs, *kid, *plain]
     out: dict[str, dict[str, Any]] = {}
@@ -252,7 +256,7 @@ def run_all(
             f"{t['confidently_wrong_rate']:.3f}"
         )
 
-    cfg = ekf_config(noise)
+    cfg = ekf_config(noise, chosen["ekf"])
 
     def make_ekf(s: Stream, start: Pose | None) -> EkfKnown:
         assert start is not None
@@ -263,17 +267,32 @@ def run_all(
     record("ekf_known", res, time.time() - t0, config=cfg.as_dict(), oracle_start=True)
 
     for n in particles:
-        pcfg = pf_config(n, noise)
+        pcfg = pf_config(n, noise, chosen["pf"][n])
+        some = streams
+        if n >= LARGE:
+            some = [*runs, *kid[:large_streams], *plain[:large_streams]]
+        else:
+            t0 = time.time()
+            res = evaluate_streams(
+                runs, pf_factory(pcfg, seed), name=f"PF {n} (truth start)", oracle_start=True
+            )
+            record(
+                f"pf{n}_truth_start",
+                res,
+                time.time() - t0,
+                config=pcfg.as_dict(),
+                oracle_start=True,
+            )
         t0 = time.time()
-        res = evaluate_streams(
-            runs, pf_factory(pcfg, seed), name=f"PF {n} (truth start)", oracle_start=True
-        )
+        res = evaluate_streams(some, pf_factory(pcfg, seed), name=f"PF {n}")
         record(
-            f"pf{n}_truth_start", res, time.time() - t0, config=pcfg.as_dict(), oracle_start=True
+            f"pf{n}",
+            res,
+            time.time() - t0,
+            config=pcfg.as_dict(),
+            options=chosen["pf"][n],
+            oracle_start=False,
         )
-        t0 = time.time()
-        res = evaluate_streams(streams, pf_factory(pcfg, seed), name=f"PF {n}")
-        record(f"pf{n}", res, time.time() - t0, config=pcfg.as_dict(), oracle_start=False)
 
     return out
 
@@ -426,6 +445,9 @@ def tuning_summary(rec: dict[str, Any]) -> str:
         "",
     ]
     for key, v in rec.items():
+        if key.startswith("superseded"):
+            lines.append(f"* `{key}` ({', '.join(k for k in v if k != 'why')}): {v['why']}")
+            continue
         rows = v.get("rows", [])
         if key.startswith("recovery_"):
             lines.append(
@@ -452,7 +474,8 @@ def tuning_summary(rec: dict[str, Any]) -> str:
             continue
         top = sorted(rows, key=lambda r: -r["J"])[:4]
         lines.append(
-            f"* `{key}` ({len(rows)} settings): best {opts(v['best']['options'])}: J "
+            f"* `{key}` ({len(rows)} settings on {v.get('streams', 'the whole runs')}): "
+            f"best {opts(v['best']['options'])}: J "
             f"{v['best']['J']} (correct {v['best']['correct']}, wrong {v['best']['wrong']}); "
             "next: " + "; ".join(f"{opts(r['options'])}: J {r['J']}" for r in top[1:])
         )
@@ -474,28 +497,59 @@ def _save_tuning(key: str, value: Any) -> None:
 
 def tuned_options(rec: dict[str, Any], n: int) -> dict[str, Any]:
     """What the tuning record says for ``n`` particles: the uniform-start descent's best,
-    with the random particles and the kidnap threshold of ``recovery_n`` (or of the nearest
-    count tuned for recovery, and then ``kidnap_n``'s threshold when there is one)."""
-    opts = dict(rec[f"pf_global_{n}"]["best"]["options"])
+    with the random particles of ``recovery_n`` (or of the nearest count tuned for recovery)
+    and the kidnap threshold of the nearest count replayed (``kidnap_n``, else
+    ``recovery_n``)."""
+    opts = _global_best(rec, n)
     recs = {int(k.rsplit("_", 1)[1]): v for k, v in rec.items() if k.startswith("recovery_")}
     if recs:
         near = recs[min(recs, key=lambda m: abs(math.log(m / n)))]
         opts.update(near["best"]["options"])
-        opts["kidnap_ratio"] = near["kidnap_ratio"]["kidnap_ratio"]
-    if f"kidnap_{n}" in rec:
-        opts["kidnap_ratio"] = rec[f"kidnap_{n}"]["best"]["kidnap_ratio"]
+    # The threshold: the nearest count's (a kidnap_ replay beats recovery_'s at one count).
+    ratios = {m: v["kidnap_ratio"]["kidnap_ratio"] for m, v in recs.items()}
+    for k, v in rec.items():
+        if k.startswith("kidnap_"):
+            ratios[int(k.rsplit("_", 1)[1])] = v["best"]["kidnap_ratio"]
+    if ratios:
+        opts["kidnap_ratio"] = ratios[min(ratios, key=lambda m: abs(math.log(m / n)))]
+    opts["alphas"] = tuple(opts.get("alphas", (0.001, 0.1)))
+    return opts
+
+
+def chosen_options(rec: dict[str, Any], particles: Sequence[int]) -> dict[str, Any]:
+    """What the tuning record chose: the EKF's grid best and, per particle count, the
+    filter's options (:func:`tuned_options`)."""
+    if "ekf" not in rec:
+        raise SystemExit("no EKF tuning in the record: run --tune ekf first")
+    return {
+        "ekf": dict(rec["ekf"]["best"]["options"]),
+        "pf": {n: tuned_options(rec, n) for n in particles},
+    }
+
+
+def _global_best(rec: dict[str, Any], n: int) -> dict[str, Any]:
+    """The uniform-start descent's best for ``n`` particles, or for the nearest count tuned."""
+    done = {int(k.rsplit("_", 1)[1]): v for k, v in rec.items() if k.startswith("pf_global_")}
+    if not done:
+        raise SystemExit("run --tune pf-global first")
+    near = min(done, key=lambda m: abs(math.log(m / n)))
+    opts = dict(done[near]["best"]["options"])
     opts["alphas"] = tuple(opts.get("alphas", (0.001, 0.1)))
     return opts
 
 
 def _global_start(rec: dict[str, Any], n: int) -> dict[str, Any]:
-    """Where the coordinate descent for ``n`` particles starts: the best of the nearest
-    particle count already tuned from a uniform start, else the best tracking setting (with
-    Thrun's alphas 0.001 / 0.1 and resampling at half the particles)."""
+    """Where the coordinate descent for ``n`` particles starts: the options of the nearest
+    particle count already tuned from a uniform start (with its random particles), else the
+    superseded descent's best, else the best tracking setting (with Thrun's alphas 0.001 / 0.1
+    and resampling at half the particles)."""
     done = {int(k.rsplit("_", 1)[1]): v for k, v in rec.items() if k.startswith("pf_global_")}
+    old = rec.get("superseded_scored_runs", {}).get("pf_global_2000")
     if done:
-        near = min(done, key=lambda m: abs(math.log(m / n)))
-        opts = dict(done[near]["best"]["options"])
+        opts = tuned_options(rec, n)  # the nearest count's, with its random particles
+        opts.pop("kidnap_ratio", None)
+    elif old:
+        opts = dict(old["best"]["options"])
     else:
         track = [v["best"] for k, v in rec.items() if k.startswith("pf_track_")]
         if not track:
@@ -507,41 +561,60 @@ def _global_start(rec: dict[str, Any], n: int) -> dict[str, Any]:
     return opts
 
 
+def tuning_streams(runs: list[Stream], n: int, seed: int) -> tuple[list[Stream], list[Stream]]:
+    """The streams every search is scored on: ``n`` kidnapped and ``n`` plain stretches of
+    the runs drawn with seed ``seed + 1000``, never the evaluation's streams (seed ``seed``)
+    nor the whole runs. (There is no second recording: they are other stretches of the same
+    five runs, started at other times, which a user tuning on their own robot would have.)"""
+    return kidnap_streams(runs, n, rng=seed + TUNING_SEED_OFFSET)
+
+
 def tune(args: argparse.Namespace, runs: list[Stream], noise: MotionNoise) -> int:
     log = print
+    n_tune = args.tune_streams
+    kid, plain = tuning_streams(runs, n_tune, args.seed)
+    where = {
+        "streams": f"{n_tune} plain tuning streams (kidnap_streams seed {args.seed} + "
+        f"{TUNING_SEED_OFFSET})",
+        "tuning_recording_s": round(sum(s.segments[-1].end - s.segments[0].start for s in plain)),
+    }
     if args.tune == "ekf":
-        best, rows = tune_ekf(runs, noise, EKF_GRID, log=log)
-        _save_tuning("ekf", {"grid": EKF_GRID, "best": best, "rows": rows})
+        best, rows = tune_ekf(plain, noise, EKF_GRID, log=log)
+        _save_tuning("ekf", {**where, "grid": EKF_GRID, "best": best, "rows": rows})
     elif args.tune == "pf-track":
         n = args.particles[0]
         base = pf_config(n, noise, {"alphas": (0.0, 0.0)})
         grid = PF_TRACK_GRIDS[args.grid]
-        best, rows = tune_pf_tracking(runs, noise, base, grid, seed=args.seed, log=log)
-        _save_tuning(f"pf_track_{n}_{args.grid}", {"grid": grid, "best": best, "rows": rows})
+        best, rows = tune_pf_tracking(plain, noise, base, grid, seed=args.seed, log=log)
+        _save_tuning(
+            f"pf_track_{n}_{args.grid}", {**where, "grid": grid, "best": best, "rows": rows}
+        )
     elif args.tune == "pf-global":
         rec = json.loads(TUNING_RECORD.read_text()) if TUNING_RECORD.is_file() else {}
         for n in args.particles:
             start = _global_start(rec, n)
             axes = PF_GLOBAL_AXES
-            if n >= LARGE:
+            if n > 2000:
                 axes = {k: v for k, v in axes.items() if k in PF_GLOBAL_AXES_LARGE}
             best, rows = tune_pf_global(
-                runs, noise, PfConfig(n_particles=n), start, axes, seed=args.seed, log=log
+                plain,
+                noise,
+                PfConfig(n_particles=n),
+                start,
+                axes,
+                seed=args.seed,
+                max_passes=args.passes,
+                log=log,
             )
             _save_tuning(
-                f"pf_global_{n}", {"axes": axes, "start": start, "best": best, "rows": rows}
+                f"pf_global_{n}",
+                {**where, "axes": axes, "start": start, "best": best, "rows": rows},
             )
             rec = json.loads(TUNING_RECORD.read_text())
     elif args.tune in ("recovery", "kidnap"):
-        n_tune = args.kidnap or 40
-        kid, plain = kidnap_streams(runs, n_tune, rng=args.seed + 1000)
         rec = json.loads(TUNING_RECORD.read_text()) if TUNING_RECORD.is_file() else {}
         for n in args.particles:
-            key = f"pf_global_{n}"
-            if key not in rec:
-                raise SystemExit(f"run --tune pf-global --particles {n} first")
-            opts = dict(rec[key]["best"]["options"])
-            opts["alphas"] = tuple(opts.get("alphas", (0.001, 0.1)))
+            opts = _global_best(rec, n)
             if args.tune == "recovery":
                 base = pf_config(n, noise, opts)
                 out = tune_recovery(
@@ -581,6 +654,16 @@ def main(argv: list[str] | None = None) -> int:
         default=None,
     )
     ap.add_argument("--grid", choices=sorted(PF_TRACK_GRIDS), default="coarse")
+    ap.add_argument(
+        "--tune-streams", type=int, default=20, help="plain (and kidnapped) tuning streams"
+    )
+    ap.add_argument(
+        "--large-streams",
+        type=int,
+        default=20,
+        help=f"kidnapped (and plain) streams scored from {LARGE:,} particles on",
+    )
+    ap.add_argument("--passes", type=int, default=2, help="coordinate-descent passes")
     args = ap.parse_args(argv)
     default_particles = "2000" if args.quick else "2000,10000,50000"
     args.particles = [int(p) for p in (args.particles or default_particles).split(",")]
@@ -604,8 +687,21 @@ def main(argv: list[str] | None = None) -> int:
         f"{len(runs)} whole runs, {len(kid)} kidnapped and {len(plain)} plain streams "
         f"(seed {args.seed}); particles {args.particles}"
     )
+    chosen = chosen_options(json.loads(TUNING_RECORD.read_text()), args.particles)
     results = {"tracker": run_tracker([*runs, *kid, *plain], print)}
-    results.update(run_all(runs, kid, plain, args.particles, noise, args.seed, print))
+    results.update(
+        run_all(
+            runs,
+            kid,
+            plain,
+            args.particles,
+            noise,
+            args.seed,
+            print,
+            chosen=chosen,
+            large_streams=args.large_streams,
+        )
+    )
 
     import omniloc
 
@@ -622,8 +718,9 @@ def main(argv: list[str] | None = None) -> int:
         "particles": args.particles,
         "odometry_noise": noise.as_dict(),
         "odometry_fit": fit,
-        "ekf_tuned": EKF_TUNED,
-        "pf_tuned": {str(k): v for k, v in PF_TUNED.items()},
+        "ekf_tuned": chosen["ekf"],
+        "pf_tuned": {str(k): v for k, v in chosen["pf"].items()},
+        "large_streams": args.large_streams,
         "wall_s": round(time.time() - t_start, 1),
     }
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -281,3 +281,36 @@ def test_pf_from_uniform_start_localizes() -> None:
         states.append(e.localized and ok)
     assert states[0] is False
     assert np.mean(states[-100:]) > 0.9
+
+
+# ---- the script: what the tuning record chooses ----------------------------------------------
+
+
+def test_tuned_options_take_the_nearest_count_tuned() -> None:
+    import track_baselines as tb
+
+    def best(**o: object) -> dict[str, object]:
+        return {"best": {"options": o}}
+
+    rec = {
+        "ekf": best(noise_scale=8, sigma_deg=0.25, gate_sigmas=10.0),
+        "pf_global_2000": best(sigma_deg=1.0, clutter=0.99, alphas=[0.001, 0.1]),
+        "pf_global_10000": best(sigma_deg=0.5, clutter=0.95, alphas=[0.001, 0.1]),
+        "recovery_2000": {
+            **best(alphas=[0.01, 0.1], per_bearing=False),
+            "kidnap_ratio": {"kidnap_ratio": 0.5},
+        },
+        "kidnap_10000": {"best": {"kidnap_ratio": 0.3}},
+    }
+    chosen = tb.chosen_options(rec, [2000, 10_000, 50_000])
+    assert chosen["ekf"]["noise_scale"] == 8
+    pf = chosen["pf"]
+    assert pf[2000]["sigma_deg"] == 1.0 and pf[2000]["kidnap_ratio"] == 0.5
+    # 10,000 and 50,000: the 10,000 descent, the 2,000 random particles, the 10,000 threshold.
+    for n in (10_000, 50_000):
+        assert pf[n]["sigma_deg"] == 0.5 and pf[n]["clutter"] == 0.95
+        assert pf[n]["alphas"] == (0.01, 0.1) and pf[n]["per_bearing"] is False
+        assert pf[n]["kidnap_ratio"] == 0.3
+    cfg = tb.pf_config(50_000, MotionNoise(), pf[50_000])
+    assert cfg.n_particles == 50_000 and cfg.alpha_slow == 0.01
+    assert cfg.sigma == pytest.approx(math.radians(0.5))
