@@ -190,13 +190,19 @@ def make_tracker(landmarks: LandmarkMap, start: Pose | None) -> LocalizerOverTim
 
     It must return a fresh localizer for one stream (``odometry(t, v, w)``, ``frame(t,
     bearings) -> TrackEstimate``); ``start`` is None (the tracker is not told where it
-    starts). The settings below are the MRCLAM ones omniloc's evaluation uses
-    (``omniloc.evaluate.DATASET_DEFAULTS["mrclam"]``).
+    starts). The settings are the tracker's ``mrclam`` preset when ``omniloc.track`` has
+    presets (as on the ``track`` branch: ``preset("mrclam") -> (sensor, motion, config)``),
+    else the MRCLAM sensor settings omniloc's evaluation uses
+    (``omniloc.evaluate.DATASET_DEFAULTS["mrclam"]``) and the tracker's defaults.
     """
+    import omniloc.track as track
     from omniloc.evaluate import DATASET_DEFAULTS
     from omniloc.sensor import SensorModel
     from omniloc.track import Tracker  # type: ignore[attr-defined]
 
+    if hasattr(track, "preset"):
+        sensor, motion, config = track.preset("mrclam")
+        return Tracker(landmarks, sensor, motion, config)  # type: ignore[no-any-return]
     opts = DATASET_DEFAULTS["mrclam"]["options"]
     sensor = SensorModel(sigma=opts["sigma"], fov=opts["fov"], max_range=opts["max_range"])
     return Tracker(landmarks, sensor=sensor)  # type: ignore[no-any-return]
@@ -240,6 +246,7 @@ def run_all(
     *,
     chosen: dict[str, Any],
     large_streams: int,
+    save: Callable[[dict[str, dict[str, Any]]], Any] | None = None,
 ) -> dict[str, dict[str, Any]]:
     streams = [*runs, *kid, *plain]
     out: dict[str, dict[str, Any]] = {}
@@ -249,6 +256,8 @@ def run_all(
         d["wall_s"] = round(wall, 1)
         d.update(extra)
         out[key] = d
+        if save is not None:
+            save({key: d})
         t = res.totals()
         log(
             f"{key}: {len(res.runs)} streams in {wall:.0f} s; correct "
@@ -688,20 +697,6 @@ def main(argv: list[str] | None = None) -> int:
         f"(seed {args.seed}); particles {args.particles}"
     )
     chosen = chosen_options(json.loads(TUNING_RECORD.read_text()), args.particles)
-    results = {"tracker": run_tracker([*runs, *kid, *plain], print)}
-    results.update(
-        run_all(
-            runs,
-            kid,
-            plain,
-            args.particles,
-            noise,
-            args.seed,
-            print,
-            chosen=chosen,
-            large_streams=args.large_streams,
-        )
-    )
 
     import omniloc
 
@@ -721,19 +716,43 @@ def main(argv: list[str] | None = None) -> int:
         "ekf_tuned": chosen["ekf"],
         "pf_tuned": {str(k): v for k, v in chosen["pf"].items()},
         "large_streams": args.large_streams,
-        "wall_s": round(time.time() - t_start, 1),
     }
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(json.dumps({"meta": meta, "results": results}, indent=1, default=str) + "\n")
-    md = tables(results)
-    if TUNING_RECORD.is_file():
-        md += "\n\n" + tuning_summary(json.loads(TUNING_RECORD.read_text()))
-    head = (
-        f"Measured {meta['when']} ({meta['machine']}, Python {meta['python']}, numpy "
-        f"{meta['numpy']}): `{meta['command']}`, {meta['wall_s']:.0f} s.\n\n"
+    results: dict[str, dict[str, Any]] = {}
+
+    def save(done: dict[str, dict[str, Any]], final: bool = False) -> str:
+        """Write the JSON and the tables of what has run so far (after each localizer, so
+        that a run cut short keeps its figures; ``meta.complete`` says whether it was)."""
+        results.update(done)
+        meta["wall_s"] = round(time.time() - t_start, 1)
+        meta["complete"] = final
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps({"meta": meta, "results": results}, indent=1, default=str) + "\n")
+        md = tables(results)
+        if TUNING_RECORD.is_file():
+            md += "\n\n" + tuning_summary(json.loads(TUNING_RECORD.read_text()))
+        head = (
+            f"Measured {meta['when']} ({meta['machine']}, Python {meta['python']}, numpy "
+            f"{meta['numpy']}): `{meta['command']}`, {meta['wall_s']:.0f} s"
+            + ("" if final else " (INCOMPLETE: the run was still going)")
+            + ".\n\n"
+        )
+        out.with_suffix(".md").write_text(head + md + "\n")
+        return md
+
+    save({"tracker": run_tracker([*runs, *kid, *plain], print)})
+    run_all(
+        runs,
+        kid,
+        plain,
+        args.particles,
+        noise,
+        args.seed,
+        print,
+        chosen=chosen,
+        large_streams=args.large_streams,
+        save=save,
     )
-    out.with_suffix(".md").write_text(head + md + "\n")
-    print(md)
+    print(save({}, final=True))
     return 0
 
 
