@@ -668,14 +668,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--large-streams",
         type=int,
-        default=20,
+        default=4,
         help=f"kidnapped (and plain) streams scored from {LARGE:,} particles on",
     )
     ap.add_argument("--passes", type=int, default=2, help="coordinate-descent passes")
     args = ap.parse_args(argv)
     default_particles = "2000" if args.quick else "2000,10000,50000"
     args.particles = [int(p) for p in (args.particles or default_particles).split(",")]
-    n_kid = args.kidnap if args.kidnap is not None else (10 if args.quick else 100)
+    n_kid = args.kidnap if args.kidnap is not None else (10 if args.quick else 20)
     out = args.out or (
         HERE / "results_tracking-quick.json" if args.quick and not args.tune else DEFAULT_OUT
     )
