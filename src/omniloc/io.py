@@ -39,9 +39,13 @@ from numpy.typing import ArrayLike, NDArray
 from omniloc.errors import InputError, MapError, ObservationError
 
 __all__ = [
+    "MAX_COORDINATE",
     "MapFileData",
+    "as_path",
     "check_bearings",
+    "check_positions",
     "content_lines",
+    "finite_number",
     "json_float",
     "load_bearings",
     "parse_float",
@@ -52,6 +56,7 @@ __all__ = [
     "read_text",
     "real_array",
     "save_bearings",
+    "shorten",
     "split_csv_line",
     "to_jsonable",
     "type_name",
@@ -64,6 +69,11 @@ __all__ = [
 PathLike = str | os.PathLike[str]
 
 _BEARING_COLUMNS = ("bearing", "bearing_rad", "bearing_deg")
+
+#: Largest magnitude of a coordinate, metres. Positions are metres about an origin near the
+#: landmarks (UTM or a building's frame): 1e9 m is well past any of them, and far below where
+#: squared distances overflow and float64 can no longer tell two landmarks apart.
+MAX_COORDINATE = 1e9
 _TEXT_SEPARATORS = re.compile(r"[\s,]+")
 
 
@@ -72,11 +82,77 @@ _TEXT_SEPARATORS = re.compile(r"[\s,]+")
 # --------------------------------------------------------------------------------------------
 
 
+def as_path(path: object, what: str, error: type[InputError] = InputError) -> Path:
+    """``path`` as a :class:`~pathlib.Path`, or ``error`` when it is not a file name.
+
+    A file name is a ``str``, ``bytes`` or path-like object without NUL characters (an int
+    would be taken by :func:`open` as a file descriptor).
+
+    Examples
+    --------
+    >>> as_path("map.csv", "map").name
+    'map.csv'
+    >>> as_path(3, "map")
+    Traceback (most recent call last):
+    ...
+    omniloc.errors.InputError: map must be a file name (str or path-like), got int 3
+    """
+    try:
+        text = os.fsdecode(path)  # type: ignore[arg-type]
+    except TypeError:
+        raise error(
+            f"{what} must be a file name (str or path-like), got {type(path).__name__} "
+            f"{shorten(path)}"
+        ) from None
+    if "\x00" in text or not text:
+        raise error(f"{what} must be a file name, got {text!r}")
+    return Path(text)
+
+
+def shorten(value: object, width: int = 60) -> str:
+    """``repr(value)`` cut to ``width`` characters, for messages that quote what they got."""
+    text = repr(value)
+    return text if len(text) <= width else text[: width - 3] + "..."
+
+
+def _as_float(value: int | float | np.integer | np.floating) -> float:
+    """``float(value)``, with an int beyond the float range as infinity."""
+    try:
+        return float(value)
+    except OverflowError:
+        return math.inf
+
+
+def finite_number(value: object, name: str, error: type[InputError] = InputError) -> float:
+    """A finite real number (not a bool, a string or an array) as a float, or ``error``
+    naming ``name``.
+
+    Examples
+    --------
+    >>> finite_number(2, "sigma")
+    2.0
+    >>> finite_number(10**400, "sigma")
+    Traceback (most recent call last):
+    ...
+    omniloc.errors.InputError: sigma must be a finite number, got an int of 401 digits
+    """
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value = value.item()
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise error(f"{name} must be a number, got {type(value).__name__} {shorten(value)}")
+    out = _as_float(value)
+    if not math.isfinite(out):
+        if isinstance(value, (int, np.integer)):
+            raise error(f"{name} must be a finite number, got an int of {len(str(value))} digits")
+        raise error(f"{name} must be a finite number, got {value!r}")
+    return out
+
+
 def read_text(path: PathLike, error: type[InputError]) -> str:
     """Read a UTF-8 text file, turning every OS or decoding failure into ``error``."""
-    src = os.fspath(path)
+    src = os.fspath(as_path(path, "path", error))
     try:
-        with open(path, encoding="utf-8-sig") as f:
+        with open(src, encoding="utf-8-sig") as f:
             return f.read()
     except FileNotFoundError:
         raise error(f"{src}: file not found") from None
@@ -90,15 +166,24 @@ def read_text(path: PathLike, error: type[InputError]) -> str:
         raise error(
             f"{src}: not a UTF-8 text file (undecodable byte at offset {e.start})"
         ) from None
+    except MemoryError:
+        raise error(f"{src}: file too large to read") from None
 
 
 def write_text(path: PathLike, text: str, error: type[InputError]) -> None:
     """Write ``text`` (already complete in memory) to ``path`` as UTF-8."""
+    dest = as_path(path, "path", error)
     try:
-        with open(path, "w", encoding="utf-8", newline="") as f:
+        with open(dest, "w", encoding="utf-8", newline="") as f:
             f.write(text)
+    except IsADirectoryError:
+        raise error(f"{dest}: is a directory, not a file") from None
+    except FileNotFoundError:
+        raise error(f"{dest}: cannot write file: the folder {dest.parent} does not exist") from None
+    except NotADirectoryError:
+        raise error(f"{dest}: cannot write file: a part of {dest.parent} is a file") from None
     except OSError as e:
-        raise error(f"{os.fspath(path)}: cannot write file: {e.strerror or e}") from None
+        raise error(f"{dest}: cannot write file: {e.strerror or e}") from None
 
 
 def content_lines(text: str) -> list[tuple[int, str]]:
@@ -141,17 +226,19 @@ def parse_float(token: str, where: str, what: str, error: type[InputError]) -> f
     except ValueError:
         raise error(f"{where}: {what} is not a number: {token!r}") from None
     if not math.isfinite(value):
-        raise error(f"{where}: {what} is not finite: {token!r}")
+        shown = token if len(token) <= 40 else f"{token[:20]}...({len(token)} characters)"
+        raise error(f"{where}: {what} is not finite: {shown!r}")
     return value
 
 
 def json_float(value: object, where: str, what: str, error: type[InputError]) -> float:
     """Accept a JSON number (not a bool, not a string) that is finite."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise error(f"{where}: {what} is not a number: {value!r}")
-    out = float(value)
+        raise error(f"{where}: {what} is not a number: {shorten(value)}")
+    out = _as_float(value)
     if not math.isfinite(out):
-        raise error(f"{where}: {what} is not finite: {value!r}")
+        shown = repr(value) if len(repr(value)) <= 40 else f"a number of {len(repr(value))} digits"
+        raise error(f"{where}: {what} is not finite: {shown}")
     return out
 
 
@@ -181,15 +268,24 @@ def _wrap_keep_in_range(a: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def real_array(values: ArrayLike, name: str, error: type[InputError]) -> NDArray[np.float64]:
     """Convert to a float64 array, refusing strings, booleans, complex numbers and ragged data."""
+    if values is None or isinstance(values, (str, bytes, dict)):
+        raise error(f"{name} must be a numeric array of real numbers, got {type(values).__name__}")
     try:
         arr = np.asarray(values)
-    except (ValueError, TypeError):
+    except (ValueError, TypeError, OverflowError):
         raise error(f"{name} must be a rectangular array of real numbers") from None
     if arr.dtype.kind == "O":
         try:
-            return np.array(arr, dtype=np.float64)
-        except (ValueError, TypeError):
+            out = np.array(arr, dtype=np.float64)
+        except (ValueError, TypeError, OverflowError):
             raise error(f"{name} must contain only real numbers") from None
+        if not all(
+            v is None  # a gap: NaN, refused later as non-finite with its row
+            or (isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool))
+            for v in arr.reshape(-1)
+        ):
+            raise error(f"{name} must contain only real numbers")
+        return out
     if arr.dtype.kind not in "iuf":
         raise error(f"{name} must contain real numbers, got an array of dtype {arr.dtype}")
     return np.array(arr, dtype=np.float64)
@@ -198,6 +294,40 @@ def real_array(values: ArrayLike, name: str, error: type[InputError]) -> NDArray
 # --------------------------------------------------------------------------------------------
 # In-memory validation
 # --------------------------------------------------------------------------------------------
+
+
+def check_positions(
+    values: ArrayLike, name: str, error: type[InputError], ids: Sequence[object] | None = None
+) -> NDArray[np.float64]:
+    """Positions of shape (N, 2), metres: real, finite and within :data:`MAX_COORDINATE`.
+
+    The message names ``name``, the first bad row (and its id when ``ids`` is given).
+
+    Examples
+    --------
+    >>> check_positions([[0, 0], [1, 2e9]], "landmarks_xy", InputError)
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    omniloc.errors.InputError: landmark 1 has a coordinate of 2e+09 m (landmarks_xy); ...
+    """
+    xy = real_array(values, name, error)
+    if xy.ndim != 2 or xy.shape[1] != 2:
+        raise error(f"{name} must have shape (N, 2), got {xy.shape}")
+    finite = np.asarray(np.isfinite(xy).all(axis=1), dtype=bool)
+    big = np.abs(np.where(np.isfinite(xy), xy, 0.0)).max(axis=1, initial=0.0) > MAX_COORDINATE
+    bad = np.flatnonzero(~finite | big)
+    if bad.size:
+        row = int(bad[0])
+        who = f"landmark {row}" + (f" (id {ids[row]!r})" if ids is not None else "")
+        if not finite[row]:
+            raise error(f"{who} has a non-finite coordinate ({name}): {xy[row].tolist()}")
+        v = float(xy[row][np.argmax(np.abs(xy[row]))])
+        raise error(
+            f"{who} has a coordinate of {v:.3g} m ({name}); positions are metres of magnitude "
+            f"at most {MAX_COORDINATE:.0e} (move the origin near the landmarks)"
+        )
+    return xy
 
 
 def check_bearings(

@@ -32,8 +32,10 @@ from scipy.spatial import cKDTree
 
 from omniloc.errors import MapError
 from omniloc.io import (
+    MAX_COORDINATE,
     MapFileData,
     PathLike,
+    check_positions,
     read_map_csv,
     read_map_file,
     read_map_json,
@@ -85,13 +87,20 @@ def _normalize_ids(ids: Sequence[Any] | NDArray[Any] | None, n: int) -> tuple[La
         return tuple(range(n))
     if isinstance(ids, str | bytes):
         raise MapError("ids must be a sequence of ids (int or str), not a single string")
+    if isinstance(ids, dict) or not isinstance(ids, Iterable):
+        raise MapError(
+            f"ids must be a sequence of one id (int or str) per landmark, got "
+            f"{type(ids).__name__} {ids!r}"[:200]
+        )
     out: list[LandmarkId] = []
     for row, lid in enumerate(ids):
         if isinstance(lid, np.generic):
             lid = lid.item()
         if isinstance(lid, bool) or not isinstance(lid, int | str):
             raise MapError(
-                f"landmark {row}: id must be an int or a str, got {type(lid).__name__} {lid!r}"
+                f"landmark {row}: id must be an int or a str, got {type(lid).__name__} {lid!r}"[
+                    :200
+                ]
             )
         if isinstance(lid, str) and not lid:
             raise MapError(f"landmark {row}: id must not be an empty string")
@@ -106,6 +115,10 @@ def _normalize_names(names: Sequence[Any] | None, n: int) -> tuple[str, ...] | N
         return None
     if isinstance(names, str | bytes):
         raise MapError("names must be a sequence of strings, not a single string")
+    if isinstance(names, dict) or not isinstance(names, Iterable):
+        raise MapError(
+            f"names must be a sequence of one name per landmark, got {type(names).__name__}"
+        )
     out = tuple(names)
     if len(out) != n:
         raise MapError(f"names must have one entry per landmark: expected {n}, got {len(out)}")
@@ -190,10 +203,7 @@ class LandmarkMap:
             raise MapError(f"a map needs at least 3 landmarks, got {n}")
         ids = _normalize_ids(self.ids, n)
         names = _normalize_names(self.names, n)
-        finite = np.all(np.isfinite(xy), axis=1)
-        if not np.all(finite):
-            row = int(np.flatnonzero(~finite)[0])
-            raise MapError(f"landmark {row} (id {ids[row]!r}) has a non-finite coordinate")
+        check_positions(xy, "landmarks_xy", MapError, ids)
         first_row: dict[LandmarkId, int] = {}
         for row, lid in enumerate(ids):
             prev = first_row.setdefault(lid, row)
@@ -411,6 +421,14 @@ class LandmarkMap:
             if prev != row:
                 raise MapError(f"{place(prev, row)}: duplicate landmark id {lid!r}")
         xy = np.array(coords, dtype=np.float64).reshape(n, 2)
+        big = np.flatnonzero(np.abs(xy).max(axis=1) > MAX_COORDINATE)
+        if big.size:
+            k = int(big[0])
+            raise MapError(
+                f"{src}: landmark {ids[k]!r} has a coordinate of {float(np.abs(xy[k]).max()):.3g} "
+                f"m; positions are metres of magnitude at most {MAX_COORDINATE:.0e} (move the "
+                "origin near the landmarks)"
+            )
         pair = _coincident_pair(xy, cKDTree(xy))
         if pair is not None:
             i, j = pair
