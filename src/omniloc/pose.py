@@ -37,9 +37,10 @@ from numpy.typing import ArrayLike, NDArray
 from ._kernels import geometry as _geo
 from .angles import wrap
 from .errors import DegenerateGeometryError, InputError
-from .io import real_array
+from .io import MAX_COORDINATE, check_positions, finite_number, real_array
 
 __all__ = [
+    "MIN_SIGMA",
     "SINGULAR_RTOL",
     "Pose",
     "bearing_jacobian",
@@ -61,6 +62,11 @@ SINGULAR_RTOL = 1e-10
 #: exceeds this: the pairs do not fix the pose (the robot on the circle through three
 #: landmarks, landmarks all on one line through it).
 MAX_CONDITION = 1e12
+
+#: The smallest bearing noise standard deviation (and gate) accepted, radians: below it the
+#: variance underflows against the rounding of the bearings themselves (1e-12 rad is a
+#: millionth of an arc-second).
+MIN_SIGMA = 1e-12
 
 #: Gauss-Newton iterations of :func:`refine_pose` (it stops earlier when a step no longer
 #: lowers the error).
@@ -85,19 +91,20 @@ class Pose:
     theta: float
 
     def __post_init__(self) -> None:
-        vals = (self.x, self.y, self.theta)
-        try:
-            x, y, t = (float(v) for v in vals)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"pose components must be numbers, got {vals!r}") from exc
-        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(t)):
-            raise InputError(f"pose components must be finite, got ({x}, {y}, {t})")
+        x, y, t = (
+            finite_number(v, f"pose {k}")
+            for k, v in zip(("x", "y", "theta"), self.as_tuple(), strict=True)
+        )
         object.__setattr__(self, "x", x)
         object.__setattr__(self, "y", y)
         if not -math.pi <= t < math.pi:
             object.__setattr__(self, "theta", float(wrap(t)))
         else:
             object.__setattr__(self, "theta", t)
+
+    def as_tuple(self) -> tuple[float, float, float]:
+        """``(x, y, theta)``."""
+        return self.x, self.y, self.theta
 
     @property
     def xy(self) -> FloatArray:
@@ -111,9 +118,9 @@ class Pose:
     @classmethod
     def from_array(cls, arr: ArrayLike) -> Pose:
         """Build a pose from an array-like ``[x, y, theta]``."""
-        a = np.asarray(arr, dtype=np.float64)
+        a = real_array(arr, "pose", InputError)
         if a.shape != (3,):
-            raise InputError(f"a pose array must have shape (3,), got {a.shape}")
+            raise InputError(f"a pose must be (x, y, theta) of shape (3,), got shape {a.shape}")
         return cls(float(a[0]), float(a[1]), float(a[2]))
 
     def distance_to(self, other: Pose) -> tuple[float, float]:
@@ -130,22 +137,11 @@ class Pose:
 
 
 def _check_landmarks(landmarks_xy: ArrayLike, name: str = "landmarks_xy") -> FloatArray:
-    L = real_array(landmarks_xy, name, InputError)
-    if L.ndim != 2 or L.shape[1] != 2:
-        raise InputError(f"{name} must have shape (N, 2), got {L.shape}")
-    bad = np.flatnonzero(~np.isfinite(L).all(axis=1))
-    if bad.size:
-        raise InputError(f"landmark {int(bad[0])} has a non-finite coordinate: {L[bad[0]]}")
-    return L
+    return check_positions(landmarks_xy, name, InputError)
 
 
 def _check_pairs(landmarks_xy: ArrayLike, bearings: ArrayLike) -> tuple[FloatArray, FloatArray]:
     """Validate a set of known landmark/bearing pairs and return float64 arrays."""
-    try:
-        np.asarray(landmarks_xy, dtype=np.float64)
-        np.asarray(bearings, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"landmarks and bearings must be numeric arrays: {exc}") from exc
     L = _check_landmarks(landmarks_xy)
     b = real_array(bearings, "bearings", InputError)
     if b.ndim != 1:
@@ -164,21 +160,27 @@ def _check_pairs(landmarks_xy: ArrayLike, bearings: ArrayLike) -> tuple[FloatArr
 
 def _check_pose(pose: Pose | ArrayLike, name: str = "pose") -> FloatArray:
     if isinstance(pose, Pose):
-        return pose.as_array()
-    try:
-        return Pose.from_array(pose).as_array()
-    except InputError as exc:
-        raise InputError(f"{name}: {exc}") from None
+        p = pose.as_array()
+    else:
+        try:
+            p = Pose.from_array(pose).as_array()
+        except InputError as exc:
+            raise InputError(f"{name}: {exc}") from None
+    if max(abs(p[0]), abs(p[1])) > MAX_COORDINATE:
+        raise InputError(
+            f"{name}: ({p[0]:.3g}, {p[1]:.3g}) lies more than {MAX_COORDINATE:.0e} m from the "
+            "origin: positions are metres near the landmarks"
+        )
+    return p
 
 
 def _check_sigma(sigma: object) -> float:
-    if isinstance(sigma, bool) or not isinstance(sigma, (int, float, np.integer, np.floating)):
-        raise InputError(f"sigma must be a number (radians), got {type(sigma).__name__} {sigma!r}")
-    s = float(sigma)
-    if not (np.isfinite(s) and s > 0):
-        raise InputError(f"sigma must be a positive bearing standard deviation, got {sigma!r}")
-    if s > np.pi:
-        raise InputError(f"sigma must be at most pi radians, got {sigma!r}")
+    s = finite_number(sigma, "sigma (radians)")
+    if not MIN_SIGMA <= s <= np.pi:
+        raise InputError(
+            f"sigma must be a bearing standard deviation in [{MIN_SIGMA:g}, pi] radians, "
+            f"got {s:.4g}"
+        )
     return s
 
 
@@ -234,11 +236,21 @@ def bearing_jacobian(landmarks_xy: FloatArray, poses: FloatArray) -> tuple[Float
     gradients : ndarray, shape (..., n, 3)
         Rows ``[dy / r^2, -dx / r^2, -1]``.
     """
-    L = np.asarray(landmarks_xy, dtype=np.float64)
-    p = np.asarray(poses, dtype=np.float64)
+    L = real_array(landmarks_xy, "landmarks_xy", InputError)
+    p = real_array(poses, "poses", InputError)
+    if L.ndim < 2 or L.shape[-1] != 2:
+        raise InputError(f"landmarks_xy must have shape (..., n, 2), got {L.shape}")
+    if p.shape != (*L.shape[:-2], 3):
+        raise InputError(f"poses must have shape {(*L.shape[:-2], 3)} (x, y, theta), got {p.shape}")
+    check_positions(L.reshape(-1, 2), "landmarks_xy", InputError)
+    check_positions(p[..., :2].reshape(-1, 2), "poses", InputError)
+    if not np.isfinite(p).all():
+        raise InputError("poses must be finite")
     dx = L[..., 0] - p[..., None, 0]
     dy = L[..., 1] - p[..., None, 1]
     r2 = dx * dx + dy * dy
+    if not (r2 > 0).all():
+        raise DegenerateGeometryError("a landmark stands on its pose: it has no bearing there")
     pred = np.arctan2(dy, dx) - p[..., None, 2]
     g = np.stack([dy / r2, -dx / r2, -np.ones_like(r2)], axis=-1)
     return pred, g
@@ -275,8 +287,22 @@ def poses_from_pairs(
         (``sum P_i`` singular), ``"behind"`` (a distance ratio ``r_i <= 0``), ``"infinity"``.
         ``why["behind_at"]`` holds the first pair with ``r_i <= 0`` (as an int array).
     """
-    L = np.asarray(landmarks_xy, dtype=np.float64)
-    b = np.asarray(bearings, dtype=np.float64)
+    L = real_array(landmarks_xy, "landmarks_xy", InputError)
+    b = real_array(bearings, "bearings", InputError)
+    if L.ndim != 3 or L.shape[2] != 2 or L.shape[1] < 2:
+        raise InputError(f"landmarks_xy must have shape (K, n, 2) with n >= 2, got {L.shape}")
+    if b.shape != L.shape[:2]:
+        raise InputError(f"bearings must have shape {L.shape[:2]} (K, n), got {b.shape}")
+    check_positions(L.reshape(-1, 2), "landmarks_xy", InputError)
+    if not np.isfinite(b).all():
+        raise InputError("bearings must be finite")
+    if scale is not None:
+        sc = real_array(scale, "scale", InputError)
+        if sc.shape not in ((), (L.shape[0],)) or not (np.isfinite(sc) & (sc > 0)).all():
+            raise InputError(
+                f"scale must be a positive finite number or one per set (shape ({L.shape[0]},))"
+            )
+        scale = sc
     if scale is None:
         scale = np.abs(L - L.mean(axis=1, keepdims=True)).max(axis=(1, 2))
         scale = np.where(scale > 0, scale, 1.0)
@@ -284,7 +310,7 @@ def poses_from_pairs(
     zy = L[:, 1:, 1] - L[:, :1, 1]
     coincident = (np.hypot(zx, zy) <= 1e-12 * np.asarray(scale)[..., None]).any(axis=1)
     rot = np.exp(1j * (b[:, 1:] - b[:, :1]))
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         a, bb, p00, p01, p11, pb0, pb1 = _geo.np_pair_terms(zx, zy, rot)  # eqs. (1)-(3)
         s00, s01, s11 = p00.sum(axis=1), p01.sum(axis=1), p11.sum(axis=1)
         t0, t1 = pb0.sum(axis=1), pb1.sum(axis=1)
@@ -415,7 +441,7 @@ def fisher_information(landmarks_xy: ArrayLike, pose: Pose | ArrayLike, sigma: f
             "it has no bearing from there"
         )
     _, g = bearing_jacobian(L, p)
-    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+    with np.errstate(over="ignore", under="ignore", invalid="ignore", divide="ignore"):
         J = g.T @ g / (s * s)
     return np.asarray(J)
 
@@ -517,14 +543,17 @@ def refine_pose(
     sigma : float, optional
         Bearing noise standard deviation in radians. When omitted the covariance is scaled by
         the residual variance ``SSE / (N - 3)``; with exactly 3 pairs there is no redundancy to
-        estimate it from, and the covariance is then all NaN (unknown), never a made-up number.
+        estimate it from, and an exact fit has none to show, so the covariance is then all NaN
+        (unknown), never a made-up number.
 
     Returns
     -------
     pose : Pose
         The refined pose.
     covariance : ndarray, shape (3, 3)
-        ``sigma^2 (G^T G)^-1`` at the refined pose (Gauss-Newton approximation).
+        ``sigma^2 (G^T G)^-1`` at the refined pose (Gauss-Newton approximation), positive
+        definite; all NaN (unknown) without ``sigma`` when the residuals cannot tell the
+        noise: exactly 3 pairs, or an exact fit.
 
     Raises
     ------
@@ -565,11 +594,10 @@ def refine_pose(
     n = L.shape[0]
     if s is not None:
         return pose, pose_covariance(L, pose, s)
-    if n > 3:
-        s_est = float(np.sqrt(sse[0] / (n - 3)))
-        if s_est > 0:
-            return pose, pose_covariance(L, pose, s_est)
-        # An exact fit of redundant pairs: the residual variance is zero.
-        return pose, np.zeros((3, 3))
-    pose_covariance(L, pose, 1.0)  # the geometry must still fix the pose
+    unit = pose_covariance(L, pose, 1.0)  # the geometry must fix the pose, whatever the noise
+    s2 = float(sse[0]) / (n - 3) if n > 3 else 0.0
+    if s2 > 0:
+        return pose, unit * s2
+    # Three pairs (no redundancy) or an exact fit: the residuals say nothing of the noise, and
+    # a zero covariance would claim a certainty nobody has.
     return pose, np.full((3, 3), np.nan)
