@@ -44,11 +44,13 @@ from scipy.special import chdtri, ndtri
 
 from .angles import TWO_PI, wrap
 from .errors import InputError
-from .pose import Pose
+from .io import finite_number
+from .pose import MIN_SIGMA, Pose
 
 __all__ = [
     "DEFAULT_THRESHOLD",
     "IMPLAUSIBLE_NOISE",
+    "MAX_RANGE",
     "RANGE_SLACK",
     "SensorModel",
 ]
@@ -73,13 +75,15 @@ VISIBLE_NOISE_MARGIN = 3.0
 #: has nothing to prune with. It is refused unless ``allow_wide=True``.
 IMPLAUSIBLE_NOISE = float(np.deg2rad(10.0))
 
+#: The largest range limit accepted, metres: ten times the largest coordinate of a map
+#: (omit ``max_range`` for a sensor without one).
+MAX_RANGE = 1e10
+
 
 def _number(name: str, value: Any, *, lo: float = 0.0, allow_zero: bool = False) -> float:
     """A finite float >= ``lo`` (> ``lo`` unless ``allow_zero``), or a clear error."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise InputError(f"{name} must be a number, got {type(value).__name__} {value!r}")
-    v = float(value)
-    if not math.isfinite(v) or v < lo or (v == lo and not allow_zero):
+    v = finite_number(value, name)
+    if v < lo or (v == lo and not allow_zero):
         rel = ">=" if allow_zero else ">"
         raise InputError(f"{name} must be a finite number {rel} {lo:g}, got {value!r}")
     return v
@@ -135,7 +139,9 @@ class SensorModel:
         uniformly over the field of view. None: the search's ``max_spurious`` is taken as the
         expected count, with at least :attr:`CLUTTER_UNKNOWN`.
     allow_wide : bool, default False
-        Accept a ``sigma`` or ``threshold`` above :data:`IMPLAUSIBLE_NOISE` (10 degrees).
+        Accept a ``sigma`` or ``threshold`` above :data:`IMPLAUSIBLE_NOISE` (10 degrees, up
+        to pi). A search with such a gate has nearly nothing to prune with: without a budget
+        it gets a default one (see :func:`omniloc.localize`).
 
     Raises
     ------
@@ -178,10 +184,16 @@ class SensorModel:
             if fov > TWO_PI + 1e-9:
                 raise InputError(f"fov is a full angle in radians, at most 2*pi, got {fov}")
             set_(self, "fov", min(fov, TWO_PI))
-        if self.max_range is not None:
-            set_(self, "max_range", _number("max_range", self.max_range))
-        if self.min_range is not None:
-            set_(self, "min_range", _number("min_range", self.min_range, allow_zero=True))
+        for key in ("max_range", "min_range"):
+            r = getattr(self, key)
+            if r is not None:
+                r = _number(key, r, allow_zero=key == "min_range")
+                if r > MAX_RANGE:
+                    raise InputError(
+                        f"{key}={r:.3g} m is beyond any map (at most {MAX_RANGE:.0e} m); "
+                        "omit it for a sensor without a range limit"
+                    )
+                set_(self, key, r)
         if (
             self.max_range is not None
             and self.min_range is not None
@@ -196,13 +208,23 @@ class SensorModel:
             set_(self, "clutter", _number("clutter", self.clutter, allow_zero=True))
         if not isinstance(self.allow_wide, (bool, np.bool_)):
             raise InputError(f"allow_wide must be True or False, got {self.allow_wide!r}")
+        name = "sigma" if self.sigma is not None else "threshold"
         wide = self.sigma if self.sigma is not None else self.threshold
-        if wide > IMPLAUSIBLE_NOISE and not self.allow_wide:
-            name = "sigma" if self.sigma is not None else "threshold"
+        if wide < MIN_SIGMA:
             raise InputError(
-                f"{name}={wide:.4g} rad ({math.degrees(wide):.1f} deg) is implausibly wide for a "
+                f"{name}={wide:.3g} rad is narrower than float64 bearings can be told apart "
+                f"(at least {MIN_SIGMA:g} rad)"
+            )
+        if wide > math.pi:
+            raise InputError(
+                f"{name}={wide:.4g} rad ({math.degrees(wide):.4g} deg) is more than half a turn: "
+                "angles are in radians (did you pass degrees?)"
+            )
+        if wide > IMPLAUSIBLE_NOISE and not self.allow_wide:
+            raise InputError(
+                f"{name}={wide:.4g} rad ({math.degrees(wide):.4g} deg) is implausibly wide for a "
                 "bearing sensor (above 10 deg): angles are in radians (did you pass degrees?); "
-                "pass allow_wide=True if you mean it"
+                "pass allow_wide=True if you mean it (the search then gets a default budget)"
             )
 
     # ---- construction ------------------------------------------------------------------------
@@ -227,11 +249,7 @@ class SensorModel:
             if p_detect is not None:
                 raise InputError("give p_miss or p_detect, not both (p_miss = 1 - p_detect)")
             p_detect = 1.0 - _probability("p_miss", p_miss)
-        if isinstance(confidence, bool) or not isinstance(
-            confidence, (int, float, np.integer, np.floating)
-        ):
-            raise InputError(f"confidence must be a number, got {confidence!r}")
-        if not 0.0 < float(confidence) < 1.0:
+        if not 0.0 < finite_number(confidence, "confidence") < 1.0:
             raise InputError(f"confidence must lie strictly between 0 and 1, got {confidence!r}")
         return cls(
             sigma=sigma,
