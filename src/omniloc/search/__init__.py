@@ -17,6 +17,7 @@ Where each idea lives:
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import time
@@ -28,7 +29,7 @@ from numpy.typing import ArrayLike
 from ..errors import InputError
 from ..io import check_bearings
 from ..maps import LandmarkMap, as_landmark_map
-from ..sensor import SensorModel
+from ..sensor import IMPLAUSIBLE_NOISE, SensorModel
 from .hypotheses import run_hypotheses
 from .options import Budget, Leaves, SearchOptions, make_options
 from .results import LocalizationResult, Method, SearchStats, Solution, Strategy
@@ -48,7 +49,7 @@ __all__ = [
 
 log = logging.getLogger("omniloc.search")
 
-#: Maps larger than this, searched without max_range or a budget, get a warning in the log.
+#: Maps larger than this, searched without max_range or a budget, get DEFAULT_TIMEOUT_S.
 LARGE_MAP = 1000
 
 #: With ``exhaustive=None`` (the default), maps of more than this many landmarks searched with
@@ -58,6 +59,32 @@ LARGE_MAP = 1000
 #: is then flagged ambiguous ("first fit: rivals not sought"); ``exhaustive=True`` buys a
 #: decisive verdict.
 AUTO_FIRST_FIT = 2000
+
+#: The budget (seconds) of a search that nothing else bounds: a gate wider than
+#: IMPLAUSIBLE_NOISE (``allow_wide=True``), which accepts nearly every pairing, or a map larger
+#: than LARGE_MAP without ``max_range``, whose tree holds N^3 landmark triples per seed. The
+#: result reports it (``stats.default_budget``) and the log says what to pass instead.
+DEFAULT_TIMEOUT_S = 10.0
+
+
+def unbounded(lm: LandmarkMap, opt: SearchOptions) -> str:
+    """Why nothing bounds a search ("" when its budget, range or gate does)."""
+    if opt.budget.bounded:
+        return ""
+    s = opt.sensor
+    noise = s.sigma if s.sigma is not None else s.threshold
+    if noise > IMPLAUSIBLE_NOISE:
+        name = "sigma" if s.sigma is not None else "threshold"
+        return (
+            f"{name}={math.degrees(noise):.1f} deg accepts nearly every pairing; pass a "
+            "narrower one, or timeout_s or max_nodes"
+        )
+    if lm.n > LARGE_MAP and s.max_range is None:
+        return (
+            f"{lm.n} landmarks without max_range (about {float(lm.n) ** 3:.1e} landmark "
+            "triples per seed); pass max_range, timeout_s or max_nodes"
+        )
+    return ""
 
 
 def choose_engine(
@@ -195,7 +222,9 @@ def localize(
         Expected number of spurious bearings per frame (default: ``max_spurious``, at least
         0.5), spread over the field of view: what a bearing left unmatched costs.
     max_nodes, timeout_s : optional
-        The budget (see ``budget``).
+        The budget (see ``budget``). A search that nothing bounds -- a gate wider than 10
+        degrees (``allow_wide``) or more than LARGE_MAP landmarks without ``max_range`` --
+        gets ``timeout_s=DEFAULT_TIMEOUT_S``, reported in ``stats.default_budget``.
 
     Returns
     -------
@@ -260,14 +289,12 @@ def localize(
             f"{m} bearings but the map has only {lm.n} landmarks"
             + (f" (with max_spurious={opt.max_wild})" if opt.max_wild else "")
         )
-    if lm.n > LARGE_MAP and opt.sensor.max_range is None and not opt.budget.bounded:
-        log.warning(
-            "localize: %d landmarks without max_range or a budget: the tree holds about %.1e "
-            "landmark triples per seed and may run for a very long time; pass max_range, "
-            "timeout_s or max_nodes",
-            lm.n,
-            float(lm.n) ** 3,
-        )
+    why = unbounded(lm, opt)
+    default_budget = ""
+    if why:
+        default_budget = f"timeout_s={DEFAULT_TIMEOUT_S:g} by default: {why}"
+        log.warning("localize: %s", default_budget)
+        opt = dataclasses.replace(opt, budget=Budget(timeout_s=DEFAULT_TIMEOUT_S))
     engine = choose_engine(strategy, meth, opt, exhaustive, lm.n)
     # The robust tree starts with the best-spread triple; the paper's takes the given order.
     robust_tree = engine in ("paper", "tree") and meth is Method.ROBUST
@@ -299,5 +326,6 @@ def localize(
             if not leaves.complete
             else ("first fit: rivals not sought" if not leaves.exhaustive else "")
         ),
+        default_budget=default_budget,
     )
     return LocalizationResult(scored.solutions, stats, lm, scored.ambiguous, scored.unexplained)

@@ -81,6 +81,11 @@ class SearchStats:
     stopped : str
         Why the search stopped before looking at everything: ``"budget"`` (``max_nodes`` or
         ``timeout_s``), ``"first fit: rivals not sought"``, or ``""`` (it did not).
+    default_budget : str
+        Why the search ran under a default budget the caller did not give ("" when it did
+        not): nothing else bounded it (a gate wider than 10 degrees, a large map without
+        ``max_range``), and the note says what to pass. ``complete`` tells whether the
+        budget stopped it.
     """
 
     total_paths: int
@@ -96,6 +101,7 @@ class SearchStats:
     complete: bool = True
     exhaustive: bool = True
     stopped: str = ""
+    default_budget: str = ""
 
     def as_dict(self) -> dict[str, int | float | bool | str]:
         """Plain-JSON dictionary of the statistics."""
