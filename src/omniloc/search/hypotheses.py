@@ -38,7 +38,7 @@ from ..angles import wrap
 from ..maps import LandmarkMap
 from ..pose import SINGULAR_RTOL
 from . import seeds as seeding
-from .neighbours import neighbour_lists
+from .neighbours import expected_entries, neighbour_lists
 from .options import Leaves, SearchOptions
 from .scoring import evidence_model
 from .tree import eps_f2
@@ -87,12 +87,23 @@ THREADS = 2
 CAPACITY = 16000
 
 
+#: Neighbour lists are built while they would hold at most this many entries (24 bytes
+#: each): a range that spans most of a dense map makes nearly every landmark a neighbour of
+#: every other, and the lists would only copy the map N times over.
+MAX_NEIGHBOUR_ENTRIES = 20_000_000
+
+
 def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> Neighbours:
     """Whom each landmark can be seen with: with a range, its neighbours within twice the
     range (the pose lies within range of the first landmark, so every landmark it sees lies
-    within twice that of it); else every other landmark."""
+    within twice that of it); else, or when those lists would be huge, every other
+    landmark."""
     s = opt.sensor
-    if s.reach_max is not None and lm.n > 64:
+    if (
+        s.reach_max is not None
+        and lm.n > 64
+        and expected_entries(lm, 2.0 * s.reach_max) <= MAX_NEIGHBOUR_ENTRIES
+    ):
         nb = neighbour_lists(lm, 2.0 * s.reach_max)
         return Neighbours(lm.xy, nb.ptr[:-1], nb.ptr[1:], nb.idx, nb.xy)
     # In the list 0..N-1 written twice, the N - 1 entries after position i are all

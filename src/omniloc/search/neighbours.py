@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from ..maps import LandmarkMap
 
-__all__ = ["NeighbourLists", "neighbour_lists"]
+__all__ = ["NeighbourLists", "expected_entries", "neighbour_lists"]
 
 #: Radii kept per map.
 KEEP = 4
@@ -35,6 +35,25 @@ class NeighbourLists(NamedTuple):
     ptr: NDArray[np.int64]
     idx: NDArray[np.int64]
     xy: NDArray[np.float64]
+
+
+def expected_entries(lm: LandmarkMap, radius: float, sample: int = 256) -> float:
+    """About how many entries the neighbour lists of ``lm`` within ``radius`` hold (each pair
+    twice), from the neighbour counts of an evenly spread sample of landmarks: what building
+    them would cost in memory, before it is spent.
+
+    Examples
+    --------
+    >>> lm = LandmarkMap([[0, 0], [1, 0], [5, 0]])
+    >>> expected_entries(lm, 2.0), expected_entries(lm, 100.0)
+    (2.0, 6.0)
+    """
+    x0, y0, x1, y1 = lm.bounds
+    if radius >= float(np.hypot(x1 - x0, y1 - y0)):
+        return float(lm.n) * (lm.n - 1)
+    rows = np.unique(np.linspace(0, lm.n - 1, min(sample, lm.n)).astype(np.int64))
+    counts = lm.kdtree.query_ball_point(lm.xy[rows], float(radius), return_length=True)
+    return float(np.mean(np.asarray(counts) - 1)) * lm.n
 
 
 def neighbour_lists(lm: LandmarkMap, radius: float) -> NeighbourLists:

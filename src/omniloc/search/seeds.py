@@ -21,6 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..angles import TWO_PI
+from ..errors import InputError
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -41,6 +42,14 @@ WIDE_SPAN = float(np.deg2rad(150.0))
 
 #: Largest (number of triples) x (number of spurious sets) for the exact greedy cover.
 MAX_GREEDY = 3_000_000
+
+#: Most triples of bearings enumerated as candidates (C(m, 3): m = 182). More bearings choose
+#: their seeds among m / 3 disjoint triples spread round the robot instead.
+MAX_TRIPLES = 1_000_000
+
+#: Most seed triples a search may need: more (many bearings, most of them possibly spurious)
+#: are refused rather than allocated (1,000 bearings with max_spurious=0.99 would need 1.6e8).
+MAX_SEEDS = 100_000
 
 #: Verifying a hypothesis from a narrow seed costs about this many times one from a wide seed
 #: (its cheap test has a wider margin and its first matches are relinearised): 1.5-2.5x,
@@ -201,6 +210,20 @@ def seed_triples(bearings: FloatArray, max_wild: int, limits: FloatArray) -> Int
     """
     m = int(bearings.shape[0])
     k = int(max_wild)
+    if m >= 3 * (k + 1) and math.comb(m, 3) > MAX_TRIPLES:
+        # Too many bearings to weigh every triple: k + 1 of m / 3 disjoint triples, each
+        # spread round the robot (every third bearing in angular order), cheapest first.
+        spread = _spread_triples(bearings)
+        pick = np.argsort(triple_cost(bearings, spread, limits), kind="stable")[: k + 1]
+        return _tightest_pair_first(spread[pick], limits)
+    if m < 3 * (k + 1) and math.comb(m, k) * math.comb(m, 3) > MAX_GREEDY:
+        n_seeds = math.comb(k + 3, 3)
+        if n_seeds > MAX_SEEDS:
+            raise InputError(
+                f"max_spurious={k} of {m} bearings would need {n_seeds:.3g} seed triples to "
+                f"be sure one is clean (at most {MAX_SEEDS:,}): allow fewer spurious "
+                "bearings, or give fewer bearings"
+            )
     triples = _triples(m)
     cost = triple_cost(bearings, triples, limits)
     if k == 0:
@@ -213,6 +236,13 @@ def seed_triples(bearings: FloatArray, max_wild: int, limits: FloatArray) -> Int
         # Any k spurious bearings leave three of the first k + 3 clean.
         out = np.array(list(itertools.combinations(range(k + 3), 3)), dtype=np.int64)
     return _tightest_pair_first(out, limits)
+
+
+def _spread_triples(bearings: FloatArray) -> IntArray:
+    """m // 3 disjoint triples of bearings, each of every third bearing in angular order."""
+    order = np.argsort(bearings, kind="stable")
+    third = bearings.shape[0] // 3
+    return np.stack([order[:third], order[third : 2 * third], order[2 * third : 3 * third]], 1)
 
 
 @functools.lru_cache(maxsize=64)

@@ -120,6 +120,8 @@ def run_paper_kernel(lm: LandmarkMap, beta: FloatArray, opt: SearchOptions, out:
     kept and the result is marked incomplete.
     """
     capacity = 64
+    # Room for the paths, (leaves, m) twice over in the scoring, stays within about 2e7 entries.
+    most = max(64, min(MAX_COMPILED_LEAVES, 20_000_000 // max(1, beta.shape[0])))
     cap = 0
     budget = opt.budget
     if budget.max_nodes is not None:
@@ -132,9 +134,9 @@ def run_paper_kernel(lm: LandmarkMap, beta: FloatArray, opt: SearchOptions, out:
     while True:
         lim = TreeLimits(float(opt.sensor.threshold), SINGULAR_RTOL, eps_f2(lm), cap, capacity)
         assign, pose, counts = paper_tree(L, b, lim)
-        if counts.leaves <= capacity or capacity >= MAX_COMPILED_LEAVES:
+        if counts.leaves <= capacity or capacity >= most:
             break
-        capacity = min(int(counts.leaves), MAX_COMPILED_LEAVES)
+        capacity = min(int(counts.leaves), most)
     c = out.counts
     c.nodes, c.examined, c.triples = counts.nodes, counts.examined, counts.triples
     c.existence, c.gate = counts.pruned_existence, counts.pruned_gate
