@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
+from ..io import finite_number
 from ..sensor import DEFAULT_THRESHOLD, SensorModel
 from .results import Method
 
@@ -53,9 +54,13 @@ class Budget:
         if t is not None:
             if isinstance(t, bool) or not isinstance(t, (int, float, np.integer, np.floating)):
                 raise InputError(f"timeout_s must be a number of seconds, got {t!r}")
-            if not (float(t) > 0 and not math.isnan(float(t))):
+            try:
+                seconds = float(t)
+            except OverflowError:  # an int beyond float: no limit in practice
+                seconds = float(MAX_BUDGET)
+            if not (seconds > 0 and not math.isnan(seconds)):
                 raise InputError(f"timeout_s must be a positive number of seconds, got {t!r}")
-            object.__setattr__(self, "timeout_s", float(min(float(t), MAX_BUDGET)))
+            object.__setattr__(self, "timeout_s", float(min(seconds, MAX_BUDGET)))
 
     @property
     def bounded(self) -> bool:
@@ -123,17 +128,24 @@ class SearchOptions:
 def _max_spurious(max_spurious: Any, m: int) -> int:
     if isinstance(max_spurious, bool) or not isinstance(max_spurious, (int, float, np.number)):
         raise InputError(f"max_spurious must be an int or a fraction of m, got {max_spurious!r}")
-    v = float(max_spurious)
-    if not math.isfinite(v):
-        raise InputError(f"max_spurious must be finite, got {max_spurious!r}")
+    if isinstance(max_spurious, (int, np.integer)) and not -(2**62) < max_spurious < 2**62:
+        raise InputError(
+            f"max_spurious must be an int below the number of bearings ({m}), got an int of "
+            f"{len(str(max_spurious))} digits"
+        )
+    v = finite_number(max_spurious, "max_spurious")
     if isinstance(max_spurious, (float, np.floating)) and not v.is_integer():
         if not 0.0 <= v < 1.0:
             raise InputError(f"max_spurious as a fraction must lie in [0, 1), got {max_spurious}")
         return math.floor(v * m)
-    k = int(v)
-    if k < 0:
+    if v < 0:
         raise InputError(f"max_spurious must be >= 0, got {max_spurious}")
-    return k
+    if v >= m:
+        raise InputError(
+            f"max_spurious={v:.6g} is not below the number of bearings ({m}); a pose needs at "
+            "least 3 matched bearings"
+        )
+    return int(v)
 
 
 def make_options(
@@ -197,7 +209,7 @@ def make_options(
         )
     if isinstance(decisive, bool) or not isinstance(decisive, (int, float, np.number)):
         raise InputError(f"decisive must be a share of the posterior in (0, 1), got {decisive!r}")
-    if not 0.5 <= float(decisive) < 1.0:
+    if not 0.5 <= finite_number(decisive, "decisive") < 1.0:
         raise InputError(
             f"decisive must lie in [0.5, 1): the best solution's share of the posterior for an "
             f"unambiguous answer, got {decisive!r}"

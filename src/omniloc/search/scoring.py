@@ -52,7 +52,7 @@ from .._kernels import geometry as geo
 from .._kernels.merge import merge
 from ..angles import TWO_PI, wrap
 from ..maps import LandmarkMap
-from ..pose import Pose
+from ..pose import MAX_CONDITION, Pose
 from ..sensor import SensorModel
 from .options import Leaves, SearchOptions
 from .results import Solution
@@ -303,6 +303,17 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     rms = np.sqrt(sse / nmatch)
     # Covariance at the refined pose: sigma^2 (G^T G)^-1 over the matched pairs.
     cov = geo.covariances(Lm, w, poses, ev.sig2, geo.COVARIANCE_FLOOR)
+    # An interpretation whose pairs do not fix its pose (every bearing alike: a robot "at
+    # infinity"; a pose on the circle through its three landmarks) is no answer: its
+    # covariance is the floor's, not the data's (pose_covariance refuses the same).
+    fixed = _fixed(cov)
+    if not fixed.any():
+        return Scored([], True, 1.0)
+    if not fixed.all():
+        k = np.flatnonzero(fixed)
+        assign, w, Lm, poses, sse, nmatch, rms, cov = (
+            assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k], rms[k], cov[k]
+        )  # fmt: skip
     missed = np.zeros(len(poses), dtype=np.int64)
     if s.p_detect is not None or ev.unknown_rate:
         missed = missed_landmarks(lm, poses, assign, bearings, opt)
@@ -359,6 +370,14 @@ def convincing(confidence: float, unexplained: float, places: int, opt: SearchOp
         return True
     need = math.log(opt.decisive / (1.0 - opt.decisive)) + math.log(max(1, places))
     return math.log(max(confidence, 1e-300)) - math.log(unexplained) >= need
+
+
+def _fixed(cov: FloatArray) -> NDArray[np.bool_]:
+    """Which (K, 3, 3) covariances are finite, positive definite and conditioned like a
+    pose the pairs fix (:data:`omniloc.pose.MAX_CONDITION`)."""
+    ok = np.asarray(np.isfinite(cov).all(axis=(1, 2)), dtype=bool)
+    w = np.linalg.eigvalsh(np.where(ok[:, None, None], cov, np.eye(3)))
+    return np.asarray(ok & (w[:, 0] > 0) & (w[:, -1] <= MAX_CONDITION * w[:, 0]))
 
 
 def _regularised(cov: FloatArray) -> FloatArray:
