@@ -48,6 +48,7 @@ __all__ = [
     "finite_number",
     "json_float",
     "load_bearings",
+    "make_folder",
     "parse_float",
     "parse_json",
     "read_map_csv",
@@ -136,6 +137,8 @@ def finite_number(value: object, name: str, error: type[InputError] = InputError
     ...
     omniloc.errors.InputError: sigma must be a finite number, got an int of 401 digits
     """
+    if type(value) is float and math.isfinite(value):  # the common case, first
+        return value
     if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
         value = value.item()
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
@@ -170,6 +173,19 @@ def read_text(path: PathLike, error: type[InputError]) -> str:
         raise error(f"{src}: file too large to read") from None
 
 
+def make_folder(folder: Path, what: str, error: type[InputError] = InputError) -> Path:
+    """Create ``folder`` (and its parents) for ``what``, or ``error`` saying why not."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise error(f"{what}: cannot create the folder {folder}: a file is there") from None
+    except NotADirectoryError:
+        raise error(f"{what}: cannot create the folder {folder}: a part of it is a file") from None
+    except OSError as exc:
+        raise error(f"{what}: cannot create the folder {folder}: {exc.strerror or exc}") from None
+    return folder
+
+
 def write_text(path: PathLike, text: str, error: type[InputError]) -> None:
     """Write ``text`` (already complete in memory) to ``path`` as UTF-8."""
     dest = as_path(path, "path", error)
@@ -184,6 +200,12 @@ def write_text(path: PathLike, text: str, error: type[InputError]) -> None:
         raise error(f"{dest}: cannot write file: a part of {dest.parent} is a file") from None
     except OSError as e:
         raise error(f"{dest}: cannot write file: {e.strerror or e}") from None
+
+
+def _columns(fields: Sequence[str], most: int = 8) -> str:
+    """The column names of a header for a message: the first ``most`` and how many more."""
+    shown = ", ".join(shorten(f, 30) for f in fields[:most])
+    return shown + (f" ... ({len(fields)} columns)" if len(fields) > most else "")
 
 
 def content_lines(text: str) -> list[tuple[int, str]]:
@@ -376,6 +398,12 @@ def check_bearings(
     ...
     omniloc.errors.ObservationError: 4 bearings but the map has only 3 landmarks
     """
+    if not isinstance(name, str):
+        raise InputError(f"name must be a str (for messages), got {type(name).__name__}")
+    name = shorten(name, 40).strip("'")
+    for key, v in (("n_landmarks", n_landmarks), ("min_count", min_count)):
+        if v is not None and (isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 0):
+            raise InputError(f"{key} must be an int >= 0, got {shorten(v)}")
     arr = real_array(bearings, name, ObservationError)
     if arr.ndim != 1:
         raise ObservationError(f"{name} must have shape (m,), got {arr.shape}")
@@ -386,7 +414,8 @@ def check_bearings(
         raise ObservationError(f"{name}[{int(bad[0])}] is not finite: {float(arr[bad[0]])!r}{more}")
     m = arr.shape[0]
     if m < min_count:
-        raise ObservationError(f"localization needs at least {min_count} {name}, got {m}")
+        shown = f"{min_count}" if min_count < 10**6 else f"{float(min_count):.3g}"
+        raise ObservationError(f"localization needs at least {shown} {name}, got {m}")
     if n_landmarks is not None and m > n_landmarks:
         raise ObservationError(f"{m} {name} but the map has only {n_landmarks} landmarks")
     return _wrap_keep_in_range(arr)
@@ -426,7 +455,7 @@ def _bearings_from_csv(text: str, src: str, degrees: bool) -> tuple[list[float],
                     raise ObservationError(
                         f"{where}: header must contain a column named bearing, bearing_rad "
                         f"or bearing_deg (or the file must be a single column of numbers "
-                        f"without header); found: {', '.join(repr(f) for f in fields)}"
+                        f"without header); found: {_columns(fields)}"
                     )
                 if len(found) > 1:
                     cols = ", ".join(repr(fields[k]) for k in found)
@@ -528,8 +557,8 @@ def load_bearings(path: PathLike, *, degrees: bool = False) -> NDArray[np.float6
     >>> np.rad2deg(load_bearings(d / "b.txt", degrees=True))
     array([  0.,  90., -90.])
     """
-    src = os.fspath(path)
-    text = read_text(path, ObservationError)
+    src = os.fspath(as_path(path, "path", ObservationError))
+    text = read_text(src, ObservationError)
     suffix = Path(src).suffix.lower()
     in_degrees = degrees
     if suffix == ".csv":
@@ -590,7 +619,7 @@ def save_bearings(path: PathLike, bearings: ArrayLike, *, degrees: bool = False)
     if degrees:
         arr = np.rad2deg(arr)
     units = "deg" if degrees else "rad"
-    suffix = Path(os.fspath(path)).suffix.lower()
+    suffix = as_path(path, "path", ObservationError).suffix.lower()
     if suffix == ".csv":
         text = f"bearing_{units}\n" + "".join(f"{_float_text(v)}\n" for v in arr)
     elif suffix == ".json":
@@ -715,7 +744,7 @@ def read_map_file(path: PathLike) -> MapFileData:
         Unsupported extension, unreadable file, or content that is not a map (the message
         names the file and the line or entry).
     """
-    src = os.fspath(path)
+    src = os.fspath(as_path(path, "map path", MapError))
     suffix = Path(src).suffix.lower()
     if suffix == ".csv":
         return read_map_csv(path)
@@ -737,7 +766,7 @@ def read_map_csv(path: PathLike) -> MapFileData:
     header = [h.lower() for h in split_csv_line(header_text, where, MapError)]
     missing = [c for c in _MAP_COLUMNS if c not in header]
     if missing:
-        found = ", ".join(repr(h) for h in header)
+        found = _columns(header)
         raise MapError(
             f"{where}: header must contain columns id, x, y; missing: {', '.join(missing)} "
             f"(found: {found})"

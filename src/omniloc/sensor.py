@@ -183,6 +183,8 @@ class SensorModel:
             fov = _number("fov", self.fov)
             if fov > TWO_PI + 1e-9:
                 raise InputError(f"fov is a full angle in radians, at most 2*pi, got {fov}")
+            if fov < MIN_SIGMA:
+                raise InputError(f"fov={fov:.3g} rad sees nothing (at least {MIN_SIGMA:g} rad)")
             set_(self, "fov", min(fov, TWO_PI))
         for key in ("max_range", "min_range"):
             r = getattr(self, key)
@@ -249,6 +251,11 @@ class SensorModel:
             if p_detect is not None:
                 raise InputError("give p_miss or p_detect, not both (p_miss = 1 - p_detect)")
             p_detect = 1.0 - _probability("p_miss", p_miss)
+            if p_detect >= 1.0:
+                raise InputError(
+                    f"p_miss={p_miss!r} is too small to tell from 0 in floating point; pass "
+                    "p_miss=None (no negative evidence) or at least 1e-16"
+                )
         if not 0.0 < finite_number(confidence, "confidence") < 1.0:
             raise InputError(f"confidence must lie strictly between 0 and 1, got {confidence!r}")
         return cls(
