@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ._save import save_figure
+
 if TYPE_CHECKING:
     from ..evaluate import DatasetResult, SweepResult
     from ..evaluate.common import Calibration
@@ -35,10 +37,7 @@ def _figure(ncols: int = 1, width: float = 6.0) -> tuple[Any, list[Any]]:
 
 
 def _save(fig: Any, path: str | Path) -> Path:
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
-    return p
+    return save_figure(fig, path)
 
 
 def plot_success_vs_noise(result: SweepResult, path: str | Path) -> Path:

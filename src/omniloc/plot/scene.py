@@ -14,8 +14,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import InputError
+from ..io import check_bearings, shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
+from ._save import save_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -122,13 +124,19 @@ def plot_localization(
     -------
     matplotlib.figure.Figure
     """
+    from ..search import LocalizationResult
+
+    if not isinstance(result, LocalizationResult):
+        raise InputError(f"result must be a LocalizationResult, got {type(result).__name__}")
     lm = as_landmark_map(result.landmarks)
-    b = np.asarray(bearings, dtype=float)
+    b = check_bearings(bearings, min_count=0)
     if result.solutions and b.shape != (len(result.solutions[0].assignment),):
         raise InputError(
             f"bearings must be the {len(result.solutions[0].assignment)} that were localized, "
             f"got shape {b.shape}"
         )
+    if isinstance(max_solutions, bool) or not isinstance(max_solutions, int | np.integer):
+        raise InputError(f"max_solutions must be an int >= 1, got {shorten(max_solutions)}")
     if max_solutions < 1:
         raise InputError(f"max_solutions must be >= 1, got {max_solutions}")
     sols = result.solutions[:max_solutions]
@@ -190,9 +198,4 @@ def plot_solutions_grid(
 
 
 def _save(fig: Any, path: str | Path) -> None:
-    p = Path(path)
-    try:
-        p.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(p, dpi=110)
-    except OSError as exc:
-        raise InputError(f"cannot write figure {p}: {exc.strerror or exc}") from exc
+    save_figure(fig, path)

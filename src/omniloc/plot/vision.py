@@ -28,6 +28,7 @@ from ..vision.render import (
     render_omni_image,
     true_features,
 )
+from ._save import save_figure
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -161,8 +162,7 @@ def plot_detections(
     if title:
         fig.suptitle(title, fontsize=10)
     if save_to is not None:
-        save_to.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(save_to, dpi=110)
+        save_figure(fig, save_to, VisionError)
     return fig
 
 
@@ -241,9 +241,7 @@ def plot_conventions(path: str | os.PathLike[str]) -> Figure:
     ax.set_aspect("equal")
     ax.set_axis_off()
     ax.set_title("omniloc.vision image conventions (aspect exaggerated to 1.3)", fontsize=11)
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
+    save_figure(fig, path, VisionError)
     return fig
 
 
