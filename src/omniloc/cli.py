@@ -22,6 +22,7 @@ import numpy as np
 
 from . import __version__
 from .errors import InputError, OmnilocError
+from .io import make_folder, shorten
 from .pose import Pose
 from .search import Method, Strategy
 
@@ -43,10 +44,28 @@ def _number(text: str) -> float:
     try:
         v = float(text)
     except ValueError as exc:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from exc
+        raise argparse.ArgumentTypeError(f"not a number: {shorten(text, 40)}") from exc
     if not np.isfinite(v):
-        raise argparse.ArgumentTypeError(f"not finite: {text!r}")
+        raise argparse.ArgumentTypeError(f"not finite: {shorten(text, 40)}")
     return v
+
+
+def _seed(text: str) -> int:
+    """A seed for numpy's generator: an int >= 0."""
+    try:
+        v = int(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"not an integer: {shorten(text, 40)}") from exc
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {v}")
+    return v
+
+
+def _out_path(text: str) -> Path:
+    """An output file or folder name (an empty one would write into the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path")
+    return Path(text)
 
 
 def _positive(text: str) -> float:
@@ -160,7 +179,9 @@ def _build_parser() -> argparse.ArgumentParser:
         "(large maps; rivals are not sought)",
     )
     p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument("--plot", type=Path, metavar="OUT.png", help="save a figure of the solutions")
+    p.add_argument(
+        "--plot", type=_out_path, metavar="OUT.png", help="save a figure of the solutions"
+    )
     _add_image_options(p)
 
     b = sub.add_parser("bearings", help="extract landmark bearings from an omnidirectional image")
@@ -168,10 +189,12 @@ def _build_parser() -> argparse.ArgumentParser:
     _add_image_options(b)
     b.add_argument("--degrees", action="store_true", help="print degrees rather than radians")
     b.add_argument("--json", action="store_true", help="machine-readable output")
-    b.add_argument("--plot", type=Path, metavar="OUT.png", help="image with the detected lines")
+    b.add_argument(
+        "--plot", type=_out_path, metavar="OUT.png", help="image with the detected lines"
+    )
 
     d = sub.add_parser("demo", help="reproduce the paper's Table 1 and show the vision chain")
-    d.add_argument("--out", type=Path, default=Path("demo-output"), help="folder for figures")
+    d.add_argument("--out", type=_out_path, default=Path("demo-output"), help="folder for figures")
     d.add_argument("--no-vision", action="store_true", help="skip the vision section")
 
     e = sub.add_parser("evaluate", help="Monte Carlo sweeps and real-data evaluation")
@@ -204,9 +227,9 @@ def _build_parser() -> argparse.ArgumentParser:
         default=4,
         help="MRCLAM: use the frames that see at least this many landmarks (default 4)",
     )
-    e.add_argument("--seed", type=int, default=0)
+    e.add_argument("--seed", type=_seed, default=0)
     e.add_argument("--workers", type=int, default=1, help="processes for a sweep (default 1)")
-    e.add_argument("--out", type=Path, default=Path("evaluation"), help="folder for results")
+    e.add_argument("--out", type=_out_path, default=Path("evaluation"), help="folder for results")
     return parser
 
 
@@ -395,8 +418,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from .search import localize
     from .simulate import DEMO_POSE, demo_room, observe, paper_experiment
 
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_folder(args.out, "--out")
     print("omniloc demo: the seed paper's experiment (Lee & Chung, section 4, Table 1)")
     print(
         f"Demo room: {len(demo_room())} landmarks; robot at ({DEMO_POSE.x}, {DEMO_POSE.y}) "
@@ -496,6 +518,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from . import evaluate as ev
 
     progress = not args.quiet
+    make_folder(args.out, "--out")  # before the run, not after it
     if args.dataset is not None:
         kind, path = args.dataset
         if args.min_landmarks < 3:
