@@ -27,11 +27,14 @@ is reported as its two edges, flagged ``ambiguous``.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import re
+import tempfile
 import warnings
+from collections.abc import Iterator
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 import cv2
@@ -40,9 +43,11 @@ from numpy.typing import NDArray
 
 from omniloc.angles import wrap
 from omniloc.errors import VisionError
+from omniloc.io import as_path, shorten
 from omniloc.vision.calibrate import (
     MirrorCalibration,
     _check_aspect,
+    _count,
     _finite_float,
     as_gray,
     calibrate_mirror,
@@ -58,6 +63,14 @@ __all__ = [
 ]
 
 _PAD = 16  # wrap-around padding (columns) for azimuthal filtering
+
+#: The largest ``forward`` angle accepted, radians: beyond it wrapping loses the precision
+#: of a bearing (at 1e300 every detection fell on one bearing).
+MAX_FORWARD = 1e6
+
+#: The largest ``smoothing`` (Gaussian sigma, panorama columns): a blur wider than a few
+#: degrees erases the edges it looks for (1e6 took 90 s to blur everything away).
+MAX_SMOOTHING = 100.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,6 +134,31 @@ class EdgeDetections:
         return int(self.bearings.shape[0])
 
 
+@contextlib.contextmanager
+def _c_stderr() -> Iterator[list[str]]:
+    """Keep what C libraries (OpenCV, libpng) write to file descriptor 2 during the block off
+    the terminal; the list then holds its last line (without OpenCV's log prefix), if any."""
+    said: list[str] = []
+    try:
+        saved = os.dup(2)
+    except OSError:  # no descriptor 2 to protect
+        yield said
+        return
+    with tempfile.TemporaryFile() as f:
+        os.dup2(f.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            f.seek(0)
+            lines = [ln.strip() for ln in f.read(4096).decode("utf-8", "replace").splitlines()]
+            lines = [ln for ln in lines if ln]
+            if lines:
+                last = re.sub(r"^\[\s*\w+:\S*\]\s*(global\s+\S+\s+)?", "", lines[-1])
+                said.append(shorten(last, 100).strip("'\""))
+
+
 def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
     """Read an image file (PNG, JPEG, TIFF, ... anything OpenCV reads).
 
@@ -140,13 +178,23 @@ def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
     VisionError
         If the file does not exist or cannot be decoded as an image.
     """
-    p = Path(path)
+    p = as_path(path, "image path", VisionError)
     if not p.is_file():
         raise VisionError(f"cannot read image {str(p)!r}: no such file")
-    data = np.fromfile(p, dtype=np.uint8)
-    img: NDArray[Any] | None = cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    try:
+        data = np.fromfile(p, dtype=np.uint8)
+    except OSError as exc:
+        raise VisionError(f"cannot read image {str(p)!r}: {exc.strerror or exc}") from None
+    img: NDArray[Any] | None = None
+    if data.size:
+        with _c_stderr() as said:
+            img = cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
     if img is None:
-        raise VisionError(f"cannot read image {str(p)!r}: not an image format OpenCV can decode")
+        why = said[-1] if data.size and said else ""
+        raise VisionError(
+            f"cannot read image {str(p)!r}: not an image format OpenCV can decode"
+            + (f" ({why})" if why else "")
+        )
     if img.ndim == 3 and img.shape[2] == 3:
         img = cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
     elif img.ndim == 3 and img.shape[2] == 4:
@@ -210,9 +258,9 @@ def _panorama_size(cal: MirrorCalibration, radial_range: tuple[float, float]) ->
 def _check_radial_range(radial_range: object) -> tuple[float, float]:
     try:
         r0, r1 = (float(r) for r in radial_range)  # type: ignore[attr-defined]
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         raise VisionError(
-            f"radial_range must be (inner, outer) fractions of the rim, got {radial_range!r}"
+            f"radial_range must be (inner, outer) fractions of the rim, got {shorten(radial_range)}"
         ) from None
     if not (math.isfinite(r0) and math.isfinite(r1) and 0 <= r0 < r1 <= 1.5):
         raise VisionError(f"radial_range must satisfy 0 <= inner < outer <= 1.5, got {(r0, r1)}")
@@ -253,12 +301,15 @@ def unwrap_panorama(
         If the image or the parameters are malformed.
     """
     gray = _gray8(image)
+    if not isinstance(calibration, MirrorCalibration):
+        raise VisionError(
+            f"calibration must be a MirrorCalibration, got {type(calibration).__name__}"
+        )
     r0, r1 = _check_radial_range(radial_range)
     rows, cols = _panorama_size(calibration, (r0, r1))
-    rows = rows if n_rows is None else int(n_rows)
-    cols = cols if n_cols is None else int(n_cols)
-    if rows < 1 or cols < 8:
-        raise VisionError(f"panorama must have >= 1 row and >= 8 columns, got {rows}x{cols}")
+    # At most 1024 x 16384 samples (64 MiB): far beyond what an image's annulus holds.
+    rows = rows if n_rows is None else _count("n_rows", n_rows, 1, 1024)
+    cols = cols if n_cols is None else _count("n_cols", n_cols, 8, 16384)
     return _remap_panorama(gray, calibration, r0, r1, rows, cols)
 
 
@@ -576,7 +627,7 @@ def extract_bearings(
         Rim centre ``(cx, cy)`` in pixels; overrides `calibration` or is held fixed while the
         rest of the rim is fitted.
     aspect : float, optional
-        Rim semi-axis along u / along v, in (0, 10]; same role as `center`.
+        Rim semi-axis along u / along v, in [0.1, 10]; same role as `center`.
     forward : float
         Image angle of the robot's forward axis, radians.
     mirrored : bool
@@ -630,19 +681,23 @@ def extract_bearings(
     """
     gray, rgb, scale = _to_8bit(image)
     fwd = _finite_float("forward", forward)
+    if abs(fwd) > MAX_FORWARD:
+        raise VisionError(
+            f"forward must be an angle in radians of magnitude at most {MAX_FORWARD:g}, got "
+            f"{fwd:.4g}"
+        )
     r0, r1 = _check_radial_range(radial_range)
-    for name, val in (
-        ("min_contrast", min_contrast),
-        ("min_agreement", min_agreement),
-        ("max_pole_width", max_pole_width),
-        ("min_separation", min_separation),
-        ("smoothing", smoothing),
-        ("min_segment_width", min_segment_width),
+    for name, val, hi in (
+        ("min_contrast", min_contrast, math.inf),
+        ("min_agreement", min_agreement, 1.0),
+        ("max_pole_width", max_pole_width, math.inf),
+        ("min_separation", min_separation, math.inf),
+        ("smoothing", smoothing, MAX_SMOOTHING),
+        ("min_segment_width", min_segment_width, math.inf),
     ):
-        if _finite_float(name, val) < 0:
-            raise VisionError(f"{name} must be >= 0, got {val}")
-    if min_agreement > 1:
-        raise VisionError(f"min_agreement must be in [0, 1], got {min_agreement}")
+        if not 0 <= _finite_float(name, val) <= hi:
+            raise VisionError(f"{name} must be in [0, {hi:g}], got {shorten(val)}")
+    min_agreement, smoothing = float(min_agreement), float(smoothing)
     cal = _resolve_calibration(gray, center, aspect, calibration)
     rows, cols = _panorama_size(cal, (r0, r1))
     maps = _panorama_maps(cal, r0, r1, rows, cols)

@@ -25,26 +25,33 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omniloc.errors import VisionError
+from omniloc.io import finite_number, shorten
 
 __all__ = ["MirrorCalibration", "as_gray", "calibrate_mirror", "check_center"]
 
 _MAX_ASPECT = 10.0
 
 
+#: The largest side of an image, pixels: OpenCV's remap addresses pixels with shorts.
+MAX_IMAGE_SIDE = 32766
+
+
 def _finite_float(name: str, value: object) -> float:
-    try:
-        out = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise VisionError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(out):
-        raise VisionError(f"{name} must be finite, got {out}")
-    return out
+    return finite_number(value, name, VisionError)
+
+
+def _count(name: str, value: object, lo: int, hi: int) -> int:
+    """An int in [lo, hi] (an integral float is accepted), or a VisionError naming ``name``."""
+    v = _finite_float(name, value)
+    if not v.is_integer() or not lo <= v <= hi:
+        raise VisionError(f"{name} must be a whole number in [{lo}, {hi}], got {shorten(value)}")
+    return int(v)
 
 
 def _check_aspect(aspect: object) -> float:
     a = _finite_float("aspect", aspect)
-    if not 0 < a <= _MAX_ASPECT:
-        raise VisionError(f"aspect must be in (0, {_MAX_ASPECT:g}], got {a}")
+    if not 1.0 / _MAX_ASPECT <= a <= _MAX_ASPECT:
+        raise VisionError(f"aspect must be in [{1.0 / _MAX_ASPECT:g}, {_MAX_ASPECT:g}], got {a}")
     return a
 
 
@@ -99,7 +106,7 @@ class MirrorCalibration:
     center : tuple of float
         Rim centre ``(cx, cy)`` in pixels (u to the right, v downward).
     aspect : float
-        Rim semi-axis along u divided by rim semi-axis along v, in (0, 10].
+        Rim semi-axis along u divided by rim semi-axis along v, in [0.1, 10].
     radius : float
         Rim semi-axis along v, pixels (> 0).
 
@@ -183,6 +190,11 @@ def as_gray(image: object) -> NDArray[np.float32]:
         raise VisionError(f"image must be 2-D (H, W) or 3-D (H, W, C), got shape {arr.shape}")
     if arr.shape[0] < 16 or arr.shape[1] < 16:
         raise VisionError(f"image is too small: {arr.shape[1]}x{arr.shape[0]}, need >= 16x16")
+    if max(arr.shape[:2]) > MAX_IMAGE_SIDE:
+        raise VisionError(
+            f"image is too large: {arr.shape[1]}x{arr.shape[0]}, at most {MAX_IMAGE_SIDE} px "
+            "a side (scale it down)"
+        )
     f = arr.astype(np.float32, copy=False)
     if not np.all(np.isfinite(f)):
         raise VisionError("image contains NaN or infinite values")
@@ -298,8 +310,8 @@ def _rim_points(
     ok &= peak > 0.3 * level
     jj = np.clip(j, 1, score.shape[1] - 2)
     s0, s1, s2 = score[rows, jj - 1], score[rows, jj], score[rows, jj + 1]
-    den = s0 - 2 * s1 + s2
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(invalid="ignore", divide="ignore"):  # -inf where a ray left the image
+        den = s0 - 2 * s1 + s2
         delta = np.where(
             np.isfinite(den) & (den < 0), 0.5 * (s0 - s2) / np.where(den == 0, 1, den), 0.0
         )
@@ -397,7 +409,7 @@ def calibrate_mirror(
     center : tuple of float, optional
         Known rim centre ``(cx, cy)`` in pixels; only the other parameters are fitted.
     aspect : float, optional
-        Known aspect ratio (rim semi-axis along u / along v), in (0, 10].
+        Known aspect ratio (rim semi-axis along u / along v), in [0.1, 10].
     radius : float, optional
         Known rim semi-axis along v, pixels.
     n_rays : int
@@ -434,8 +446,7 @@ def calibrate_mirror(
         if not 1 <= r <= 10 * max(h, w):
             raise VisionError(f"radius must be in [1, {10 * max(h, w)}] px, got {r}")
         fixed["radius"] = r
-    if int(n_rays) < 16:
-        raise VisionError(f"n_rays must be >= 16, got {n_rays}")
+    n_rays = _count("n_rays", n_rays, 16, MAX_IMAGE_SIDE)
     if len(fixed) == 4:
         return MirrorCalibration((fixed["cx"], fixed["cy"]), fixed["aspect"], fixed["radius"])
 

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from omniloc.angles import wrap
 from omniloc.errors import VisionError
+from omniloc.io import finite_number, shorten
 
 __all__ = [
     "DEMO_CAMERA",
@@ -49,13 +50,16 @@ _SUPERSAMPLE = 3  # odd, so sub-sample offsets are symmetric about each pixel ce
 
 
 def _finite(name: str, value: float) -> float:
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise VisionError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(out):
-        raise VisionError(f"{name} must be finite, got {out}")
-    return out
+    return finite_number(value, name, VisionError)
+
+
+def _pair(name: str, value: object) -> tuple[float, float]:
+    """Two finite numbers, or a VisionError naming ``name``."""
+    if isinstance(value, str | bytes) or not isinstance(value, tuple | list | np.ndarray):
+        raise VisionError(f"{name} must be a pair of numbers, got {shorten(value)}")
+    if len(value) != 2:
+        raise VisionError(f"{name} must be a pair of numbers, got {len(value)} values")
+    return _finite(name, value[0]), _finite(name, value[1])
 
 
 #: A surface's paint: a grey level in [0, 255], or an RGB colour ``(r, g, b)`` in [0, 255].
@@ -275,34 +279,35 @@ class OmniCamera:
     color: bool = False
 
     def __post_init__(self) -> None:
-        if len(self.image_size) != 2:
-            raise VisionError(f"image_size must be (width, height), got {self.image_size!r}")
-        w, h = (int(s) for s in self.image_size)
-        if w < 16 or h < 16 or w > 20000 or h > 20000:
-            raise VisionError(f"image_size must be between 16 and 20000 px, got {(w, h)}")
+        fw, fh = _pair("image_size", self.image_size)
+        if not (fw.is_integer() and fh.is_integer() and 16 <= min(fw, fh) <= max(fw, fh) <= 20000):
+            raise VisionError(
+                f"image_size must be whole pixels between 16 and 20000, got {(fw, fh)}"
+            )
+        w, h = int(fw), int(fh)
         object.__setattr__(self, "image_size", (w, h))
-        if len(self.center) != 2:
-            raise VisionError(f"center must be (cx, cy), got {self.center!r}")
-        cx, cy = (_finite("center", c) for c in self.center)
+        cx, cy = _pair("center", self.center)
         if not (0 <= cx <= w - 1 and 0 <= cy <= h - 1):
-            raise VisionError(f"center {(cx, cy)} lies outside the {w}x{h} image")
+            raise VisionError(f"center {(cx, cy)} lies outside the image_size {w}x{h}")
         object.__setattr__(self, "center", (cx, cy))
         aspect = _finite("aspect", self.aspect)
-        if not 0 < aspect <= 10:
-            raise VisionError(f"aspect must be in (0, 10], got {aspect}")
+        if not 0.1 <= aspect <= 10:
+            raise VisionError(f"aspect must be in [0.1, 10], got {aspect}")
         if not _finite("radius", self.radius) > 1:
             raise VisionError(f"radius must be > 1 px, got {self.radius}")
         if not 0 <= _finite("inner_radius", self.inner_radius) < 1:
             raise VisionError(f"inner_radius must be in [0, 1), got {self.inner_radius}")
-        for name in ("forward", "blur_sigma", "noise_sigma", "texture_sigma"):
-            _finite(name, getattr(self, name))
+        if abs(_finite("forward", self.forward)) > 1e6:
+            raise VisionError(f"forward must be an angle in radians, got {self.forward:.4g}")
         for name in ("blur_sigma", "noise_sigma", "texture_sigma"):
-            if getattr(self, name) < 0:
-                raise VisionError(f"{name} must be >= 0, got {getattr(self, name)}")
-        if len(self.elevation_range) != 2 or len(self.lighting_gradient) != 2:
-            raise VisionError("elevation_range and lighting_gradient need two values each")
-        for v in (*self.elevation_range, *self.lighting_gradient):
-            _finite("elevation_range/lighting_gradient", v)
+            if not 0 <= _finite(name, getattr(self, name)) <= 1000:
+                raise VisionError(f"{name} must be in [0, 1000], got {getattr(self, name)}")
+        for name in ("background_level", "camera_level"):
+            _check_paint(name, getattr(self, name))
+        for name in ("elevation_range", "lighting_gradient"):
+            lo, hi = _pair(name, getattr(self, name))
+            if max(abs(lo), abs(hi)) > 100:
+                raise VisionError(f"{name} values must lie within [-100, 100], got {(lo, hi)}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -335,18 +340,25 @@ class TrueFeatures:
         return int(self.bearings.shape[0])
 
 
+def _check_scene(scene: object) -> None:
+    if not isinstance(scene, OmniScene):
+        raise VisionError(f"scene must be an OmniScene, got {type(scene).__name__}")
+
+
 def _check_pose(pose: object) -> tuple[float, float, float]:
     try:
         vals = [float(getattr(pose, k)) for k in ("x", "y", "theta")]
     except AttributeError:
         try:
             vals = [float(v) for v in np.asarray(pose, dtype=np.float64).reshape(-1)]
-        except (TypeError, ValueError):
-            raise VisionError(f"pose must be (x, y, theta), got {pose!r}") from None
+        except (TypeError, ValueError, OverflowError):
+            raise VisionError(f"pose must be (x, y, theta), got {shorten(pose)}") from None
     if len(vals) != 3:
         raise VisionError(f"pose must have 3 values (x, y, theta), got {len(vals)}")
     if not all(math.isfinite(v) for v in vals):
         raise VisionError(f"pose must be finite, got {vals}")
+    if max(abs(v) for v in vals) > 1e6:
+        raise VisionError(f"pose must lie within 1e6 m (and radians) of the origin, got {vals}")
     return vals[0], vals[1], vals[2]
 
 
@@ -404,7 +416,11 @@ def true_features(
         If the pose is malformed or lies inside a pole.
     """
     del camera
+    _check_scene(scene)
     x, y, theta = _check_pose(pose)
+    margin = _finite("margin", margin)
+    if not 0 <= margin <= math.pi:
+        raise VisionError(f"margin must be an angle in [0, pi] radians, got {margin:g}")
     az, dist, half = _pole_geometry(scene, x, y)
     bearings: list[float] = []
     kinds: list[str] = []
@@ -578,7 +594,15 @@ def render_omni_image(
     ((480, 640), dtype('uint8'))
     """
     cam = OmniCamera() if camera is None else camera
-    gen = np.random.default_rng(rng)
+    if not isinstance(cam, OmniCamera):
+        raise VisionError(f"camera must be an OmniCamera, got {type(cam).__name__}")
+    _check_scene(scene)
+    try:
+        gen = np.random.default_rng(rng)
+    except (TypeError, ValueError):
+        raise VisionError(
+            f"rng must be a Generator, an int seed >= 0 or None, got {shorten(rng)}"
+        ) from None
     x, y, theta = _check_pose(pose)
     paints, is_wall = _wall_profile(scene, x, y)
     table = paints if cam.color else _luminance_table(paints)
