@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from .angles import wrap
 from .errors import InputError
+from .io import as_path, shorten
 from .maps import LandmarkMap
 from .pose import Pose
 
@@ -90,19 +91,29 @@ def _read_rows(path: Path, required: tuple[str, ...]) -> Iterator[tuple[int, dic
     """Rows of a CSV file as dicts with their 1-based line numbers; checks the header."""
     if not path.is_file():
         raise InputError(f"{path}: no such file")
-    with path.open(newline="") as fh:
-        reader = csv.DictReader(fh)
-        header = reader.fieldnames or []
-        missing = [c for c in required if c not in header]
-        if missing:
-            raise InputError(f"{path}:1: missing column(s) {missing}; header is {header}")
-        for row in reader:
-            line = reader.line_num
-            if None in row or any(row.get(c) is None for c in required):
+    line = 1
+    try:
+        with path.open(newline="", encoding="utf-8") as fh:
+            reader = csv.DictReader(fh)
+            header = reader.fieldnames or []
+            missing = [c for c in required if c not in header]
+            if missing:
                 raise InputError(
-                    f"{path}:{line}: expected {len(header)} fields, got a row of another length"
+                    f"{path}:1: missing column(s) {missing}; header is {shorten(header, 120)}"
                 )
-            yield line, row
+            for row in reader:
+                line = reader.line_num
+                if None in row or any(row.get(c) is None for c in required):
+                    raise InputError(
+                        f"{path}:{line}: expected {len(header)} fields, got a row of another length"
+                    )
+                yield line, row
+    except UnicodeDecodeError as e:
+        raise InputError(f"{path}: not a UTF-8 text file (byte {e.start} of a line)") from None
+    except csv.Error as e:
+        raise InputError(f"{path}:{line}: not a readable CSV file ({e})") from None
+    except OSError as e:
+        raise InputError(f"{path}: cannot read the file: {e.strerror or e}") from None
 
 
 # --------------------------------------------------------------------------------------------
@@ -159,7 +170,7 @@ class RohDataset:
 
 def _existing(path: PathLike, name: str) -> Path:
     """``path`` as a Path, or an error naming it when there is nothing there."""
-    p = Path(path)
+    p = as_path(path, f"the {name} dataset path")
     if not p.exists():
         raise InputError(f"{p}: no such folder or file (the {name} dataset)")
     return p
@@ -278,6 +289,15 @@ def load_mrclam(
     InputError
         Missing files, an unknown landmark id, or a malformed row (file and line named).
     """
+    if isinstance(robots, str | bytes) or not isinstance(robots, tuple | list):
+        raise InputError(f"robots must be a tuple of robot numbers, got {shorten(robots)}")
+    for r in robots:
+        if isinstance(r, bool) or not isinstance(r, int | np.integer) or not 1 <= r <= 99:
+            raise InputError(f"robots must hold robot numbers 1-99, got {shorten(r)}")
+    if isinstance(min_landmarks, bool) or not isinstance(min_landmarks, int | np.integer):
+        raise InputError(f"min_landmarks must be an int, got {shorten(min_landmarks)}")
+    if min_landmarks < 0:
+        raise InputError(f"min_landmarks must be >= 0, got {min_landmarks}")
     p = _existing(path, "MRCLAM")
     if p.is_dir():
         folder = p

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .angles import TWO_PI, wrap
 from .errors import InputError
+from .io import MAX_COORDINATE, finite_number, shorten
 from .maps import LandmarkMap, as_landmark_map
 from .pose import Pose
 
@@ -63,10 +64,39 @@ def demo_room() -> LandmarkMap:
         return LandmarkMap.from_csv(path)
 
 
-def _check_count(name: str, n: object, minimum: int) -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or int(n) < minimum:
-        raise InputError(f"{name} must be an integer >= {minimum}, got {n!r}")
+#: The most landmarks or bearings a simulation makes (a larger count is a typo, not a test).
+MAX_COUNT = 10_000_000
+
+
+def _check_count(name: str, n: object, minimum: int, maximum: int = MAX_COUNT) -> int:
+    if (
+        isinstance(n, bool)
+        or not isinstance(n, (int, np.integer))
+        or not minimum <= int(n) <= maximum
+    ):
+        raise InputError(
+            f"{name} must be an integer >= {minimum} (and <= {maximum:,}), got {shorten(n)}"
+        )
     return int(n)
+
+
+def _length(name: str, value: object, *, zero: bool = False) -> float:
+    """A length (or density): finite, > 0 (>= 0 with ``zero``), at most MAX_COORDINATE."""
+    v = finite_number(value, name)
+    if not (0 <= v if zero else 0 < v) or v > MAX_COORDINATE:
+        rel = ">= 0" if zero else "positive"
+        raise InputError(f"{name} must be {rel} (and <= {MAX_COORDINATE:.0e}), got {v:g}")
+    return v
+
+
+def _generator(rng: object) -> np.random.Generator:
+    """``np.random.default_rng(rng)``, or an InputError naming ``rng``."""
+    try:
+        return np.random.default_rng(rng)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InputError(
+            f"rng must be a numpy Generator, an int seed >= 0 or None, got {shorten(rng)}"
+        ) from None
 
 
 def random_map(
@@ -96,22 +126,19 @@ def random_map(
     LandmarkMap
     """
     n = _check_count("n", n, 3)
-    gen = np.random.default_rng(rng)
+    gen = _generator(rng)
+    min_separation = _length("min_separation", min_separation, zero=True)
     if density is not None:
-        if not density > 0:
-            raise InputError(f"density must be positive, got {density}")
-        side = math.sqrt(n / density)
-        w, h = side, side
+        side = math.sqrt(n / _length("density", density))
+        w = h = _length("the side sqrt(n / density)", side)
     elif size is None:
         w = h = 20.0
-    elif isinstance(size, tuple):
+    elif isinstance(size, tuple | list):
         if len(size) != 2:
-            raise InputError(f"size must be one side or (width, height), got {size}")
-        w, h = float(size[0]), float(size[1])
+            raise InputError(f"size must be one side or (width, height), got {shorten(size)}")
+        w, h = _length("size", size[0]), _length("size", size[1])
     else:
-        w = h = float(size)
-    if not (w > 0 and h > 0):
-        raise InputError(f"size must be positive, got {size}")
+        w = h = _length("size", size)
     if min_separation > 0 and n * math.pi * (min_separation / 2) ** 2 > 0.5 * w * h:
         raise InputError(
             f"{n} landmarks {min_separation} m apart do not fit in {w:.1f} m x {h:.1f} m"
@@ -159,15 +186,16 @@ def grid_map(
     (100, True)
     """
     n = _check_count("n", n, 3)
-    if not (isinstance(density, (int, float)) and math.isfinite(density) and density > 0):
-        raise InputError(f"density must be a positive number of landmarks per m^2, got {density!r}")
+    density = _length("density", density)
     spacing = 1.0 / math.sqrt(density)
+    _length("the grid's side at this density", spacing * math.sqrt(n))
+    min_separation = _length("min_separation", min_separation, zero=True)
     if not 0.0 <= min_separation < spacing:
         raise InputError(
             f"min_separation must lie in [0, {spacing:g}) m (the grid's spacing at density "
             f"{density:g}), got {min_separation!r}"
         )
-    gen = np.random.default_rng(rng)
+    gen = _generator(rng)
     side = math.ceil(math.sqrt(n))
     k = np.arange(n)
     nodes = np.stack([k % side, k // side], axis=1) * spacing
@@ -181,6 +209,7 @@ def symmetric_map(kind: str = "square", *, size: float = 6.0) -> LandmarkMap:
     ``"square"``: the 4 corners of a square (Roh's beacon layout, 4-fold ambiguity);
     ``"octagon"``: 8 points on a regular octagon; ``"grid"``: a 4 x 3 grid (2-fold).
     """
+    size = _length("size", size)
     if kind == "square":
         xy = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float) * size
     elif kind == "octagon":
@@ -190,7 +219,7 @@ def symmetric_map(kind: str = "square", *, size: float = 6.0) -> LandmarkMap:
         gx, gy = np.meshgrid(np.arange(4), np.arange(3))
         xy = np.stack([gx.ravel(), gy.ravel()], axis=1).astype(np.float64) * (size / 3.0)
     else:
-        raise InputError(f"unknown symmetric map {kind!r}; choose square, octagon or grid")
+        raise InputError(f"unknown symmetric map {shorten(kind)}; choose square, octagon or grid")
     return LandmarkMap(xy)
 
 
@@ -216,7 +245,8 @@ def random_pose(
     """A pose uniform in the map's bounding box, at least ``clearance`` from every landmark,
     with a uniform heading."""
     lm = as_landmark_map(landmarks)
-    gen = np.random.default_rng(rng)
+    gen = _generator(rng)
+    clearance = _length("clearance", clearance, zero=True)
     x0, y0, x1, y1 = lm.bounds
     for _ in range(1000):
         p = gen.uniform((x0, y0), (x1, y1))
@@ -309,15 +339,35 @@ def observe(
     rng : Generator, int or None
     """
     lm = as_landmark_map(landmarks)
-    gen = np.random.default_rng(rng)
-    if sigma < 0 or not np.isfinite(sigma):
-        raise InputError(f"sigma must be >= 0, got {sigma}")
+    gen = _generator(rng)
+    if not isinstance(pose, Pose):
+        try:
+            pose = Pose.from_array(pose)
+        except InputError as exc:
+            raise InputError(f"pose: {exc}") from None
+    sigma = finite_number(sigma, "sigma")
+    if not 0.0 <= sigma <= math.pi:
+        raise InputError(f"sigma must be >= 0 (and <= pi radians), got {sigma:g}")
+    p_miss = finite_number(p_miss, "p_miss")
     if not 0.0 <= p_miss < 1.0:
         raise InputError(f"p_miss must lie in [0, 1), got {p_miss}")
+    max_range = None if max_range is None else _length("max_range", max_range)
+    min_range = None if min_range is None else _length("min_range", min_range, zero=True)
+    if fov is not None:
+        fov = finite_number(fov, "fov")
+        if not 0.0 < fov <= TWO_PI:
+            raise InputError(f"fov is a full angle in radians in (0, 2 pi], got {fov:g}")
+    n_spurious = _check_count("n_spurious", n_spurious, 0)
     if visible is None:
         idx = visible_landmarks(lm, pose, max_range=max_range, min_range=min_range, fov=fov)
     else:
-        idx = np.asarray(visible, dtype=np.int64)
+        try:
+            arr = np.asarray(visible)
+        except (TypeError, ValueError):
+            arr = np.asarray([None])
+        if arr.size and arr.dtype.kind not in "iu":
+            raise InputError(f"visible must list landmark indices (ints), got {shorten(visible)}")
+        idx = arr.astype(np.int64)
         if idx.ndim != 1 or (idx.size and (idx.min() < 0 or idx.max() >= lm.n)):
             raise InputError(f"visible must list landmark indices in [0, {lm.n})")
     if p_miss > 0:
@@ -332,7 +382,7 @@ def observe(
     if sigma > 0:
         b = b + gen.normal(0.0, sigma, size=b.shape)
     half = np.pi if fov is None else fov / 2
-    spur = gen.uniform(-half, half, size=_check_count("n_spurious", n_spurious, 0))
+    spur = gen.uniform(-half, half, size=n_spurious)
     bearings = np.asarray(wrap(np.concatenate([b, spur])))
     truth: list[int | None] = [int(i) for i in idx] + [None] * spur.size
     if shuffle:
@@ -378,11 +428,15 @@ def paper_experiment(
     from .search import localize
 
     lm = demo_room()
-    gen = np.random.default_rng(rng)
+    gen = _generator(rng)
     full = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, sigma=sigma, rng=gen)
     rows: list[Table1Row] = []
     runs: dict[int, tuple[Scene, Any]] = {}
+    if isinstance(n_obs, str | bytes) or not isinstance(n_obs, tuple | list):
+        raise InputError(f"n_obs must be a tuple of observation counts, got {shorten(n_obs)}")
     for m in n_obs:
+        if isinstance(m, bool) or not isinstance(m, int | np.integer):
+            raise InputError(f"n_obs must hold ints (observation counts), got {shorten(m)}")
         if not 3 <= m <= len(full.bearings):
             raise InputError(f"the demo sees 3 to {len(full.bearings)} landmarks, not {m}")
         scene = Scene(full.bearings[:m], full.assignment[:m], DEMO_POSE)
