@@ -92,12 +92,21 @@ CAPACITY = 16000
 #: every other, and the lists would only copy the map N times over.
 MAX_NEIGHBOUR_ENTRIES = 20_000_000
 
+#: HYPOTHESIS_WORK_PER_SECOND was fitted to gates up to about FITTED_GATE wide and to
+#: neighbour lists. A wider gate, or a range whose lists were too large to build
+#: (MAX_NEIGHBOUR_ENTRIES: every landmark of the map is tested at each step), costs more per
+#: unit of work: at the full rate sigma=0.1 or 0.2 on 30 landmarks overran 0.5 s by 3-9x, and
+#: 200,000 landmarks with max_range=3000 overran 2 s by 7x. A time budget is then converted at
+#: a lower rate, down to COSTLY_WORK_RATE of it (stopping early is the safe side of a budget).
+FITTED_GATE = float(np.deg2rad(2.0))
+COSTLY_WORK_RATE = 0.1
 
-def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> Neighbours:
+
+def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> tuple[Neighbours, bool]:
     """Whom each landmark can be seen with: with a range, its neighbours within twice the
     range (the pose lies within range of the first landmark, so every landmark it sees lies
     within twice that of it); else, or when those lists would be huge, every other
-    landmark."""
+    landmark. The flag tells whether the lists were built."""
     s = opt.sensor
     if (
         s.reach_max is not None
@@ -105,13 +114,13 @@ def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> Neighbours:
         and expected_entries(lm, 2.0 * s.reach_max) <= MAX_NEIGHBOUR_ENTRIES
     ):
         nb = neighbour_lists(lm, 2.0 * s.reach_max)
-        return Neighbours(lm.xy, nb.ptr[:-1], nb.ptr[1:], nb.idx, nb.xy)
+        return Neighbours(lm.xy, nb.ptr[:-1], nb.ptr[1:], nb.idx, nb.xy), True
     # In the list 0..N-1 written twice, the N - 1 entries after position i are all
     # landmarks but i.
     N = lm.n
     idx = np.tile(np.arange(N, dtype=np.int64), 2)
     lo = np.arange(1, N + 1, dtype=np.int64)
-    return Neighbours(lm.xy, lo, lo + (N - 1), idx, np.ascontiguousarray(lm.xy[idx]))
+    return Neighbours(lm.xy, lo, lo + (N - 1), idx, np.ascontiguousarray(lm.xy[idx])), False
 
 
 def _scoring(lm: LandmarkMap, opt: SearchOptions, n_seeds: int) -> Scoring:
@@ -151,7 +160,10 @@ def run_hypotheses(
     m = beta.shape[0]
     limits = seeding.pair_limits(beta, s.reach_max, s.reach_min, 2.0 * s.gate_width)
     triples = seeding.seed_triples(beta, opt.max_wild, limits)
-    nb = _neighbours(lm, opt)
+    nb, listed = _neighbours(lm, opt)
+    unlisted = s.reach_max is not None and lm.n > 64 and not listed
+    slower = COSTLY_WORK_RATE if unlisted else min(1.0, FITTED_GATE / s.gate_width)
+    rate = HYPOTHESIS_WORK_PER_SECOND * max(COSTLY_WORK_RATE, slower)
     miss_allow = m + lm.n
     if stop_first and s.p_detect is not None:
         # A first fit must not leave more plainly visible landmarks unseen than misses
@@ -195,16 +207,21 @@ def run_hypotheses(
         budget = Budget(cap[0], cap[1], stop_first, miss_allow, CAPACITY)
         return hypotheses(nb, i0, i1, bearings, seeds, gate, vis, scoring, budget)
 
-    if lm.n <= 4 * CHUNK_ANCHORS:
-        work = _work_left(out, opt)
-        results = [call(slice(None), 0, lm.n, (max_nodes, 1 if work < 0 else work))]
+    if lm.n <= 4 * CHUNK_ANCHORS and opt.budget.timeout_s is None:
+        results = [call(slice(None), 0, lm.n, (max_nodes, 0))]
+    elif lm.n <= 4 * CHUNK_ANCHORS:
+        # A time budget on a small map: a chunk per seed, so that the clock is read between
+        # them (the work rate that stands in for it inside the kernel was fitted to narrow
+        # gates; a wide one costs several times more per unit and overran 0.5 s by 3-7x).
+        chunks = [(slice(r, r + 1), 0, lm.n) for r in range(len(triples))]
+        results = _run_chunks(call, chunks, max_nodes, out, opt, rate)
     else:
         chunks = [
             (slice(r, r + 1), i0, min(i0 + CHUNK_ANCHORS, lm.n))
             for r in range(len(triples))
             for i0 in range(0, lm.n, CHUNK_ANCHORS)
         ]
-        results = _run_chunks(call, chunks, max_nodes, out, opt)
+        results = _run_chunks(call, chunks, max_nodes, out, opt, rate)
     if not results:
         # The time was up before the first chunk (a big map's neighbour lists took it).
         out.complete = False
@@ -317,15 +334,15 @@ def _polish(
     return assign, pose
 
 
-def _work_left(out: Leaves, opt: SearchOptions) -> int:
+def _work_left(out: Leaves, opt: SearchOptions, rate: float = HYPOTHESIS_WORK_PER_SECOND) -> int:
     """The kernel cannot read the clock: what is left of ``timeout_s`` becomes work at
-    HYPOTHESIS_WORK_PER_SECOND; 0 without a timeout, -1 when spent."""
+    ``rate`` per second; 0 without a timeout, -1 when spent."""
     left = out.time_left(opt.budget.timeout_s)
     if left is None:
         return 0
     if left <= 0:
         return -1
-    return max(1, int(min(left * HYPOTHESIS_WORK_PER_SECOND, 2**62)))
+    return max(1, int(min(left * rate, 2**62)))
 
 
 def _run_chunks(
@@ -334,6 +351,7 @@ def _run_chunks(
     max_nodes: int,
     out: Leaves,
     opt: SearchOptions,
+    rate: float = HYPOTHESIS_WORK_PER_SECOND,
 ) -> list[KernelResult]:
     """Run chunks on a small thread pool, in order; stop early on an answer (first fit),
     when the node budget is spent (summed over chunks) or when the time is up (each chunk in
@@ -351,7 +369,7 @@ def _run_chunks(
                 if nxt is None:
                     done = True
                     break
-                work = _work_left(out, opt)
+                work = _work_left(out, opt, rate)
                 if work < 0:
                     out.complete = False
                     done = True
