@@ -402,7 +402,9 @@ def check_bearings(
         raise InputError(f"name must be a str (for messages), got {type(name).__name__}")
     name = shorten(name, 40).strip("'")
     for key, v in (("n_landmarks", n_landmarks), ("min_count", min_count)):
-        if v is not None and (isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 0):
+        if (v is None and key == "min_count") or (
+            v is not None and (isinstance(v, bool) or not isinstance(v, int | np.integer) or v < 0)
+        ):
             raise InputError(f"{key} must be an int >= 0, got {shorten(v)}")
     arr = real_array(bearings, name, ObservationError)
     if arr.ndim != 1:
@@ -414,7 +416,7 @@ def check_bearings(
         raise ObservationError(f"{name}[{int(bad[0])}] is not finite: {float(arr[bad[0]])!r}{more}")
     m = arr.shape[0]
     if m < min_count:
-        shown = f"{min_count}" if min_count < 10**6 else f"{float(min_count):.3g}"
+        shown = f"{min_count}" if min_count < 10**6 else f"a number of {len(str(min_count))} digits"
         raise ObservationError(f"localization needs at least {shown} {name}, got {m}")
     if n_landmarks is not None and m > n_landmarks:
         raise ObservationError(f"{m} {name} but the map has only {n_landmarks} landmarks")

@@ -210,6 +210,10 @@ def symmetric_map(kind: str = "square", *, size: float = 6.0) -> LandmarkMap:
     ``"octagon"``: 8 points on a regular octagon; ``"grid"``: a 4 x 3 grid (2-fold).
     """
     size = _length("size", size)
+    if size < 1e-6:
+        raise InputError(
+            f"size must be at least 1e-6 m (the landmarks would coincide), got {size:g}"
+        )
     if kind == "square":
         xy = np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float) * size
     elif kind == "octagon":

@@ -25,7 +25,7 @@ def save_figure(fig: Any, path: object, error: type[InputError] = InputError) ->
             + (f"unknown format '.{ext}'" if ext else "no file extension")
             + f" (use one of {shown}, ...)"
         )
-    make_folder(p.parent, f"figure {p}", error)
+    make_folder(p.parent, f"cannot write figure {p.name}", error)
     if p.is_dir():
         raise error(f"figure {p}: is a directory, not a file")
     try:

@@ -163,7 +163,7 @@ def run_hypotheses(
     nb, listed = _neighbours(lm, opt)
     unlisted = s.reach_max is not None and lm.n > 64 and not listed
     slower = COSTLY_WORK_RATE if unlisted else min(1.0, FITTED_GATE / s.gate_width)
-    rate = HYPOTHESIS_WORK_PER_SECOND * max(COSTLY_WORK_RATE, slower)
+    rate = max(COSTLY_WORK_RATE, slower)
     miss_allow = m + lm.n
     if stop_first and s.p_detect is not None:
         # A first fit must not leave more plainly visible landmarks unseen than misses
@@ -334,15 +334,15 @@ def _polish(
     return assign, pose
 
 
-def _work_left(out: Leaves, opt: SearchOptions, rate: float = HYPOTHESIS_WORK_PER_SECOND) -> int:
+def _work_left(out: Leaves, opt: SearchOptions) -> int:
     """The kernel cannot read the clock: what is left of ``timeout_s`` becomes work at
-    ``rate`` per second; 0 without a timeout, -1 when spent."""
+    HYPOTHESIS_WORK_PER_SECOND; 0 without a timeout, -1 when spent."""
     left = out.time_left(opt.budget.timeout_s)
     if left is None:
         return 0
     if left <= 0:
         return -1
-    return max(1, int(min(left * rate, 2**62)))
+    return max(1, int(min(left * HYPOTHESIS_WORK_PER_SECOND, 2**62)))
 
 
 def _run_chunks(
@@ -351,7 +351,7 @@ def _run_chunks(
     max_nodes: int,
     out: Leaves,
     opt: SearchOptions,
-    rate: float = HYPOTHESIS_WORK_PER_SECOND,
+    rate: float = 1.0,
 ) -> list[KernelResult]:
     """Run chunks on a small thread pool, in order; stop early on an answer (first fit),
     when the node budget is spent (summed over chunks) or when the time is up (each chunk in
@@ -369,7 +369,8 @@ def _run_chunks(
                 if nxt is None:
                     done = True
                     break
-                work = _work_left(out, opt, rate)
+                work = _work_left(out, opt)
+                work = max(1, int(work * rate)) if work > 0 else work
                 if work < 0:
                     out.complete = False
                     done = True

@@ -55,7 +55,11 @@ def _finite(name: str, value: float) -> float:
 
 def _pair(name: str, value: object) -> tuple[float, float]:
     """Two finite numbers, or a VisionError naming ``name``."""
-    if isinstance(value, str | bytes) or not isinstance(value, tuple | list | np.ndarray):
+    if (
+        isinstance(value, str | bytes)
+        or not isinstance(value, tuple | list | np.ndarray)
+        or np.ndim(value) != 1
+    ):
         raise VisionError(f"{name} must be a pair of numbers, got {shorten(value)}")
     if len(value) != 2:
         raise VisionError(f"{name} must be a pair of numbers, got {len(value)} values")
@@ -72,6 +76,8 @@ _LUMA = (0.299, 0.587, 0.114)
 
 def _check_paint(name: str, value: object) -> Paint:
     """A grey level or an RGB triple, finite and in [0, 255]; raises VisionError otherwise."""
+    if isinstance(value, np.ndarray) and value.ndim == 0:
+        value = value.item()
     if isinstance(value, (tuple, list, np.ndarray)):
         if len(value) != 3:
             raise VisionError(f"{name} must be a grey level or (r, g, b), got {len(value)} values")
