@@ -59,7 +59,7 @@ def _check_center_pair(center: object) -> tuple[float, float]:
     try:
         vals = np.asarray(center, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError):
-        raise VisionError(f"center must be (cx, cy) in pixels, got {center!r}") from None
+        raise VisionError(f"center must be (cx, cy) in pixels, got {shorten(center)}") from None
     if vals.shape != (2,):
         raise VisionError(f"center must have 2 values (cx, cy), got {vals.size}")
     if not np.all(np.isfinite(vals)):
