@@ -430,6 +430,19 @@ PROBABILITIES: Pool = (
     ("complex", 0.5 + 0j),
 )
 
+
+def merged(*pools: Pool) -> Pool:
+    """The pools one after the other, a repeated label taking its pool's number ("nan #2")."""
+    out: list[tuple[str, Any]] = []
+    seen: set[str] = set()
+    for k, pool in enumerate(pools, 1):
+        for label, value in pool:
+            name = label if label not in seen else f"{label} #{k}"
+            seen.add(name)
+            out.append((name, value))
+    return tuple(out)
+
+
 LANDMARKS: Pool = (
     ("nan row", Lazy(lambda: np.vstack([room_xy5()[:4], [[np.nan, 1.0]]]))),
     ("inf row", Lazy(lambda: np.vstack([room_xy5()[:4], [[np.inf, 1.0]]]))),
@@ -620,7 +633,8 @@ def _pose_targets() -> list[Target]:
                 "bearings": Lazy(lambda: z5()[None]),
             },
             {
-                "landmarks_xy": Arg(("landmark",), LANDMARKS),
+                # a landmark array of another shape than the bearings: either may be named
+                "landmarks_xy": Arg(("landmark", "bearing"), LANDMARKS),
                 "bearings": Arg(("bearing",), BEARINGS),
                 "scale": Arg(("scale",), NUMBERS),
             },
@@ -631,7 +645,7 @@ def _pose_targets() -> list[Target]:
             lambda kw: P.bearing_jacobian(**kw),
             lambda: {"landmarks_xy": Lazy(room_xy5), "poses": ROOM_POSE.as_array()},
             {
-                "landmarks_xy": Arg(("landmark",), LANDMARKS),
+                "landmarks_xy": Arg(("landmark", "pose"), LANDMARKS),
                 "poses": Arg(("pose",), POSES),
             },
         ),
@@ -668,7 +682,7 @@ def _search_targets() -> list[Target]:
     }
     keywords.update(
         {
-            k: Arg((k,), PROBABILITIES + NUMBERS)
+            k: Arg((k,), merged(PROBABILITIES, NUMBERS))
             for k in ("confidence", "p_miss", "p_detect", "decisive")
         }
     )
@@ -677,7 +691,7 @@ def _search_targets() -> list[Target]:
         "bearings": Arg(("bearing",), BEARINGS),
         "sensor": Arg(("sensor",), sensors),
         "budget": Arg(("budget",), budgets),
-        "max_spurious": Arg(("max_spurious",), COUNTS + PROBABILITIES),
+        "max_spurious": Arg(("max_spurious",), merged(COUNTS, PROBABILITIES)),
         "max_nodes": Arg(("max_nodes",), COUNTS),
         "ordering": Arg(("ordering",), (("string", "yes"), ("None", None), ("int 2", 2))),
         "method": Arg(("method",), (("unknown", "fast"), ("None", None), ("int", 1))),
@@ -807,7 +821,7 @@ def _io_targets() -> list[Target]:
             {
                 "bearings": Arg(("bearing",), BEARINGS),
                 "n_landmarks": Arg(("n_landmarks", "landmark"), COUNTS),
-                "min_count": Arg(("min_count",), COUNTS),
+                "min_count": Arg(("min_count", "at least"), COUNTS),
                 "name": Arg(("name",), (("int", 5), ("None", None), ("long", "b" * 1000))),
             },
         ),
@@ -978,18 +992,19 @@ def _vision_targets() -> list[Target]:
         ("reversed", (0.9, 0.4)),
         ("equal", (0.5, 0.5)),
         ("above 1.5", (0.4, 3.0)),
-        ("negative", (-0.5, 0.9)),
+        ("negative inner", (-0.5, 0.9)),
         ("three", (0.1, 0.2, 0.3)),
-        ("nan", (float("nan"), 0.9)),
+        ("nan inner", (float("nan"), 0.9)),
         ("tiny", (0.0, 1e-12)),
     )
     extract_args = {
         "image": Arg(("image",), IMAGES),
-        "center": Arg(("center",), centers),
-        "aspect": Arg(("aspect",), NUMBERS),
+        # a valid but wrong centre or aspect may leave no rim to find: "rim" names that
+        "center": Arg(("center", "rim"), centers),
+        "aspect": Arg(("aspect", "rim"), NUMBERS),
         "forward": Arg(("forward",), ANGLES),
         "mirrored": Arg(("mirrored",), (("string", "yes"), ("None", None), ("nan", float("nan")))),
-        "calibration": Arg(("calibration",), calibrations),
+        "calibration": Arg(("calibration", "center", "radius"), calibrations),
         "radial_range": Arg(("radial_range",), ranges),
         **{
             k: Arg((k,), NUMBERS)
@@ -1034,8 +1049,8 @@ def _vision_targets() -> list[Target]:
             lambda: {"image": Lazy(demo_image)},
             {
                 "image": Arg(("image", "rim", "mirror"), IMAGES),
-                "center": Arg(("center",), centers),
-                "aspect": Arg(("aspect",), NUMBERS),
+                "center": Arg(("center", "rim"), centers),
+                "aspect": Arg(("aspect", "rim"), NUMBERS),
                 "radius": Arg(("radius",), NUMBERS),
                 "n_rays": Arg(("n_rays",), COUNTS),
             },
@@ -1142,9 +1157,12 @@ def _simulate_targets() -> list[Target]:
             lambda: {"n": 12, "rng": 0},
             {
                 "n": Arg(("n",), COUNTS),
-                "size": Arg(("size",), (*NUMBERS, ("pair", (1e300, 1.0)), ("triple", (1, 2, 3)))),
-                "density": Arg(("density",), NUMBERS),
-                "min_separation": Arg(("min_separation",), NUMBERS),
+                "size": Arg(
+                    ("size", "do not fit"),
+                    (*NUMBERS, ("pair", (1e300, 1.0)), ("triple", (1, 2, 3))),
+                ),
+                "density": Arg(("density", "do not fit"), NUMBERS),
+                "min_separation": Arg(("min_separation", "do not fit"), NUMBERS),
                 "rng": Arg(("rng", "seed"), rngs),
             },
             check=lambda kw, v: _finite(v.xy, "map"),
@@ -1176,7 +1194,7 @@ def _simulate_targets() -> list[Target]:
             lambda: {"landmarks": Lazy(room), "rng": 0},
             {
                 "landmarks": Arg(("landmark", "map"), LANDMARKS),
-                "clearance": Arg(("clearance",), NUMBERS),
+                "clearance": Arg(("clearance", "from every landmark"), NUMBERS),
             },
         ),
         Target(
@@ -1260,7 +1278,7 @@ ROH_FOLDERS: Pool = (
     ("bad number", Lazy(lambda f: _roh_folder(f, ROH_HEADER + "1,1,0,a,1,2,3\n"), needs_dir=True)),
     ("short row", Lazy(lambda f: _roh_folder(f, ROH_HEADER + "1,1,0\n"), needs_dir=True)),
     ("latin-1 row", Lazy(lambda f: _roh_folder(f, ROH_HEADER + "1,1,0,é,1,2,3\n"), needs_dir=True)),
-    ("binary", Lazy(lambda f: _roh_bytes(f), needs_dir=True)),
+    ("binary measurements", Lazy(lambda f: _roh_bytes(f), needs_dir=True)),
     (
         "huge value",
         Lazy(lambda f: _roh_folder(f, ROH_HEADER + "1,1,0,1e999,1,2,3\n"), needs_dir=True),
@@ -1285,6 +1303,18 @@ def _roh_ok(folder: Path) -> Path:
     return _roh_folder(folder, ROH_HEADER + rows)
 
 
+def _mrclam_ok(folder: Path) -> Path:
+    """An MRCLAM folder: the Roh landmarks and one robot's frames seeing all four."""
+    d = _roh_ok(folder)
+    rows = "".join(
+        f"{x},{y},0.1," + ";".join(f"{i + 1}:{float(v)!r}:3.0" for i, v in enumerate(b)) + ",\n"
+        for x, y in ((2.0, 2.0), (3.0, 1.5))
+        for b in [omniloc.predict_bearings([[0, 0], [6, 0], [6, 6], [0, 6]], (x, y, 0.1))]
+    )
+    (d / "robot1_frames.csv").write_text("gt_x,gt_y,gt_theta,landmarks,robot_detections\n" + rows)
+    return d
+
+
 def _track_targets() -> list[Target]:
     from omniloc import datasets as D
     from omniloc.track import GroundTruth, Odometry, load_frames, load_groundtruth, load_odometry
@@ -1303,14 +1333,18 @@ def _track_targets() -> list[Target]:
             "load_odometry",
             lambda kw: load_odometry(**kw),
             dict,
-            {"path": Arg(("odometry", "file", ".csv", "path", "line"), ODOMETRY_FILES)},
+            {"path": Arg(("odometry", "file", ".csv", "path", "line", "column"), ODOMETRY_FILES)},
             check=lambda kw, v: None,
         ),
         Target(
             "load_groundtruth",
             lambda kw: load_groundtruth(**kw),
             dict,
-            {"path": Arg(("ground truth", "file", ".csv", "path", "line"), GROUNDTRUTH_FILES)},
+            {
+                "path": Arg(
+                    ("ground truth", "file", ".csv", "path", "line", "column"), GROUNDTRUTH_FILES
+                )
+            },
             check=lambda kw, v: None,
         ),
         Target(
@@ -1353,7 +1387,7 @@ def _track_targets() -> list[Target]:
         Target(
             "load_mrclam",
             lambda kw: D.load_mrclam(**kw),
-            lambda: {"path": Lazy(_roh_ok, needs_dir=True)},
+            lambda: {"path": Lazy(_mrclam_ok, needs_dir=True), "robots": (1,)},
             {
                 "path": Arg(
                     ("mrclam", "file", "folder", ".csv", "path", "landmarks", "robot"), TEXT_FILES
@@ -1580,24 +1614,27 @@ def cli_argv(target: CliTarget, option: str, value: Any, folder: Path) -> list[s
     return [target.name, *argv]
 
 
+#: The numeric options of ``omniloc localize``.
+LOCALIZE_NUMERIC = (
+    "--threshold",
+    "--sigma",
+    "--max-spurious",
+    "--max-range",
+    "--min-range",
+    "--fov",
+    "--p-miss",
+    "--p-detect",
+    "--clutter",
+    "--confidence",
+    "--decisive",
+    "--max-nodes",
+    "--timeout",
+    "--forward",
+    "--aspect",
+)
+
+
 def cli_targets() -> dict[str, CliTarget]:
-    numeric = (
-        "--threshold",
-        "--sigma",
-        "--max-spurious",
-        "--max-range",
-        "--min-range",
-        "--fov",
-        "--p-miss",
-        "--p-detect",
-        "--clutter",
-        "--confidence",
-        "--decisive",
-        "--max-nodes",
-        "--timeout",
-        "--forward",
-        "--aspect",
-    )
     localize = CliTarget(
         "localize",
         (
@@ -1613,7 +1650,7 @@ def cli_targets() -> dict[str, CliTarget]:
             "--method": (("unknown", "fast"), ("empty", "")),
             "--strategy": (("unknown", "fast"), ("upper case", "TREE")),
             "--center": (("one value", "5"), ("word", "x")),
-            **{k: CLI_NUMBERS for k in numeric},
+            **{k: CLI_NUMBERS for k in LOCALIZE_NUMERIC},
         },
     )
     bearings = CliTarget(
