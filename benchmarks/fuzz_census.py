@@ -107,7 +107,7 @@ def main() -> int:
         "--json",
         type=Path,
         default=HERE / "results_fuzz.json",
-        help="write the census and every case's outcome here (default: %(default)s)",
+        help="write the census and each bad case here (default: %(default)s)",
     )
     ap.add_argument("--only", nargs="*", default=[], help="target names ('cli localize' ...)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
@@ -175,7 +175,8 @@ def main() -> int:
         "cases": total,
         "tally": {k: tally[k] for k in ("ok", "refused", "bad", "hang")},
         "by_target": {k: dict(v) for k, v in sorted(by_target.items())},
-        "outcomes": results,
+        # every case that ended badly, with why; the others only as counts above
+        "bad": [r for r in results if r["outcome"] in ("bad", "hang")],
     }
     args.json.write_text(json.dumps(census, indent=1) + "\n")
     print(f"written to {args.json}")
