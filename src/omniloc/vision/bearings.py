@@ -627,7 +627,7 @@ def extract_bearings(
         Rim centre ``(cx, cy)`` in pixels; overrides `calibration` or is held fixed while the
         rest of the rim is fitted.
     aspect : float, optional
-        Rim semi-axis along u / along v, in [0.1, 10]; same role as `center`.
+        Rim semi-axis along u / along v, in (0, 10]; same role as `center`.
     forward : float
         Image angle of the robot's forward axis, radians.
     mirrored : bool

@@ -30,6 +30,7 @@ from omniloc.io import finite_number, shorten
 __all__ = ["MirrorCalibration", "as_gray", "calibrate_mirror", "check_center"]
 
 _MAX_ASPECT = 10.0
+_MIN_ASPECT = 1e-3
 
 
 #: The largest side of an image, pixels: OpenCV's remap addresses pixels with shorts.
@@ -50,8 +51,11 @@ def _count(name: str, value: object, lo: int, hi: int) -> int:
 
 def _check_aspect(aspect: object) -> float:
     a = _finite_float("aspect", aspect)
-    if not 1.0 / _MAX_ASPECT <= a <= _MAX_ASPECT:
-        raise VisionError(f"aspect must be in [{1.0 / _MAX_ASPECT:g}, {_MAX_ASPECT:g}], got {a}")
+    if not _MIN_ASPECT <= a <= _MAX_ASPECT:
+        # (a denormal aspect divided by zero in the rim fit)
+        raise VisionError(
+            f"aspect must be in (0, {_MAX_ASPECT:g}] (at least {_MIN_ASPECT:g}), got {a}"
+        )
     return a
 
 
@@ -106,7 +110,7 @@ class MirrorCalibration:
     center : tuple of float
         Rim centre ``(cx, cy)`` in pixels (u to the right, v downward).
     aspect : float
-        Rim semi-axis along u divided by rim semi-axis along v, in [0.1, 10].
+        Rim semi-axis along u divided by rim semi-axis along v, in (0, 10].
     radius : float
         Rim semi-axis along v, pixels (> 0).
 
@@ -409,7 +413,7 @@ def calibrate_mirror(
     center : tuple of float, optional
         Known rim centre ``(cx, cy)`` in pixels; only the other parameters are fitted.
     aspect : float, optional
-        Known aspect ratio (rim semi-axis along u / along v), in [0.1, 10].
+        Known aspect ratio (rim semi-axis along u / along v), in (0, 10].
     radius : float, optional
         Known rim semi-axis along v, pixels.
     n_rays : int

@@ -297,8 +297,8 @@ class OmniCamera:
             raise VisionError(f"center {(cx, cy)} lies outside the image_size {w}x{h}")
         object.__setattr__(self, "center", (cx, cy))
         aspect = _finite("aspect", self.aspect)
-        if not 0.1 <= aspect <= 10:
-            raise VisionError(f"aspect must be in [0.1, 10], got {aspect}")
+        if not 1e-3 <= aspect <= 10:
+            raise VisionError(f"aspect must be in (0, 10] (at least 0.001), got {aspect}")
         if not _finite("radius", self.radius) > 1:
             raise VisionError(f"radius must be > 1 px, got {self.radius}")
         if not 0 <= _finite("inner_radius", self.inner_radius) < 1:
