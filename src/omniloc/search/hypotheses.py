@@ -265,14 +265,15 @@ def _collect(
     if len(assign) == 0:
         return
     pose = np.concatenate([r[1] for r in results])
+    missed = np.concatenate([r[2] for r in results])
     if stopped == 2:
         # A first fit: what the other chunks in flight found counts only if it, too, is an
         # acceptable fit (the rest would rank below it on negative evidence anyway).
-        fits = np.concatenate([r[2] for r in results]) <= miss_allow
-        assign, pose = assign[fits], pose[fits]
+        fits = missed <= miss_allow
+        assign, pose, missed = assign[fits], pose[fits], missed[fits]
     # One interpretation is often reached from several seeds.
     assign, first = np.unique(assign, axis=0, return_index=True)
-    pose = pose[first]
+    pose, missed = pose[first], missed[first]
     if stop_first:
         assign, pose = _polish(lm, beta, assign, pose, opt)
     if opt.ordering:
@@ -287,8 +288,11 @@ def _collect(
             2.0 * opt.sensor.gate_width,
         )
         c.ordering += int((~good).sum())
-        assign, pose = assign[good], pose[good]
-    out.add(assign, pose)
+        assign, pose, missed = assign[good], pose[good], missed[good]
+    # The kernel counted the landmarks each path leaves unseen where the scoring needs them
+    # (a polished first fit keeps its set of landmarks): the scoring reuses the counts
+    # rather than look at every landmark in range again for thousands of paths.
+    out.add(assign, pose, missed)
 
 
 def _polish(

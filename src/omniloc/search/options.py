@@ -270,16 +270,27 @@ class Leaves:
     order: IntArray
     assign: list[IntArray] = field(default_factory=list)
     pose: list[FloatArray] = field(default_factory=list)
+    missed: list[IntArray] = field(default_factory=list)
     counts: Counters = field(default_factory=Counters)
     complete: bool = True
     exhaustive: bool = True
     started: float = field(default_factory=time.perf_counter)
 
-    def add(self, assign: IntArray, pose: FloatArray) -> None:
-        """Add complete paths (assignments in level order, poses)."""
+    def add(self, assign: IntArray, pose: FloatArray, missed: IntArray | None = None) -> None:
+        """Add complete paths (assignments in level order, poses) and, when the engine
+        counted them, the plainly visible landmarks each leaves unseen."""
         if len(assign):
             self.assign.append(np.asarray(assign, dtype=np.int64))
             self.pose.append(np.asarray(pose, dtype=np.float64))
+            if missed is not None:
+                self.missed.append(np.asarray(missed, dtype=np.int64))
+
+    def missed_counts(self) -> IntArray | None:
+        """The engines' counts of landmarks left unseen for all paths (as :meth:`arrays`),
+        or None when some engine did not count them."""
+        if not self.missed or len(self.missed) != len(self.assign):
+            return None
+        return np.concatenate(self.missed)
 
     def arrays(self) -> tuple[IntArray, FloatArray]:
         """All paths as two arrays (K, m) and (K, 3)."""

@@ -263,6 +263,7 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     """Solutions, best first, from an engine's complete paths, with the posterior's verdict
     (see the module's documentation for the steps)."""
     level_assign, level_pose = leaves.arrays()
+    engine_missed = leaves.missed_counts()
     # No solution decides nothing: ambiguous, so that ``not result.ambiguous`` always has a
     # best to read.
     if len(level_assign) == 0:
@@ -279,6 +280,8 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         keep0 = np.argsort(-(nm * ev.per_match - 0.5 * sse0 / ev.sig2), kind="stable")
         keep0 = keep0[:MAX_LEAVES]
         level_assign, level_pose = level_assign[keep0], level_pose[keep0]
+        if engine_missed is not None:
+            engine_missed = engine_missed[keep0]
     # Back from level order to observation order.
     assign = np.full((len(level_assign), m), -1, dtype=np.int64)
     assign[:, order] = level_assign
@@ -300,6 +303,8 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     if not joint.all():
         k = np.flatnonzero(joint)
         assign, w, Lm, poses, sse, nmatch = assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k]
+        if engine_missed is not None:
+            engine_missed = engine_missed[k]
     rms = np.sqrt(sse / nmatch)
     # Covariance at the refined pose: sigma^2 (G^T G)^-1 over the matched pairs.
     cov = geo.covariances(Lm, w, poses, ev.sig2, geo.COVARIANCE_FLOOR)
@@ -315,7 +320,9 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
             assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k], rms[k], cov[k]
         )  # fmt: skip
     missed = np.zeros(len(poses), dtype=np.int64)
-    if s.p_detect is not None or ev.unknown_rate:
+    if (s.p_detect is not None or ev.unknown_rate) and engine_missed is not None:
+        missed = engine_missed
+    elif s.p_detect is not None or ev.unknown_rate:
         missed = missed_landmarks(lm, poses, assign, bearings, opt)
     ln_e = log_evidence(ev, nmatch, sse, cov, missed, poses)
     rank = np.argsort(-ln_e, kind="stable")
