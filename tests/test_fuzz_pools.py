@@ -25,20 +25,9 @@ OWN_TESTS = {"scenario"}
 #: their cases (a fixed choice), ``benchmarks/fuzz_census.py`` all of them.
 THINNED = {"plot_localization": 3, "unwrap_panorama": 2, "render_omni_image": 2, "evaluate": 4}
 
-#: Cases that fail in code this branch does not own: ``src/omniloc/track/`` is being reworked
-#: elsewhere. Strict: a fix there makes the case pass, and then it must leave this list.
-KNOWN_BAD: set[tuple[str, str, str]] = {
-    # a header quoted whole (44,000 characters), a JSON file read as CSV
-    *(
-        (f, "path", c)
-        for f in ("load_odometry", "load_groundtruth")
-        for c in ("400-digit json", "long line", "deep json", "many columns")
-    ),
-    *(
-        ("load_frames", "path", c)
-        for c in ("400-digit json", "long line", "deep json", "many columns")
-    ),
-}
+#: Cases known to fail, as (target, argument, label): strict, so a fix makes the case pass
+#: and then it must leave this set.
+KNOWN_BAD: set[tuple[str, str, str]] = set()
 
 
 def _params(name: str, cases: list[tuple[str, str]]) -> list[Any]:
@@ -49,7 +38,7 @@ def _params(name: str, cases: list[tuple[str, str]]) -> list[Any]:
             continue
         marks = []
         if (name, arg, label) in KNOWN_BAD:
-            marks = [pytest.mark.xfail(strict=True, reason="in src/omniloc/track/")]
+            marks = [pytest.mark.xfail(strict=True, reason="known bad case")]
         out.append(pytest.param(name, arg, label, id=f"{name}-{arg}-{label}", marks=marks))
     return out
 

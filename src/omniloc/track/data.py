@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 
 from ..angles import wrap
 from ..errors import InputError
-from ..io import PathLike, content_lines, parse_float, read_text, split_csv_line
+from ..io import PathLike, content_lines, parse_float, read_text, shorten, split_csv_line
 from ..pose import Pose
 
 __all__ = [
@@ -234,13 +234,17 @@ def _table(path: PathLike, what: str) -> tuple[str, list[str], list[tuple[int, l
     if not lines:
         raise InputError(f"{src}: empty {what} file")
     n0, head = lines[0]
-    header = [h.lower() for h in split_csv_line(head, f"{src}:{n0}", InputError)]
+    header = [
+        h.lower()
+        for h in split_csv_line(head, f"{src}:{n0} (header of the {what} file)", InputError)
+    ]
     rows = []
     for n, line in lines[1:]:
         cells = split_csv_line(line, f"{src}:{n}", InputError)
         if len(cells) != len(header):
             raise InputError(
-                f"{src}:{n}: expected {len(header)} fields ({','.join(header)}), got {len(cells)}"
+                f"{src}:{n}: expected {len(header)} fields ({shorten(','.join(header))}), "
+                f"got {len(cells)}"
             )
         rows.append((n, cells))
     return src, header, rows
@@ -251,7 +255,10 @@ def _columns(
 ) -> list[FloatArray]:
     missing = [c for c in names if c not in header]
     if missing:
-        raise InputError(f"{src}:1: missing column(s) {missing}; the header is {header}")
+        raise InputError(
+            f"{src}:1: missing column(s) {shorten(missing)}; the header is "
+            f"{shorten(','.join(header))}"
+        )
     out = []
     for c in names:
         k = header.index(c)
@@ -323,7 +330,8 @@ def load_frames(
     if col is None or "t" not in header:
         raise InputError(
             f"{src}:1: a frames file needs columns t and bearing (or bearing_deg), or the "
-            f"MRCLAM columns landmarks and robot_detections; the header is {header}"
+            f"MRCLAM columns landmarks and robot_detections; the header is "
+            f"{shorten(','.join(header))}"
         )
     if col == "bearing_rad" and degrees:
         raise InputError(f"{src}:1: the column says radians (bearing_rad) but degrees=True")
