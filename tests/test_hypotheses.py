@@ -607,3 +607,30 @@ def test_cheap_test_only_removes_poorly_fitting_interpretations(
         work["off"] += off.stats.examined_paths
     # ... and it spares most of the verification.
     assert work["on"] < 0.5 * work["off"]
+
+
+def test_auto_first_fit_looks_again_when_a_real_bearing_is_out_of_its_gate() -> None:
+    # A 2,500-landmark map: the default is a first fit. One real bearing 8 sigma off puts the
+    # truth out of reach with max_spurious equal to the clutter (1); nothing else convinces,
+    # so the search looks again with one more bearing allowed unmatched.
+    lm = random_map(2500, density=0.01, min_separation=1.0, rng=21)
+    sigma = np.deg2rad(0.3)
+    for seed in range(30):
+        truth = random_pose(lm, clearance=1.0, rng=seed)
+        x0, y0, x1, y1 = lm.bounds
+        if not (x0 + 20 < truth.x < x1 - 20 and y0 + 20 < truth.y < y1 - 20):
+            continue
+        sc = observe(lm, truth, max_range=20.0, n_spurious=1, sigma=sigma, rng=seed)
+        real = [k for k, a in enumerate(sc.assignment) if a is not None]
+        if len(real) >= 8:
+            break
+    else:
+        pytest.fail("no interior pose seeing 8 landmarks")
+    z = sc.bearings.copy()
+    z[real[0]] += 8 * sigma
+    kw = {"sigma": sigma, "max_spurious": 1, "max_range": 20.0}
+    strict = localize(lm, z, exhaustive=True, **kw)
+    assert not strict or strict.best.pose.distance_to(truth)[0] > 0.5
+    res = localize(lm, z, **kw)
+    assert res.best is not None and res.best.pose.distance_to(truth)[0] < 0.1
+    assert res.best.assignment[real[0]] is None
