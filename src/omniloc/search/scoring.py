@@ -319,8 +319,13 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         assign, w, Lm, poses, sse, nmatch, rms, cov = (
             assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k], rms[k], cov[k]
         )  # fmt: skip
+        if engine_missed is not None:
+            engine_missed = engine_missed[k]
     missed = np.zeros(len(poses), dtype=np.int64)
-    if (s.p_detect is not None or ev.unknown_rate) and engine_missed is not None:
+    # (Every filter above keeps the engine's counts aligned; a length check guards that.)
+    if (s.p_detect is not None or ev.unknown_rate) and (
+        engine_missed is not None and len(engine_missed) == len(poses)
+    ):
         missed = engine_missed
     elif s.p_detect is not None or ev.unknown_rate:
         missed = missed_landmarks(lm, poses, assign, bearings, opt)
