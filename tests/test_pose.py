@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 from omniloc.errors import DegenerateGeometryError, InputError
 from omniloc.pose import (
     Pose,
+    bearing_jacobian,
     crlb,
     estimate_pose,
     fisher_information,
@@ -202,3 +203,23 @@ def test_pose_validation_and_helpers() -> None:
 def test_crlb_at_a_landmark_names_it() -> None:
     with pytest.raises(DegenerateGeometryError, match="coincides with landmark 1"):
         crlb([[0, 0], [1, 0], [0, 1]], Pose(1.0, 0.0, 0.0), 0.01)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.floats(-3, 3), st.floats(-3, 3), st.floats(-np.pi, np.pi),
+    st.floats(-5, 5), st.floats(-5, 5),
+)  # fmt: skip
+def test_bearing_jacobian_is_the_derivative_of_the_bearing(x, y, th, lx, ly) -> None:
+    assume(np.hypot(lx - x, ly - y) > 0.1)
+    pose, lm = np.array([x, y, th]), np.array([[lx, ly]])
+    h, g = bearing_jacobian(lm, pose)
+    assert h[0] == pytest.approx(np.arctan2(ly - y, lx - x) - th)
+    eps = 1e-6
+    for i in range(3):
+        dp = np.zeros(3)
+        dp[i] = eps
+        num = np.angle(
+            np.exp(1j * (bearing_jacobian(lm, pose + dp)[0] - bearing_jacobian(lm, pose - dp)[0]))
+        )
+        assert g[0, i] == pytest.approx(num[0] / (2 * eps), rel=1e-4, abs=1e-6)

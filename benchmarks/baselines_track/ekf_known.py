@@ -25,14 +25,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from omniloc.angles import wrap
-from omniloc.pose import Pose
+from omniloc.pose import Pose, bearing_jacobian
 from omniloc.track import Frame, Hypothesis, TrackEstimate, TrackState
 
 from .motion import MotionNoise, OdometryBuffer, predict_ekf
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["EkfConfig", "EkfKnown", "bearing_jacobian"]
+__all__ = ["EkfConfig", "EkfKnown"]
 
 
 @dataclass(frozen=True)
@@ -62,16 +62,6 @@ class EkfConfig:
         return d
 
 
-def bearing_jacobian(mean: FloatArray, landmark_xy: FloatArray) -> tuple[float, FloatArray]:
-    """Predicted bearing of a landmark from a pose, and its gradient with respect to
-    ``(x, y, theta)``."""
-    dx = landmark_xy[0] - mean[0]
-    dy = landmark_xy[1] - mean[1]
-    r2 = dx * dx + dy * dy
-    h = math.atan2(dy, dx) - mean[2]
-    return float(wrap(h)), np.array([dy / r2, -dx / r2, -1.0])
-
-
 class EkfKnown:
     """EKF with known correspondences (see the module's documentation)."""
 
@@ -98,8 +88,9 @@ class EkfKnown:
     def update(self, bearing: float, row: int) -> bool:
         """One bearing of landmark ``row``: gate, then the Kalman update (Joseph form).
         Returns whether it passed the gate."""
-        h, H = bearing_jacobian(self.mean, self.landmarks_xy[row])
-        nu = float(wrap(bearing - h))
+        h, G = bearing_jacobian(self.landmarks_xy[row][None], self.mean)
+        H = G[0]
+        nu = float(wrap(bearing - h[0]))
         PH = self.cov @ H
         S = float(H @ PH) + self.config.sigma**2
         if nu * nu > self.config.gate_sigmas**2 * S:
