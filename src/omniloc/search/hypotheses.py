@@ -228,6 +228,10 @@ def run_hypotheses(
         return
     found = any(len(r[0]) for r in results)
     _collect(lm, beta, results, out, opt, stop_first, miss_allow)
+    if stop_first:
+        # Whether or not it stopped, a first fit took shortcuts (below) that can lose a rival
+        # interpretation: its verdict is never that of a search that looked at everything.
+        out.exhaustive = False
     if stop_first and not found and out.complete:
         # A first fit takes shortcuts (a tighter cheap test, wildcards reserved in advance)
         # that can lose an interpretation the exhaustive search finds. Finding nothing is
