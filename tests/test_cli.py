@@ -86,6 +86,23 @@ def test_human_output_says_why_an_answer_is_not_decisive(tmp_path, capsys) -> No
     assert "AMBIGUOUS" in out and ("distinct poses compete" in out or "chance fit" in out)
 
 
+def test_human_output_says_when_one_pose_cannot_rule_out_a_chance_fit(tmp_path, capsys) -> None:
+    # Four bearings, 12 landmarks, no range: one pose fits and holds 99 % of the posterior
+    # among the fits found, but four bearings are too few to rule out that it is a chance fit
+    # and the truth lies where the search found nothing.
+    from omniloc.simulate import observe, random_map, random_pose
+
+    lm = random_map(12, density=0.05, rng=15)
+    sc = observe(lm, random_pose(lm, rng=16), n_obs=4, rng=17)
+    m, b = tmp_path / "map.csv", tmp_path / "b.txt"
+    lm.to_csv(m)
+    b.write_text("\n".join(f"{v:.12f}" for v in sc.bearings) + "\n")
+    assert main(["localize", "--map", str(m), "--bearings", str(b), "--sigma", "0.01"]) == 0
+    out = capsys.readouterr().out
+    assert "AMBIGUOUS" in out and "too little to rule out that none is right" in out
+    assert "distinct poses compete" not in out
+
+
 def test_no_solution_is_a_sentence_and_exit_0(tmp_path, capsys) -> None:
     m = tmp_path / "sq.csv"
     m.write_text("id,x,y\n1,0,0\n2,6,0\n3,6,6\n4,0,6\n")
