@@ -97,9 +97,13 @@ MAX_NEIGHBOUR_ENTRIES = 20_000_000
 #: (MAX_NEIGHBOUR_ENTRIES: every landmark of the map is tested at each step), costs more per
 #: unit of work: at the full rate sigma=0.1 or 0.2 on 30 landmarks overran 0.5 s by 3-9x, and
 #: 200,000 landmarks with max_range=3000 overran 2 s by 7x. A time budget is then converted at
-#: a lower rate, down to COSTLY_WORK_RATE of it (stopping early is the safe side of a budget).
+#: a lower rate, down to COSTLY_WORK_RATE of it for a wide gate (stopping early is the safe
+#: side of a budget), and at UNLISTED_WORK_RATE without lists: at 0.1 a range taking in a
+#: whole map of 20,000 landmarks still ran 6.7 s on a 1 s budget (the fuzz census's one hang),
+#: with per-unit costs that grow with the map (each step scans every landmark, out of cache).
 FITTED_GATE = float(np.deg2rad(2.0))
 COSTLY_WORK_RATE = 0.1
+UNLISTED_WORK_RATE = 0.01
 
 
 def _neighbours(lm: LandmarkMap, opt: SearchOptions) -> tuple[Neighbours, bool]:
@@ -162,8 +166,10 @@ def run_hypotheses(
     triples = seeding.seed_triples(beta, opt.max_wild, limits)
     nb, listed = _neighbours(lm, opt)
     unlisted = s.reach_max is not None and lm.n > 64 and not listed
-    slower = COSTLY_WORK_RATE if unlisted else min(1.0, FITTED_GATE / s.gate_width)
-    rate = max(COSTLY_WORK_RATE, slower)
+    if unlisted:
+        rate = UNLISTED_WORK_RATE
+    else:
+        rate = max(COSTLY_WORK_RATE, min(1.0, FITTED_GATE / s.gate_width))
     miss_allow = m + lm.n
     if stop_first and s.p_detect is not None:
         # A first fit must not leave more plainly visible landmarks unseen than misses
