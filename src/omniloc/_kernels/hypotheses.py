@@ -751,6 +751,13 @@ def _verify(
                         n_out = _keep(out, n_out, path, n, m, (qx, qy, qt), missed, key, fits)
                         if fits:
                             return n_out, 2
+                        # The budget is checked per complete path too, not only per node: with
+                        # a range that takes in a whole map, one node's gate held ~900 paths,
+                        # each refined and scanned against every landmark (200,000 landmarks:
+                        # 1.9e8 units on a 1.2e7 budget, 25 s for 2 s).
+                        work_now = _walk_work(cnt[0], cnt[4], nn, _counts_missed(scoring))
+                        if work_budget > 0 and work_now >= work_budget:
+                            return n_out, 1
                 level -= 1
                 continue
             o = rest[level]
