@@ -1,4 +1,4 @@
-"""The ``omniloc`` command: ``localize``, ``bearings``, ``demo``, ``evaluate``.
+"""The ``omniloc`` command: ``localize``, ``bearings``, ``demo``, ``evaluate``, ``track``.
 
 Each subcommand calls one library function. Errors that omniloc raises on purpose
 (:class:`~omniloc.errors.OmnilocError`) become one line on stderr and exit status 1; anything
@@ -218,7 +218,13 @@ def _build_parser() -> argparse.ArgumentParser:
         "--dataset",
         nargs=2,
         metavar=("KIND", "PATH"),
-        help="evaluate on real data instead: KIND is roh or mrclam",
+        help="evaluate on real data instead: KIND is roh, mrclam or mrclam-track",
+    )
+    e.add_argument(
+        "--kidnap",
+        type=int,
+        default=100,
+        help="mrclam-track: kidnapped streams (and as many without a jump), default 100",
     )
     e.add_argument("--max-samples", type=int, help="use at most this many dataset samples")
     e.add_argument(
@@ -230,7 +236,40 @@ def _build_parser() -> argparse.ArgumentParser:
     e.add_argument("--seed", type=_seed, default=0)
     e.add_argument("--workers", type=int, default=1, help="processes for a sweep (default 1)")
     e.add_argument("--out", type=_out_path, default=Path("evaluation"), help="folder for results")
+    _add_track_parser(sub)
     return parser
+
+
+def _add_track_parser(sub: Any) -> None:
+    from .track.presets import Preset
+
+    t = sub.add_parser("track", help="localize over time from odometry and frames of bearings")
+    t.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
+    t.add_argument("--odometry", required=True, type=Path, help="odometry CSV: t,v,w")
+    t.add_argument(
+        "--frames",
+        required=True,
+        type=Path,
+        help="frames: CSV t,bearing (rows with equal t form a frame) or MRCLAM robotR_frames.csv",
+    )
+    t.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
+    t.add_argument(
+        "--preset",
+        choices=[p.value for p in Preset],
+        default=Preset.GENERIC.value,
+        help="sensor, motion and tracker parameters (default generic)",
+    )
+    t.add_argument("--sigma", type=_positive, help="bearing noise std, deg (overrides the preset)")
+    t.add_argument("--fov", type=_fov_deg, help="full field of view, deg (overrides the preset)")
+    t.add_argument("--max-range", type=_positive, help="sensor range, m (overrides the preset)")
+    t.add_argument(
+        "--groundtruth", type=Path, help="true track t,x,y,theta: errors in the summary and figure"
+    )
+    t.add_argument("--out", type=Path, metavar="TRAJ.tum", help="localized poses, TUM format")
+    t.add_argument(
+        "--json", action="store_true", help="one JSON object per frame on stdout (JSON lines)"
+    )
+    t.add_argument("--plot", type=Path, metavar="OUT.png", help="save a figure of the run")
 
 
 # --------------------------------------------------------------------------------------------
@@ -519,6 +558,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     progress = not args.quiet
     make_folder(args.out, "--out")  # before the run, not after it
+    if args.dataset is not None and args.dataset[0] == "mrclam-track":
+        return _cmd_evaluate_track(args)
     if args.dataset is not None:
         kind, path = args.dataset
         if args.min_landmarks < 3:
@@ -560,11 +601,110 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_evaluate_track(args: argparse.Namespace) -> int:
+    from .evaluate.tracking import evaluate_mrclam_tracking, tracking_summary
+
+    if args.kidnap < 0:
+        raise InputError(f"--kidnap must be >= 0, got {args.kidnap}")
+    res, _ = evaluate_mrclam_tracking(
+        args.dataset[1], kidnapped=args.kidnap, rng=args.seed, progress=not args.quiet
+    )
+    print(tracking_summary(res))
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    res.to_csv(out / "mrclam_track_runs.csv")
+    (out / "mrclam_track.json").write_text(json.dumps(res.as_dict(), indent=1))
+    print(f"written: {out / 'mrclam_track_runs.csv'}, {out / 'mrclam_track.json'}")
+    return 0
+
+
+def _cmd_track(args: argparse.Namespace) -> int:
+    from .evaluate.common import progress_bar
+    from .maps import LandmarkMap
+    from .track import load_frames, load_groundtruth, load_odometry, preset, track
+    from .track.io import write_json_lines, write_tum
+
+    lm = LandmarkMap.load(args.map)
+    odo = load_odometry(args.odometry)
+    frames = load_frames(args.frames, degrees=args.degrees)
+    if not frames:
+        raise InputError(f"{args.frames}: no frames")
+    truth = load_groundtruth(args.groundtruth) if args.groundtruth is not None else None
+    sensor, motion, config = preset(args.preset)
+    changes: dict[str, Any] = {}
+    if args.sigma is not None:
+        changes["sigma"] = float(np.deg2rad(args.sigma))
+    if args.fov is not None:
+        changes["fov"] = float(np.deg2rad(args.fov))
+    if args.max_range is not None:
+        changes["max_range"] = args.max_range
+    if changes:
+        sensor = sensor.replace(**changes)
+    bar = progress_bar(len(frames), not args.quiet, "tracking")
+    try:
+        run = track(
+            lm,
+            odo,
+            frames,
+            sensor=sensor,
+            motion=motion,
+            config=config,
+            progress=lambda n: bar.update(1),
+        )
+    finally:
+        bar.close()
+    est = run.estimates
+    if args.out is not None:
+        n = write_tum(args.out, est)
+        log.info("%s: %d localized poses (TUM)", args.out, n)
+    if args.plot is not None:
+        from .plot.track import plot_track
+
+        plot_track(lm, est, args.plot, truth=truth, title=f"{args.frames.name}")
+    if args.json:
+        write_json_lines(sys.stdout, est)
+        return 0
+    span = est[-1].t - est[0].t
+    print(
+        f"{len(est)} frames over {span:.1f} s in {run.cpu_s:.2f} s CPU "
+        f"({span / run.cpu_s if run.cpu_s > 0 else float('inf'):.0f}x real time), "
+        f"{run.searches} searches: localized {100 * run.share('localized'):.1f} %, "
+        f"ambiguous {100 * run.share('ambiguous'):.1f} %, lost {100 * run.share('lost'):.1f} %"
+    )
+    first = next((e for e in est if e.localized), None)
+    if first is not None:
+        after = first.t - est[0].t
+        print(f"first localized at t = {first.t:.3f} s ({after:.1f} s after the first frame)")
+    kid = [e.t for e in est if e.kidnapped]
+    if kid:
+        print(f"kidnapping flagged at t = {', '.join(f'{x:.1f}' for x in kid[:10])}")
+    if truth is not None:
+        from .evaluate.tracking import errors_against
+
+        ok, d_pos, d_hdg = errors_against(truth, est)
+        loc = np.array([e.localized for e in est])
+        if loc.any():
+            print(
+                f"against the ground truth: localized and within 0.3 m / 5 deg "
+                f"{100 * np.mean(ok[loc]):.1f} % of localized frames; position RMSE "
+                f"{np.sqrt(np.nanmean(d_pos[loc] ** 2)):.3f} m, heading RMSE "
+                f"{np.sqrt(np.nanmean(d_hdg[loc] ** 2)):.2f} deg"
+            )
+    last = est[-1]
+    where = "no pose"
+    if last.pose is not None:
+        p = last.pose
+        where = f"x = {p.x:.3f} m, y = {p.y:.3f} m, theta = {np.rad2deg(p.theta):.2f} deg"
+    print(f"last frame: {last.state.value}: {where} ({last.reason})")
+    return 0
+
+
 _COMMANDS = {
     "localize": _cmd_localize,
     "bearings": _cmd_bearings,
     "demo": _cmd_demo,
     "evaluate": _cmd_evaluate,
+    "track": _cmd_track,
 }
 
 

@@ -50,11 +50,16 @@ __all__ = [
     "LocalizerOverTime",
     "RunScore",
     "Stream",
+    "TrackingReport",
     "TrackingResult",
+    "errors_against",
+    "evaluate_mrclam_tracking",
     "evaluate_tracking",
     "run_stream",
     "score_run",
     "splice",
+    "tracker_factory",
+    "tracking_summary",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -519,3 +524,144 @@ def mrclam_streams(path: str | Path, robots: Sequence[int] = (1, 2, 3, 4, 5)) ->
         truth = load_groundtruth(folder / f"{name}_groundtruth_10hz.csv")
         out.append(whole_run(name, lm, odo, frames, truth))
     return out
+
+
+# --------------------------------------------------------------------------------------------
+# The omniloc tracker on MRCLAM: whole runs and kidnappings, one report
+# --------------------------------------------------------------------------------------------
+
+
+def errors_against(
+    truth: GroundTruth,
+    estimates: Sequence[TrackEstimate],
+    pos_tol_m: float = 0.3,
+    heading_tol_deg: float = 5.0,
+) -> tuple[NDArray[np.bool_], FloatArray, FloatArray]:
+    """Per estimate: within tolerance of the truth (any state), position error (m) and
+    heading error (deg); NaN errors where there is no pose or no truth."""
+    t = np.array([e.t for e in estimates], dtype=np.float64)
+    true, _ = truth.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
+    est = np.array(
+        [e.pose.as_array() if e.pose is not None else (np.nan,) * 3 for e in estimates]
+    ).reshape(-1, 3)
+    d_pos = np.hypot(est[:, 0] - true[:, 0], est[:, 1] - true[:, 1])
+    d_hdg = np.degrees(np.abs(np.mod(est[:, 2] - true[:, 2] + np.pi, 2 * np.pi) - np.pi))
+    with np.errstate(invalid="ignore"):
+        ok = (d_pos <= pos_tol_m) & (d_hdg <= heading_tol_deg)
+    return ok, d_pos, d_hdg
+
+
+def tracker_factory(
+    preset_name: str = "mrclam",
+) -> Callable[[LandmarkMap, Pose | None], LocalizerOverTime]:
+    """``make_localizer`` for :func:`evaluate_tracking`: a fresh
+    :class:`~omniloc.track.Tracker` with a named preset's parameters (the start pose, even
+    when given, is not used: the tracker localizes globally)."""
+    from ..track.presets import preset
+    from ..track.tracker import Tracker
+
+    sensor, motion, config = preset(preset_name)
+
+    def make(landmarks: LandmarkMap, start: Pose | None) -> LocalizerOverTime:
+        return Tracker(landmarks, sensor, motion, config)
+
+    return make
+
+
+@dataclass(frozen=True)
+class TrackingReport:
+    """The tracker on MRCLAM: the whole runs, and the kidnapped streams with the same
+    segments without a jump."""
+
+    whole: TrackingResult
+    kidnap: TrackingResult | None = None
+
+    def as_dict(self) -> dict[str, object]:
+        """Plain JSON."""
+        return {
+            "whole_runs": self.whole.as_dict(),
+            "kidnap_streams": None if self.kidnap is None else self.kidnap.as_dict(),
+        }
+
+    def to_csv(self, path: str | Path) -> None:
+        """One row per stream (whole runs, then kidnap streams)."""
+        runs = list(self.whole.runs) + ([] if self.kidnap is None else list(self.kidnap.runs))
+        write_records_csv(Path(path), runs)
+
+
+def evaluate_mrclam_tracking(
+    path: str | Path,
+    *,
+    kidnapped: int = 100,
+    rng: RngLike = 0,
+    robots: Sequence[int] = (1, 2, 3, 4, 5),
+    preset_name: str = "mrclam",
+    progress: bool = True,
+) -> tuple[TrackingReport, list[list[TrackEstimate]]]:
+    """Run the :class:`~omniloc.track.Tracker` on MRCLAM: each robot's whole run, and
+    ``kidnapped`` kidnapped streams with as many without a jump (:func:`kidnap_streams`,
+    seeded by ``rng``). Returns the report and every estimate (whole runs first)."""
+    if isinstance(kidnapped, bool) or not isinstance(kidnapped, (int, np.integer)) or kidnapped < 0:
+        raise InputError(f"kidnapped must be an integer >= 0, got {kidnapped!r}")
+    runs = mrclam_streams(path, robots)
+    make = tracker_factory(preset_name)
+    whole, est = evaluate_tracking(runs, make, name="tracker: whole runs", progress=progress)
+    kid = None
+    if kidnapped:
+        jumps, plain = kidnap_streams(runs, int(kidnapped), rng=rng)
+        kid, est_k = evaluate_tracking(
+            jumps + plain, make, name="tracker: kidnap streams", progress=progress
+        )
+        est = est + est_k
+    return TrackingReport(whole, kid), est
+
+
+def _fmt(v: float, spec: str = ".2f") -> str:
+    return "nan" if not math.isfinite(v) else format(v, spec)
+
+
+def tracking_summary(report: TrackingReport | TrackingResult) -> str:
+    """Plain-text table of the runs and the totals that the targets read."""
+    if isinstance(report, TrackingResult):
+        report = TrackingReport(report)
+    w = report.whole
+    lines = [
+        f"{w.name}: correct = localized and within {w.pos_tol_m} m / {w.heading_tol_deg} deg",
+        "run        time to localize  correct after  localized  conf. wrong  pos RMSE  hdg RMSE"
+        "  CPU x real time",
+    ]
+    for r in w.runs:
+        lines.append(
+            f"{r.name:<10} {_fmt(r.time_to_localize_s, '13.1f')} s  "
+            f"{_fmt(100 * r.correct_after_rate, '11.1f')} %"
+            f"  {r.n_localized:5d}/{r.n_scored:<5d} {r.n_confidently_wrong:8d}"
+            f"  {_fmt(r.pos_rmse_m, '6.3f')} m {_fmt(r.heading_rmse_deg, '6.2f')} deg"
+            f"  {_fmt(r.realtime_factor, '8.0f')}x"
+        )
+    tot = w.totals()
+    lines.append(
+        f"all runs: time to localize median {_fmt(tot['time_to_localize_median_s'], '.1f')} s, "
+        f"max {_fmt(tot['time_to_localize_max_s'], '.1f')} s; correct after "
+        f"{_fmt(100 * tot['correct_after_rate'], '.1f')} %; confidently wrong "
+        f"{_fmt(100 * tot['confidently_wrong_rate'], '.2f')} % of frames; position RMSE "
+        f"{_fmt(tot['pos_rmse_m'], '.3f')} m, heading RMSE {_fmt(tot['heading_rmse_deg'])} deg; "
+        f"{_fmt(tot['realtime_factor'], '.0f')}x real time"
+    )
+    if report.kidnap is not None:
+        k = report.kidnap
+        tj = k.totals(True)
+        tp = k.totals(False)
+        lines.append(
+            f"kidnapped streams ({int(tj['runs'])}): detection delay median "
+            f"{_fmt(tj['detection_delay_median_s'], '.1f')} s "
+            f"({int(tj['undetected'])} undetected), "
+            f"recovery median {_fmt(tj['recovery_median_s'], '.1f')} s ({int(tj['unrecovered'])} "
+            f"not recovered); confidently wrong {_fmt(100 * tj['confidently_wrong_rate'], '.2f')} %"
+        )
+        lines.append(
+            f"same segments without a jump ({int(tp['runs'])}): false alarm on "
+            f"{_fmt(100 * tp['false_alarm_run_rate'], '.1f')} % of runs; confidently wrong "
+            f"{_fmt(100 * tp['confidently_wrong_rate'], '.2f')} %; time to localize median "
+            f"{_fmt(tp['time_to_localize_median_s'], '.1f')} s"
+        )
+    return "\n".join(lines)

@@ -1,22 +1,67 @@
 """Localization over time: wake up, disambiguate while moving, track, notice a kidnapping.
 
+* :class:`Tracker` (:mod:`.tracker`) -- the online localizer: feed it odometry and frames of
+  bearings, it reports ``lost``, ``ambiguous`` or ``localized`` after every frame;
+* :func:`track` (:mod:`.offline`) -- the same over a whole recording;
+* :mod:`.motion` -- the odometry's motion and noise (:class:`MotionModel`);
+* :mod:`.ekf`, :mod:`.step`, :mod:`.clutter` -- a set of pose hypotheses, each an extended
+  Kalman filter, and how a frame is taken in;
+* :mod:`.window`, :mod:`.relocalize` -- the recent frames, and new hypotheses from the
+  interpretation tree;
+* :mod:`.presets` -- tuned parameters (``generic``, ``mrclam``);
 * :mod:`.data` -- odometry, frames of bearings and ground-truth tracks, and their files;
-* :mod:`.records` -- what a localizer over time reports after each frame.
+  :mod:`.io` -- TUM trajectories and JSON lines; :mod:`.records` -- what a localizer over
+  time reports; :mod:`.simulate` -- simulated recordings.
+
+The package is callable: ``omniloc.track(map, odometry, frames, ...)`` is :func:`track`.
 """
 
 from __future__ import annotations
 
+import sys
+import types
+from typing import Any
+
 from .data import Frame, GroundTruth, Odometry, load_frames, load_groundtruth, load_odometry
+from .io import read_tum, write_json_lines, write_tum
+from .motion import MotionModel
+from .offline import TrackRun, track
+from .presets import Preset, preset
 from .records import Hypothesis, TrackEstimate, TrackState
+from .simulate import SimulatedRun, simulate_run
+from .tracker import Tracker, TrackerConfig
 
 __all__ = [
     "Frame",
     "GroundTruth",
     "Hypothesis",
+    "MotionModel",
     "Odometry",
+    "Preset",
+    "SimulatedRun",
     "TrackEstimate",
+    "TrackRun",
     "TrackState",
+    "Tracker",
+    "TrackerConfig",
     "load_frames",
     "load_groundtruth",
     "load_odometry",
+    "preset",
+    "read_tum",
+    "simulate_run",
+    "track",
+    "write_json_lines",
+    "write_tum",
 ]
+
+
+class _CallablePackage(types.ModuleType):
+    """``omniloc.track(...)`` calls :func:`track`: the issue's API, without hiding the
+    package (``omniloc.track.Tracker`` still works)."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> TrackRun:
+        return track(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallablePackage

@@ -1,0 +1,285 @@
+"""The motion model: how odometry moves a pose, and how uncertain that leaves it.
+
+Odometry comes as constant-velocity pieces (velocity rows ``t, v, w`` holding until the next
+row, as MRCLAM's robots record them) or as increments ``(dx, dy, dtheta)`` between times.
+Both become pieces of constant *body twist* ``(vx, vy, w)`` -- ``vy = 0`` for a wheeled
+robot's ``(v, w)`` -- integrated exactly: over a piece of duration ``dt`` the robot moves by
+the SE(2) exponential of ``(vx, vy, w) dt`` (an arc of a circle; a straight line when
+``w = 0``). Pieces compose into one relative motion ``delta = (dx, dy, dtheta)`` in the frame
+of the robot at the start, with a covariance ``Q``.
+
+Noise
+-----
+Each piece adds independent noise in its own start frame (variances, per piece):
+
+* along the motion: ``along_per_m * |d| + along_per_s * dt`` (m^2),
+* across it: ``across_per_m * |d|`` (m^2),
+* heading: ``turn_per_rad * |dtheta| + turn_per_m * |d| + turn_per_s * dt`` (rad^2),
+
+where ``|d|`` is the distance travelled and ``|dtheta|`` the angle turned on the piece: a
+variance per unit of motion, so that noise grows with the motion and not with how finely it
+was sampled. ``Q`` is propagated through the composition to first order (the Jacobians of
+:func:`compose`). ``delay_s`` is the odometry's latency: a row stamped ``t`` describes the
+motion from ``t + delay_s`` (MRCLAM's recorded velocities lead the true motion by ~0.2 s).
+
+How the MRCLAM values were estimated from odometry against ground truth is in
+``docs/tracking.md``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..errors import InputError
+from . import _kernels
+
+__all__ = [
+    "MotionModel",
+    "between",
+    "compose",
+    "compose_jacobians",
+    "integrate",
+    "inverse",
+    "twist_of",
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class MotionModel:
+    """Noise of the odometry and its latency.
+
+    Parameters
+    ----------
+    along_per_m : float
+        Variance along the motion per metre travelled, m^2/m.
+    across_per_m : float
+        Variance across the motion per metre travelled, m^2/m.
+    turn_per_rad : float
+        Heading variance per radian turned, rad^2/rad.
+    turn_per_m : float
+        Heading variance per metre travelled, rad^2/m.
+    turn_per_s : float
+        Heading variance per second, rad^2/s (drift, also when standing still).
+    along_per_s : float
+        Variance along the motion per second, m^2/s.
+    delay_s : float
+        Latency of the odometry, seconds: a row stamped ``t`` moves the robot from
+        ``t + delay_s``. May be negative (odometry stamped late).
+
+    Raises
+    ------
+    InputError
+        A variance that is negative or not finite, a latency that is not finite.
+
+    Examples
+    --------
+    >>> m = MotionModel.mrclam()
+    >>> m.delay_s
+    0.2
+    """
+
+    along_per_m: float = 0.004
+    across_per_m: float = 0.0005
+    turn_per_rad: float = 0.02
+    turn_per_m: float = 0.002
+    turn_per_s: float = 1e-6
+    along_per_s: float = 1e-6
+    delay_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+                raise InputError(f"{f.name} must be a number, got {v!r}")
+            v = float(v)
+            if not math.isfinite(v) or (f.name != "delay_s" and v < 0):
+                what = "finite" if f.name == "delay_s" else "finite and >= 0"
+                raise InputError(f"{f.name} must be {what}, got {getattr(self, f.name)!r}")
+            object.__setattr__(self, f.name, v)
+
+    @classmethod
+    def mrclam(cls) -> MotionModel:
+        """The values fitted to MRCLAM set 6 (odometry against Vicon; ``docs/tracking.md``)."""
+        return cls(
+            along_per_m=0.004,
+            across_per_m=0.0005,
+            turn_per_rad=0.012,
+            turn_per_m=0.002,
+            turn_per_s=2e-5,
+            along_per_s=1e-6,
+            delay_s=0.2,
+        )
+
+    @property
+    def noise(self) -> FloatArray:
+        """The six variances in the order the compiled integration takes them."""
+        return np.array(
+            [
+                self.along_per_m,
+                self.across_per_m,
+                self.turn_per_rad,
+                self.turn_per_m,
+                self.turn_per_s,
+                self.along_per_s,
+            ]
+        )
+
+
+def _poses(a: ArrayLike, name: str) -> FloatArray:
+    p = np.asarray(a, dtype=np.float64)
+    if p.shape[-1:] != (3,):
+        raise InputError(f"{name} must have shape (3,) or (n, 3), got {p.shape}")
+    return p
+
+
+def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
+    """``pose (+) delta``: move by ``delta`` given in the frame of ``pose``.
+
+    Parameters
+    ----------
+    pose : array_like, shape (3,) or (n, 3)
+        ``(x, y, theta)``, metres and radians.
+    delta : array_like, shape (3,) or (n, 3)
+        ``(dx, dy, dtheta)`` in the robot frame of ``pose``.
+
+    Returns
+    -------
+    ndarray, shape of the broadcast inputs
+        Headings wrapped to [-pi, pi).
+
+    Examples
+    --------
+    >>> compose([1.0, 2.0, np.pi / 2], [1.0, 0.0, 0.0]).round(6)
+    array([1.     , 3.     , 1.570796])
+    """
+    p = _poses(pose, "pose")
+    d = _poses(delta, "delta")
+    c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
+    out = np.empty(np.broadcast_shapes(p.shape, d.shape))
+    out[..., 0] = p[..., 0] + c * d[..., 0] - s * d[..., 1]
+    out[..., 1] = p[..., 1] + s * d[..., 0] + c * d[..., 1]
+    out[..., 2] = np.mod(p[..., 2] + d[..., 2] + np.pi, 2 * np.pi) - np.pi
+    return out
+
+
+def compose_jacobians(pose: ArrayLike, delta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Jacobians of :func:`compose` with respect to ``pose`` and to ``delta``.
+
+    Returns
+    -------
+    J_pose, J_delta : ndarray, shape (..., 3, 3)
+    """
+    p = _poses(pose, "pose")
+    d = _poses(delta, "delta")
+    shape = np.broadcast_shapes(p.shape, d.shape)[:-1]
+    c = np.broadcast_to(np.cos(p[..., 2]), shape)
+    s = np.broadcast_to(np.sin(p[..., 2]), shape)
+    dx = np.broadcast_to(d[..., 0], shape)
+    dy = np.broadcast_to(d[..., 1], shape)
+    Jp = np.zeros((*shape, 3, 3))
+    Jp[..., 0, 0] = Jp[..., 1, 1] = Jp[..., 2, 2] = 1.0
+    Jp[..., 0, 2] = -s * dx - c * dy
+    Jp[..., 1, 2] = c * dx - s * dy
+    Jd = np.zeros((*shape, 3, 3))
+    Jd[..., 0, 0], Jd[..., 0, 1] = c, -s
+    Jd[..., 1, 0], Jd[..., 1, 1] = s, c
+    Jd[..., 2, 2] = 1.0
+    return Jp, Jd
+
+
+def inverse(delta: ArrayLike) -> FloatArray:
+    """The motion that undoes ``delta``: ``compose(compose(p, d), inverse(d)) == p``."""
+    d = _poses(delta, "delta")
+    c, s = np.cos(d[..., 2]), np.sin(d[..., 2])
+    out = np.empty(d.shape)
+    out[..., 0] = -c * d[..., 0] - s * d[..., 1]
+    out[..., 1] = s * d[..., 0] - c * d[..., 1]
+    out[..., 2] = np.mod(-d[..., 2] + np.pi, 2 * np.pi) - np.pi
+    return out
+
+
+def between(a: ArrayLike, b: ArrayLike) -> FloatArray:
+    """The motion from pose ``a`` to pose ``b``, in the frame of ``a``:
+    ``compose(a, between(a, b)) == b``."""
+    pa = _poses(a, "a")
+    pb = _poses(b, "b")
+    c, s = np.cos(pa[..., 2]), np.sin(pa[..., 2])
+    dx = pb[..., 0] - pa[..., 0]
+    dy = pb[..., 1] - pa[..., 1]
+    out = np.empty(np.broadcast_shapes(pa.shape, pb.shape))
+    out[..., 0] = c * dx + s * dy
+    out[..., 1] = -s * dx + c * dy
+    out[..., 2] = np.mod(pb[..., 2] - pa[..., 2] + np.pi, 2 * np.pi) - np.pi
+    return out
+
+
+def twist_of(delta: ArrayLike, dt: float) -> FloatArray:
+    """The constant body twist ``(vx, vy, w)`` that moves by ``delta`` in ``dt`` seconds (the
+    SE(2) logarithm divided by ``dt``): how an increment becomes a piece of motion."""
+    d = _poses(delta, "delta")
+    if not dt > 0:
+        raise InputError(f"an increment needs a positive duration, got {dt!r}")
+    th = d[..., 2]
+    small = np.abs(th) < 1e-9
+    ths = np.where(small, 1.0, th)
+    a = np.where(small, 1.0 - th * th / 6.0, np.sin(ths) / ths)  # sin(th)/th
+    b = np.where(small, th / 2.0, (1.0 - np.cos(ths)) / ths)  # (1-cos th)/th
+    det = a * a + b * b
+    vx = (a * d[..., 0] + b * d[..., 1]) / det
+    vy = (-b * d[..., 0] + a * d[..., 1]) / det
+    return np.stack([vx, vy, th], axis=-1) / dt
+
+
+def integrate(
+    dt: ArrayLike,
+    vx: ArrayLike,
+    w: ArrayLike,
+    model: MotionModel,
+    vy: ArrayLike | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """Compose constant-twist pieces into one relative motion with its covariance.
+
+    Parameters
+    ----------
+    dt : array_like, shape (k,)
+        Durations of the pieces, seconds (>= 0).
+    vx, w : array_like, shape (k,)
+        Forward velocity (m/s) and turn rate (rad/s) on each piece.
+    model : MotionModel
+    vy : array_like, shape (k,), optional
+        Sideways velocity (m/s); zero for a wheeled robot.
+
+    Returns
+    -------
+    delta : ndarray, shape (3,)
+        ``(dx, dy, dtheta)`` in the robot frame at the start (dtheta not wrapped: the total
+        angle turned).
+    Q : ndarray, shape (3, 3)
+        Its covariance.
+
+    Examples
+    --------
+    A quarter circle of radius 1 m:
+
+    >>> d, Q = integrate([np.pi / 2], [1.0], [1.0], MotionModel())
+    >>> d.round(6)
+    array([1.      , 1.      , 1.570796])
+    """
+    t = np.ascontiguousarray(dt, dtype=np.float64)
+    v = np.ascontiguousarray(vx, dtype=np.float64)
+    om = np.ascontiguousarray(w, dtype=np.float64)
+    s = np.zeros_like(v) if vy is None else np.ascontiguousarray(vy, dtype=np.float64)
+    if not (t.shape == v.shape == om.shape == s.shape) or t.ndim != 1:
+        raise InputError(
+            f"dt, vx, vy and w must have the same shape (k,), got {t.shape}, {v.shape}, "
+            f"{s.shape}, {om.shape}"
+        )
+    if t.size and (not np.isfinite(t).all() or (t < 0).any()):
+        raise InputError("piece durations must be finite and >= 0")
+    return _kernels.integrate_pieces(t, v, s, om, model.noise)

@@ -1,0 +1,130 @@
+"""Localization over time for a recording: :func:`track`.
+
+The online :class:`~omniloc.track.Tracker` takes odometry and frames as they come;
+:func:`track` feeds it a whole recording in time order -- before each frame, the odometry
+rows up to the frame's time -- and returns one :class:`~omniloc.track.TrackEstimate` per
+frame.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from ..errors import InputError
+from ..maps import LandmarkMap, as_landmark_map
+from ..sensor import SensorModel
+from .data import Frame, Odometry
+from .motion import MotionModel
+from .records import TrackEstimate, TrackState
+from .tracker import Tracker, TrackerConfig
+
+__all__ = ["TrackRun", "track"]
+
+
+@dataclass(frozen=True)
+class TrackRun:
+    """What :func:`track` produced.
+
+    Attributes
+    ----------
+    estimates : tuple of TrackEstimate
+        One per frame, in time order.
+    searches : int
+        Interpretation-tree searches the tracker ran.
+    cpu_s : float
+        Processor time spent, seconds.
+    """
+
+    estimates: tuple[TrackEstimate, ...] = field(repr=False)
+    searches: int = 0
+    cpu_s: float = 0.0
+
+    def __len__(self) -> int:
+        return len(self.estimates)
+
+    def share(self, state: TrackState | str) -> float:
+        """Share of the frames in ``state`` (NaN without frames)."""
+        if not self.estimates:
+            return float("nan")
+        st = TrackState(state)
+        return sum(e.state is st for e in self.estimates) / len(self.estimates)
+
+
+def track(
+    landmarks: LandmarkMap | ArrayLike,
+    odometry: Odometry,
+    frames: Sequence[Frame],
+    *,
+    sensor: SensorModel | None = None,
+    motion: MotionModel | None = None,
+    config: TrackerConfig | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> TrackRun:
+    """Localize a robot over a whole recording.
+
+    Parameters
+    ----------
+    landmarks : LandmarkMap or array_like, shape (N, 2)
+        The map, metres.
+    odometry : Odometry
+        Velocity odometry (``t, v, w``), in time order.
+    frames : sequence of Frame
+        Frames of bearings in time order (their ``truth``, if any, is not read).
+    sensor, motion, config
+        See :class:`~omniloc.track.Tracker` (defaults: its defaults).
+    progress : callable, optional
+        Called with the number of frames done after each frame (for a progress bar).
+
+    Returns
+    -------
+    TrackRun
+
+    Raises
+    ------
+    InputError
+        Frames out of time order (the message names the frame), or what
+        :meth:`Tracker.frame` refuses.
+
+    Examples
+    --------
+    >>> import numpy as np, omniloc
+    >>> from omniloc.sensor import SensorModel
+    >>> from omniloc.track import Frame, Odometry, track
+    >>> room = omniloc.demo_room()
+    >>> truth = omniloc.Pose(5.6, 2.1, np.deg2rad(30))
+    >>> z = omniloc.predict_bearings(room.xy, truth)
+    >>> frames = [Frame(0.25 * k, z) for k in range(12)]
+    >>> run = track(room, Odometry([0.0], [0.0], [0.0]), frames,
+    ...             sensor=SensorModel(sigma=np.deg2rad(0.3)))
+    >>> run.estimates[-1].state.value
+    'localized'
+    """
+    lm = as_landmark_map(landmarks)
+    if not isinstance(odometry, Odometry):
+        raise InputError(f"odometry must be an Odometry, got {type(odometry).__name__}")
+    times = np.array([f.t for f in frames], dtype=np.float64)
+    back = np.flatnonzero(np.diff(times) < 0)
+    if back.size:
+        k = int(back[0]) + 1
+        raise InputError(
+            f"frames out of time order: frame {k} at t={float(times[k])!r} "
+            f"after t={float(times[k - 1])!r}"
+        )
+    tracker = Tracker(lm, sensor, motion, config)
+    out: list[TrackEstimate] = []
+    k = 0
+    c0 = time.process_time()
+    for n, f in enumerate(frames, 1):
+        k1 = int(np.searchsorted(odometry.t, f.t, side="right"))
+        if k1 > k:
+            tracker.odometry(odometry.t[k:k1], odometry.v[k:k1], odometry.w[k:k1])
+            k = k1
+        out.append(tracker.frame(f.t, f.bearings))
+        if progress is not None:
+            progress(n)
+    return TrackRun(tuple(out), tracker.searches, time.process_time() - c0)

@@ -1,0 +1,169 @@
+"""Simulated recordings: a robot driving about a map, its odometry, its frames of bearings.
+
+:func:`simulate_run` drives a robot at constant speed with a turn rate that changes every
+few seconds (and steers back towards the map when it leaves it), records noisy velocity
+odometry at ``odometry_hz`` and, at ``frame_hz``, the bearings of the landmarks it sees
+(range and field of view of a :class:`~omniloc.sensor.SensorModel`, each detected with
+``p_detect``, Gaussian noise ``sigma``) plus Poisson clutter spread over the field of view.
+A kidnapping carries the robot to another pose at a given time while its odometry goes on
+as if nothing happened.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..errors import InputError
+from ..maps import LandmarkMap, as_landmark_map
+from ..pose import Pose
+from ..sensor import SensorModel
+from .data import Frame, GroundTruth, Odometry
+
+__all__ = ["SimulatedRun", "simulate_run"]
+
+FloatArray = NDArray[np.float64]
+RngLike = np.random.Generator | int | None
+
+
+@dataclass(frozen=True)
+class SimulatedRun:
+    """A simulated recording.
+
+    Attributes
+    ----------
+    odometry : Odometry
+        Noisy velocity odometry.
+    frames : list of Frame
+        Bearings, with the true landmark row of each in :attr:`Frame.truth`.
+    truth : GroundTruth
+        The true trajectory, sampled at the odometry's rate.
+    kidnap_t : float
+        Time of the kidnapping (NaN without one).
+    """
+
+    odometry: Odometry
+    frames: list[Frame] = field(repr=False)
+    truth: GroundTruth = field(repr=False)
+    kidnap_t: float = math.nan
+
+
+def simulate_run(
+    landmarks: LandmarkMap | NDArray[np.float64],
+    sensor: SensorModel,
+    start: Pose,
+    *,
+    duration_s: float = 60.0,
+    speed: float = 0.3,
+    turn_rate: float = 0.3,
+    turn_every_s: float = 4.0,
+    odometry_hz: float = 50.0,
+    frame_hz: float = 4.0,
+    v_noise: float = 0.02,
+    w_noise: float = 0.02,
+    kidnap: tuple[float, Pose] | None = None,
+    rng: RngLike = None,
+) -> SimulatedRun:
+    """Simulate a robot's run.
+
+    Parameters
+    ----------
+    landmarks : LandmarkMap or array_like, shape (N, 2)
+    sensor : SensorModel
+        What the robot sees (``sigma`` or ``threshold / 3`` as noise; ``p_detect`` default 1;
+        ``clutter`` default 0 per frame).
+    start : Pose
+        Where the robot starts.
+    duration_s : float
+        Length of the run, seconds.
+    speed : float
+        Forward speed, m/s.
+    turn_rate : float
+        Largest turn rate, rad/s: a new one is drawn uniformly in [-turn_rate, turn_rate]
+        every ``turn_every_s``; outside the map's bounding box (1 m margin) the robot turns
+        back towards its centre.
+    odometry_hz, frame_hz : float
+        Rates of the odometry rows and of the frames.
+    v_noise, w_noise : float
+        Standard deviations of the odometry's velocity (relative, per row) and turn rate
+        (rad/s, per row) errors.
+    kidnap : (float, Pose), optional
+        At this time the robot is carried to this pose (the odometry does not see it).
+    rng : Generator, int or None
+
+    Returns
+    -------
+    SimulatedRun
+    """
+    lm = as_landmark_map(landmarks)
+    gen = np.random.default_rng(rng)
+    for name, val in (
+        ("duration_s", duration_s),
+        ("odometry_hz", odometry_hz),
+        ("frame_hz", frame_hz),
+        ("turn_every_s", turn_every_s),
+    ):
+        if not (math.isfinite(val) and val > 0):
+            raise InputError(f"{name} must be a positive number, got {val!r}")
+    for name, val in (("speed", speed), ("v_noise", v_noise), ("w_noise", w_noise)):
+        if not (math.isfinite(val) and val >= 0):
+            raise InputError(f"{name} must be finite and >= 0, got {val!r}")
+    dt = 1.0 / odometry_hz
+    n = round(duration_s * odometry_hz) + 1
+    t = np.arange(n, dtype=np.float64) * dt
+    x0, y0, x1, y1 = lm.bounds
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+    poses = np.empty((n, 3))
+    v_cmd = np.full(n, float(speed))
+    w_cmd = np.empty(n)
+    p = start.as_array()
+    w = 0.0
+    next_turn = 0.0
+    k_jump = n if kidnap is None else int(np.searchsorted(t, kidnap[0]))
+    for k in range(n):
+        if k == k_jump and kidnap is not None:
+            p = kidnap[1].as_array()
+        poses[k] = p
+        if t[k] >= next_turn:
+            w = float(gen.uniform(-turn_rate, turn_rate))
+            next_turn = t[k] + turn_every_s
+        outside = not (x0 - 1 <= p[0] <= x1 + 1 and y0 - 1 <= p[1] <= y1 + 1)
+        if outside:
+            want = math.atan2(cy - p[1], cx - p[0])
+            err = (want - p[2] + math.pi) % (2 * math.pi) - math.pi
+            w = float(np.clip(2.0 * err, -max(turn_rate, 0.5), max(turn_rate, 0.5)))
+        w_cmd[k] = w
+        phi = w * dt
+        if abs(phi) < 1e-12:
+            dx, dy = speed * dt, 0.0
+        else:
+            dx = speed / w * math.sin(phi)
+            dy = speed / w * (1 - math.cos(phi))
+        c, s = math.cos(p[2]), math.sin(p[2])
+        p = np.array([p[0] + c * dx - s * dy, p[1] + s * dx + c * dy, p[2] + phi])
+    odo = Odometry(
+        t,
+        v_cmd * (1.0 + v_noise * gen.standard_normal(n)),
+        w_cmd + w_noise * gen.standard_normal(n),
+    )
+    truth = GroundTruth(t, poses[:, 0], poses[:, 1], np.mod(poses[:, 2] + np.pi, 2 * np.pi) - np.pi)
+    p_det = 1.0 if sensor.p_detect is None else sensor.p_detect
+    clutter = 0.0 if sensor.clutter is None else sensor.clutter
+    half = sensor.half_fov if sensor.half_fov is not None else math.pi
+    frames = []
+    t_frames = np.arange(0.5 / frame_hz, t[-1], 1.0 / frame_hz)
+    for tf in t_frames:
+        pose = truth.pose_at(float(tf))
+        vis = np.flatnonzero(sensor.visible(lm.xy, pose))
+        vis = vis[gen.random(vis.size) < p_det]
+        d = lm.xy[vis] - pose.xy
+        b = np.arctan2(d[:, 1], d[:, 0]) - pose.theta + sensor.noise * gen.standard_normal(vis.size)
+        spur = gen.uniform(-half, half, size=gen.poisson(clutter))
+        bearings = np.concatenate([b, spur])
+        who: list[int | None] = [int(i) for i in vis] + [None] * spur.size
+        order = gen.permutation(bearings.size)
+        frames.append(Frame(float(tf), bearings[order], tuple(who[i] for i in order)))
+    return SimulatedRun(odo, frames, truth, math.nan if kidnap is None else float(kidnap[0]))

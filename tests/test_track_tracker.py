@@ -1,0 +1,214 @@
+"""The tracker on simulated runs: wake-up, ambiguity, tracking, kidnapping; bad input."""
+
+from __future__ import annotations
+
+import logging
+from functools import cache
+
+import numpy as np
+import pytest
+
+from omniloc import LandmarkMap, Pose, symmetric_map
+from omniloc.errors import InputError
+from omniloc.sensor import SensorModel
+from omniloc.track import (
+    Frame,
+    Odometry,
+    SimulatedRun,
+    TrackerConfig,
+    TrackRun,
+    TrackState,
+    simulate_run,
+    track,
+)
+from omniloc.track.motion import MotionModel
+from omniloc.track.tracker import Tracker
+
+#: A 4 x 3 grid (symmetric under a half turn about its centre) and one landmark that breaks
+#: the symmetry, seen only from the east side of the grid with a 5 m range.
+GRID = LandmarkMap(np.vstack([symmetric_map("grid", size=12.0).xy, [[14.0, 2.0]]]))
+SENSOR = SensorModel(sigma=np.deg2rad(0.5), max_range=5.0, p_detect=0.9, clutter=0.3)
+MOTION = MotionModel(
+    along_per_m=0.002, across_per_m=2e-4, turn_per_rad=0.004, turn_per_m=0.002, turn_per_s=1e-6
+)
+CONFIG = TrackerConfig(search_interval_s=2.0)
+KIDNAP = (24.0, Pose(10.5, 3.2, 0.4))
+
+
+@cache
+def _scenario() -> tuple[SimulatedRun, TrackRun]:
+    run = simulate_run(
+        GRID,
+        SENSOR,
+        Pose(5.0, 4.2, 0.0),
+        duration_s=40.0,
+        speed=0.25,
+        turn_rate=0.0,
+        v_noise=0.02,
+        w_noise=0.01,
+        kidnap=KIDNAP,
+        rng=3,
+    )
+    return run, track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=CONFIG)
+
+
+def _errors(run: SimulatedRun, res: TrackRun) -> tuple[np.ndarray, np.ndarray]:
+    t = np.array([e.t for e in res.estimates])
+    truth, _ = run.truth.at(t)
+    est = np.array([e.pose.as_array() if e.pose else (np.nan,) * 3 for e in res.estimates])
+    d = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])
+    h = np.degrees(np.abs(np.angle(np.exp(1j * (est[:, 2] - truth[:, 2])))))
+    return d, h
+
+
+def test_wakes_up_ambiguous_on_a_symmetric_view() -> None:
+    run, res = _scenario()
+    first = next(e for e in res.estimates if e.state is not TrackState.LOST)
+    assert first.t < 1.0  # the first frame with enough bearings to search
+    # from the middle of the grid, shifted and turned poses explain the same bearings
+    assert first.state is TrackState.AMBIGUOUS
+    assert len(first.hypotheses) >= 2 and first.hypotheses[0].weight < 0.5
+    truth = run.truth.pose_at(first.t)
+    assert any(
+        h.pose.distance_to(truth)[0] < 0.3 and h.pose.distance_to(truth)[1] < 0.1
+        for h in first.hypotheses
+    )
+    assert not any(e.localized for e in res.estimates if e.t < 5.0)
+
+
+def test_disambiguates_while_moving_and_tracks() -> None:
+    run, res = _scenario()
+    d, h = _errors(run, res)
+    t = np.array([e.t for e in res.estimates])
+    loc = np.array([e.localized for e in res.estimates])
+    before = t < KIDNAP[0]
+    first = int(np.flatnonzero(loc)[0])
+    assert t[first] < 20.0
+    # once localized, localized and right until the kidnapping, never confidently wrong
+    assert loc[first:][before[first:]].mean() > 0.9
+    assert (d[loc & before] < 0.1).all() and (h[loc & before] < 1.0).all()
+
+
+def test_notices_the_kidnapping_and_recovers() -> None:
+    run, res = _scenario()
+    d, h = _errors(run, res)
+    t = np.array([e.t for e in res.estimates])
+    loc = np.array([e.localized for e in res.estimates])
+    kid = np.array([e.kidnapped for e in res.estimates])
+    jump = KIDNAP[0]
+    assert not kid[t < jump].any()  # no false alarm
+    after = t >= jump
+    wrong = loc & ((d > 0.3) | (h > 5.0))
+    # at most two seconds of confidently wrong frames after the jump, then flagged
+    assert not wrong[after & (t > jump + 2.0)].any()
+    flagged = t[kid]
+    assert flagged.size and jump <= flagged[0] < jump + 6.0
+    # localized and right again within ten seconds
+    back = after & loc & (d < 0.3) & (h < 5.0)
+    assert back.any() and t[back][0] < jump + 10.0
+
+
+def _frames(n: int = 8, t0: float = 0.0) -> list[Frame]:
+    truth = Pose(5.0, 4.2, 0.3)
+    seen = GRID.xy[SENSOR.visible(GRID.xy, truth)]
+    z = np.arctan2(seen[:, 1] - truth.y, seen[:, 0] - truth.x) - truth.theta
+    return [Frame(t0 + 0.25 * k, z) for k in range(n)]
+
+
+def test_bad_odometry_is_refused_and_changes_nothing() -> None:
+    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    tr.odometry([0.0, 0.1], [0.1, 0.1], [0.0, 0.0])
+    with pytest.raises(InputError, match="must not decrease"):
+        tr.odometry([0.3, 0.2], [0.1, 0.1], [0.0, 0.0])
+    with pytest.raises(InputError, match="out of time order"):
+        tr.odometry([0.05], [0.1], [0.0])
+    with pytest.raises(InputError, match=r"odometry v\[1\] is not finite"):
+        tr.odometry([0.2, 0.3], [0.1, np.nan], [0.0, 0.0])
+    with pytest.raises(InputError, match="one value per row"):
+        tr.odometry([0.2, 0.3], [0.1], [0.0, 0.0])
+    with pytest.raises(InputError, match="cannot also take increments"):
+        tr.increments([0.2], [0.0], [0.0], [0.0])
+    est = tr.frame(0.2, _frames()[0].bearings)
+    with pytest.raises(InputError, match="arrived after the frame"):
+        tr.odometry([0.15], [0.1], [0.0])
+    with pytest.raises(InputError, match="frames out of time order"):
+        tr.frame(0.1, _frames()[0].bearings)
+    with pytest.raises(InputError, match=r"frame bearings\[0\] is not finite"):
+        tr.frame(0.3, [np.inf, 0.1, 0.2])
+    # the refused calls left the tracker as it was: the next frame goes on from t = 0.2
+    assert est.t == 0.2
+    assert tr.frame(0.45, _frames()[0].bearings).t == 0.45
+
+
+def test_frame_before_any_odometry_is_a_robot_standing_still(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.tracker"):
+        est = [tr.frame(f.t, f.bearings) for f in _frames(12)]
+    assert "before any odometry" in caplog.text
+    assert est[-1].state is not TrackState.LOST
+    # odometry may start later, from the last frame's time on
+    tr.odometry([3.0], [0.0], [0.0])
+    assert tr.frame(3.1, _frames()[0].bearings).t == 3.1
+
+
+def test_a_long_odometry_gap_drops_the_hypotheses() -> None:
+    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    for f in _frames(10):
+        tr.odometry([f.t], [0.0], [0.0])
+        tr.frame(f.t, f.bearings)
+    assert tr.n_hypotheses > 0
+    # no odometry from t = 0 to 200 s: the motion is unknown, so the tracker relocalizes
+    tr.odometry([200.0], [0.0], [0.0])
+    est = tr.frame(200.1, np.array([1.0]))  # one bearing: too few to search
+    assert est.state is TrackState.LOST
+    assert "odometry gap" in est.reason
+    assert tr.n_hypotheses == 0
+
+
+def test_increments_move_the_robot_like_the_velocities_they_stand_for() -> None:
+    a = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    b = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    a.odometry([0.0, 1.0], [0.2, 0.2], [0.1, 0.1])
+    b.increments([0.0], [0.0], [0.0], [0.0])
+    with pytest.raises(InputError, match="first increment starts the clock"):
+        Tracker(GRID).increments([0.0], [0.1], [0.0], [0.0])
+    # 0.2 m/s and 0.1 rad/s for one second, as one increment (an arc of 0.1 rad)
+    phi = 0.1
+    b.increments([1.0], [2.0 * np.sin(phi)], [2.0 * (1 - np.cos(phi))], [phi])
+    for tr in (a, b):
+        tr._t = 0.0
+        tr._hold = np.zeros(3)
+    da, Qa, _ = a._motion_to(1.0)
+    db, Qb, _ = b._motion_to(1.0)
+    assert np.allclose(da, db, atol=1e-12)
+    assert np.allclose(Qa, Qb, atol=1e-12)
+
+
+def test_odometry_latency_shifts_the_motion() -> None:
+    late = MotionModel(delay_s=0.5)
+    tr = Tracker(GRID, SENSOR, late, CONFIG)
+    tr.odometry([0.0], [0.2], [0.0])
+    tr.frame(0.0, np.zeros(0))
+    d, _, _ = tr._motion_to(1.0)
+    assert d[0] == pytest.approx(0.1)  # the row stamped 0 moves the robot from 0.5 s on
+
+
+def test_track_refuses_frames_out_of_order() -> None:
+    fr = _frames(3)
+    with pytest.raises(InputError, match="frame 2 at t=0.1"):
+        track(GRID, Odometry([0.0], [0.0], [0.0]), [fr[0], fr[2], Frame(0.1, fr[1].bearings)])
+
+
+def test_config_errors_name_the_option() -> None:
+    with pytest.raises(InputError, match="localized_share"):
+        TrackerConfig(localized_share=1.5)
+    with pytest.raises(InputError, match="max_hypotheses"):
+        TrackerConfig(max_hypotheses=0)
+    with pytest.raises(InputError, match="memory_s"):
+        TrackerConfig(memory_s=-1.0)
+    with pytest.raises(InputError, match="kidnap_p"):
+        TrackerConfig(kidnap_p=0.5, suspect_p=0.01)
+    with pytest.raises(InputError, match="sensor must be a SensorModel"):
+        Tracker(GRID, sensor="sigma=1")  # type: ignore[arg-type]
