@@ -12,7 +12,8 @@ from hypothesis import strategies as st
 from omniloc.pose import predict_bearings
 from omniloc.sensor import SensorModel
 from omniloc.simulate import demo_room
-from omniloc.track import _kernels, ekf
+from omniloc._kernels import track as _kernels
+from omniloc.track import ekf
 from omniloc.track.motion import MotionModel, integrate
 
 SENSOR = SensorModel(sigma=np.deg2rad(0.5), p_detect=0.8, clutter=0.5)

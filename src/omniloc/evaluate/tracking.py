@@ -39,6 +39,7 @@ from typing import Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..angles import wrap
 from ..errors import InputError
 from ..maps import LandmarkMap
 from ..pose import Pose
@@ -545,7 +546,7 @@ def errors_against(
         [e.pose.as_array() if e.pose is not None else (np.nan,) * 3 for e in estimates]
     ).reshape(-1, 3)
     d_pos = np.hypot(est[:, 0] - true[:, 0], est[:, 1] - true[:, 1])
-    d_hdg = np.degrees(np.abs(np.mod(est[:, 2] - true[:, 2] + np.pi, 2 * np.pi) - np.pi))
+    d_hdg = np.degrees(np.abs(np.asarray(wrap(est[:, 2] - true[:, 2]))))
     with np.errstate(invalid="ignore"):
         ok = (d_pos <= pos_tol_m) & (d_hdg <= heading_tol_deg)
     return ok, d_pos, d_hdg

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..angles import wrap
+
 __all__ = ["ClutterMemory", "PersistentClutter"]
 
 FloatArray = NDArray[np.float64]
@@ -86,7 +88,7 @@ class ClutterMemory:
 
     def turn(self, dtheta: float) -> None:
         """The robot turned by ``dtheta``: remembered bearings turn the other way."""
-        self.bearings = np.mod(self.bearings - dtheta + np.pi, 2 * np.pi) - np.pi
+        self.bearings = np.asarray(wrap(self.bearings - dtheta))
 
     def log_density(
         self, bearings: FloatArray, t: float, rule: PersistentClutter, base: float
@@ -103,7 +105,7 @@ class ClutterMemory:
         if not live.any():
             return out
         s = rule.sd + rule.rate * np.maximum(age, 0.0)
-        d = np.mod(bearings[None, :, None] - self.bearings[:, None, :] + np.pi, 2 * np.pi) - np.pi
+        d = np.asarray(wrap(bearings[None, :, None] - self.bearings[:, None, :]))
         with np.errstate(invalid="ignore"):
             dens = (
                 math.log(rule.p_again)
@@ -121,7 +123,7 @@ class ClutterMemory:
             if rows.size == 0:
                 continue
             b = bearings[i]
-            d = np.abs(np.mod(self.bearings[rows] - b + np.pi, 2 * np.pi) - np.pi)
+            d = np.abs(np.asarray(wrap(self.bearings[rows] - b)))
             d = np.where(np.isfinite(d), d, np.inf)
             near = np.argmin(d, axis=1)
             oldest = np.argmin(self.t[rows], axis=1)

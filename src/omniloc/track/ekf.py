@@ -26,8 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .._kernels import track as _kernels
+from ..angles import wrap
+from ..pose import bearing_jacobian
 from ..sensor import SensorModel
-from . import _kernels
 from .motion import compose, compose_jacobians
 
 __all__ = ["FrameEvidence", "Split", "predict", "split", "update"]
@@ -172,7 +174,7 @@ def split(
         out_parent.append(np.full(n, h))
         out_w.append(w)
     new_p = np.concatenate(out_p)
-    new_p[:, 2] = np.mod(new_p[:, 2] + np.pi, 2 * np.pi) - np.pi
+    new_p[:, 2] = np.asarray(wrap(new_p[:, 2]))
     return new_p, np.concatenate(out_c), np.concatenate(out_parent), np.concatenate(out_w)
 
 
@@ -181,14 +183,11 @@ def _geometry(
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Landmarks in each robot frame (H, N, 2), predicted bearings (H, N), squared ranges
     (H, N) and predicted bearing variances S (H, N)."""
-    c = np.cos(poses[:, 2])[:, None]
-    s = np.sin(poses[:, 2])[:, None]
-    dx = L[None, :, 0] - poses[:, 0, None]
-    dy = L[None, :, 1] - poses[:, 1, None]
-    rel = np.stack([c * dx + s * dy, -s * dx + c * dy], axis=-1)
-    pred = np.arctan2(rel[..., 1], rel[..., 0])
-    r2 = dx * dx + dy * dy
-    g = np.stack([dy / r2, -dx / r2, -np.ones_like(r2)], axis=-1)
+    pred, g = bearing_jacobian(L, poses)
+    pred = np.asarray(wrap(pred))
+    r2 = 1.0 / (g[..., 0] ** 2 + g[..., 1] ** 2)
+    r = np.sqrt(r2)
+    rel = np.stack([r * np.cos(pred), r * np.sin(pred)], axis=-1)
     # (max: a covariance a rounding error away from positive semi-definite stays usable)
     S = np.maximum(np.einsum("hni,hij,hnj->hn", g, covs, g), 0.0) + var
     return rel, pred, r2, S
@@ -291,7 +290,7 @@ def update(
         reach &= r2 <= sensor.reach_max**2
     if sensor.reach_min is not None:
         reach &= r2 >= sensor.reach_min**2
-    nu = np.mod(bearings[None, :, None] - pred[:, None, :] + np.pi, 2 * np.pi) - np.pi
+    nu = np.asarray(wrap(bearings[None, :, None] - pred[:, None, :]))
     Sb = S[:, None, :]
     ok = (nu * nu <= sensor.gate_chi2 * Sb) & reach[:, None, :]
     gain = np.where(

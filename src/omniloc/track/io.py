@@ -22,6 +22,7 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
+from ..angles import wrap
 from ..errors import InputError
 from ..io import PathLike, write_text
 from .records import TrackEstimate, TrackState
@@ -90,7 +91,7 @@ def read_tum(path: PathLike) -> NDArray[np.float64]:
             raise InputError(f"{path}:{n}: not a planar pose (rotation about x or y)")
         rows.append((t, x, y, 2.0 * math.atan2(qz, qw)))
     out = np.array(rows, dtype=np.float64).reshape(-1, 4)
-    out[:, 3] = np.mod(out[:, 3] + np.pi, 2 * np.pi) - np.pi
+    out[:, 3] = np.asarray(wrap(out[:, 3]))
     return out
 
 

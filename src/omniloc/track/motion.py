@@ -34,8 +34,9 @@ from dataclasses import dataclass, fields
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .._kernels import track as _kernels
+from ..angles import wrap
 from ..errors import InputError
-from . import _kernels
 
 __all__ = [
     "MotionModel",
@@ -164,7 +165,7 @@ def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
     out = np.empty(np.broadcast_shapes(p.shape, d.shape))
     out[..., 0] = p[..., 0] + c * d[..., 0] - s * d[..., 1]
     out[..., 1] = p[..., 1] + s * d[..., 0] + c * d[..., 1]
-    out[..., 2] = np.mod(p[..., 2] + d[..., 2] + np.pi, 2 * np.pi) - np.pi
+    out[..., 2] = np.asarray(wrap(p[..., 2] + d[..., 2]))
     return out
 
 
@@ -200,7 +201,7 @@ def inverse(delta: ArrayLike) -> FloatArray:
     out = np.empty(d.shape)
     out[..., 0] = -c * d[..., 0] - s * d[..., 1]
     out[..., 1] = s * d[..., 0] - c * d[..., 1]
-    out[..., 2] = np.mod(-d[..., 2] + np.pi, 2 * np.pi) - np.pi
+    out[..., 2] = np.asarray(wrap(-d[..., 2]))
     return out
 
 
@@ -215,7 +216,7 @@ def between(a: ArrayLike, b: ArrayLike) -> FloatArray:
     out = np.empty(np.broadcast_shapes(pa.shape, pb.shape))
     out[..., 0] = c * dx + s * dy
     out[..., 1] = -s * dx + c * dy
-    out[..., 2] = np.mod(pb[..., 2] - pa[..., 2] + np.pi, 2 * np.pi) - np.pi
+    out[..., 2] = np.asarray(wrap(pb[..., 2] - pa[..., 2]))
     return out
 
 

@@ -53,5 +53,6 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
             p_detect=0.15,
             clutter=0.4,
         )
-        return sensor, MotionModel.mrclam(), TrackerConfig(search_min_bearings=5)
+        config = TrackerConfig(search_window_s=1.0, search_min_bearings=4)
+        return sensor, MotionModel.mrclam(), config
     return SensorModel(sigma=float(np.deg2rad(0.5))), MotionModel(), TrackerConfig()

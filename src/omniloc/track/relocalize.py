@@ -122,6 +122,7 @@ def search_window(
             max_range=sensor.max_range,
             min_range=sensor.min_range,
             timeout_s=timeout_s,
+            exhaustive=True,  # every interpretation: the candidates are weighed later
         )
     except OmnilocError:
         # Geometry the search refuses (e.g. too many bearings for the map): no candidates.

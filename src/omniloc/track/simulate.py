@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ..angles import wrap
 from ..errors import InputError
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
@@ -149,7 +150,7 @@ def simulate_run(
         v_cmd * (1.0 + v_noise * gen.standard_normal(n)),
         w_cmd + w_noise * gen.standard_normal(n),
     )
-    truth = GroundTruth(t, poses[:, 0], poses[:, 1], np.mod(poses[:, 2] + np.pi, 2 * np.pi) - np.pi)
+    truth = GroundTruth(t, poses[:, 0], poses[:, 1], wrap(poses[:, 2]))
     p_det = 1.0 if sensor.p_detect is None else sensor.p_detect
     clutter = 0.0 if sensor.clutter is None else sensor.clutter
     half = sensor.half_fov if sensor.half_fov is not None else math.pi

@@ -22,7 +22,9 @@ How it works (``docs/tracking.md`` has the reasons and the figures)
 * **Pruning**: hypotheses whose score falls ``prune_margin`` nats behind the best are
   dropped; equal ones (Mahalanobis distance) are merged (the better score stays); at most
   ``max_hypotheses`` are kept.
-* **Localized** only when one hypothesis holds ``localized_share`` of the mass, its
+* **Localized** only when the best hypothesis and those within ``cluster_position_m`` /
+  ``cluster_heading`` of it (the same place, read through rival assignments that have not
+  merged) hold ``localized_share`` of the mass, its
   covariance is within ``max_position_sd_m`` / ``max_heading_sd``, it has matched enough
   bearings and it explains the recent bearings (a binomial test of the share it matched
   against ``fit_explained``).
@@ -46,11 +48,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import betainc
 
+from .._kernels import track as _kernels
+from ..angles import wrap
 from ..errors import InputError
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from . import _kernels, ekf
+from . import ekf
 from .clutter import ClutterMemory, PersistentClutter
 from .motion import MotionModel, integrate, twist_of
 from .records import Hypothesis, TrackEstimate, TrackState
@@ -79,7 +83,13 @@ class TrackerConfig:
         from nearly the same pose are not independent evidence; their errors -- bearing
         biases, landmark placement -- repeat).
     localized_share : float
-        Share of the posterior mass the best hypothesis needs to be ``localized``.
+        Share of the posterior mass the best hypothesis, with those at the same place (see
+        ``cluster_position_m``), needs to be ``localized``.
+    cluster_position_m, cluster_heading : float
+        Hypotheses within this many metres and radians of the best count with it towards
+        ``localized_share``: rival readings of one frame (a bearing between two tubes of a
+        cluster) leave near-copies of one pose that the merge, which needs the copies to
+        agree within their covariances, keeps apart.
     max_position_sd_m : float
         Largest position standard deviation (m, along the worst axis) of a localized pose.
     max_heading_sd : float
@@ -170,6 +180,8 @@ class TrackerConfig:
     memory_s: float = 10.0
     evidence_weight: float = 0.5
     localized_share: float = 0.99
+    cluster_position_m: float = 0.15
+    cluster_heading: float = float(np.deg2rad(3.0))
     max_position_sd_m: float = 0.1
     max_heading_sd: float = float(np.deg2rad(1.5))
     min_support: float = 6.0
@@ -669,7 +681,7 @@ class Tracker:
         if self._t is not None and tf < self._t:
             raise InputError(f"frames out of time order: t={tf!r} after a frame at t={self._t!r}")
         b = _finite_1d("frame bearings", bearings)
-        b = np.mod(b + np.pi, 2 * np.pi) - np.pi
+        b = np.asarray(wrap(b))
         if self._input_kind is None and not self._warned_no_odometry:
             log.warning("frame at t=%s before any odometry: the robot is taken to stand still", tf)
             self._warned_no_odometry = True
@@ -739,7 +751,10 @@ class Tracker:
                     )
                 elif best is not None and best != i and state is TrackState.LOCALIZED:
                     # another pose took over: the same place (merged) or a jump
-                    same = not self._distinct(self._poses[[i, best]], self._covs[[i, best]])[1]
+                    same = (
+                        bool(self._near(best)[i])
+                        or not self._distinct(self._poses[[i, best]], self._covs[[i, best]])[1]
+                    )
                     if not same:
                         kidnapped = True
                         reason = "another pose took over the localized one; " + reason
@@ -760,6 +775,16 @@ class Tracker:
         if self._bearings_since_search == 0 or t - self._last_search < c.search_interval_s:
             return False
         return state is not TrackState.LOCALIZED or suspect
+
+    def _near(self, i: int) -> NDArray[np.bool_]:
+        """Which hypotheses are at the same place as hypothesis ``i`` (within
+        ``cluster_position_m`` and ``cluster_heading``; ``i`` included)."""
+        c = self.config
+        d = self._poses - self._poses[i]
+        dh = np.abs(np.asarray(wrap(d[:, 2])))
+        return np.asarray(
+            (np.hypot(d[:, 0], d[:, 1]) <= c.cluster_position_m) & (dh <= c.cluster_heading)
+        )
 
     def _weights(self) -> FloatArray:
         if self.n_hypotheses == 0:
@@ -789,10 +814,11 @@ class Tracker:
                 True,
                 i,
             )
-        if w[i] < c.localized_share:
+        share = float(w[self._near(i)].sum())
+        if share < c.localized_share:
             return (
                 TrackState.AMBIGUOUS,
-                f"{H} hypotheses; the best holds {100 * w[i]:.0f} % of the mass",
+                f"{H} hypotheses; the best place holds {100 * share:.0f} % of the mass",
                 False,
                 i,
             )
@@ -813,7 +839,7 @@ class Tracker:
             )
         return (
             TrackState.LOCALIZED,
-            f"one hypothesis holds {100 * w[i]:.1f} % of the mass ({rivals} rival"
+            f"one place holds {100 * share:.1f} % of the mass ({rivals} rival"
             f"{'s' if rivals != 1 else ''})",
             False,
             i,

@@ -21,6 +21,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from ..angles import wrap
 from ..sensor import SensorModel
 from .clutter import ClutterMemory
 from .motion import between, compose, inverse
@@ -130,7 +131,7 @@ def stack_bearings(
     b = np.concatenate(parts) if parts else np.zeros(0)
     if b.size == 0:
         return b, np.zeros(0), travel
-    b = np.sort(np.mod(b + np.pi, 2 * np.pi) - np.pi)
+    b = np.sort(np.asarray(wrap(b)))
     # Greedy chaining of sorted bearings (across the -pi/pi seam too).
     groups: list[list[float]] = [[float(b[0])]]
     for x in b[1:]:
@@ -141,7 +142,7 @@ def stack_bearings(
     if len(groups) > 1 and b[0] + 2 * np.pi - groups[-1][-1] <= merge_tol:
         groups[0] = [x - 2 * np.pi for x in groups.pop()] + groups[0]
     merged = np.array([np.mean(g) for g in groups])
-    merged = np.mod(merged + np.pi, 2 * np.pi) - np.pi
+    merged = np.asarray(wrap(merged))
     counts = np.array([len(g) for g in groups], dtype=np.float64)
     order = np.argsort(merged)
     return merged[order], counts[order], travel

@@ -1,35 +1,27 @@
-"""The tracker's compiled kernels (numba): odometry integration, association, EKF update.
+"""The tracker's compiled kernels (numba): odometry integration, association, EKF update,
+merging of hypotheses.
 
 Each kernel is the one implementation of its piece of maths; the Python modules around them
-(:mod:`.motion`, :mod:`.bank`) validate their input and say what they mean. The frame
+(:mod:`omniloc.track.motion`, :mod:`omniloc.track.ekf`) validate their input and say what
+they mean. Angles are wrapped, 3x3 inverses taken and squared bearing errors summed by the
+section-2 building blocks of :mod:`.geometry` (one implementation each). The frame
 likelihood itself (what a matched bearing, a clutter bearing and a missed landmark are
 worth) is not here: it is :class:`omniloc.sensor.SensorModel`'s, computed with numpy before
 the association kernel, which only chooses the assignment that maximises the sum it is given.
-
-Without numba (or with ``OMNILOC_NO_NUMBA=1``) the same functions run as plain Python, slowly.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
-from .._compiled import njit
+from .geometry import information, inv3, squared_error, wrap_angle
 
 __all__ = ["associate", "collapse", "distinct", "iekf_update", "integrate_pieces"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-TWO_PI = 2.0 * np.pi
-
-
-@njit(cache=True, error_model="numpy")
-def _wrap(a: float) -> float:
-    t = (a + np.pi) % TWO_PI - np.pi
-    if t >= np.pi:
-        t -= TWO_PI
-    return t
 
 
 @njit(cache=True, error_model="numpy")
@@ -182,23 +174,14 @@ def associate(gain: FloatArray, out: IntArray, totals: FloatArray) -> IntArray:
 
 @njit(cache=True, error_model="numpy")
 def _inv3(A: FloatArray) -> FloatArray:
-    a, b, c = A[0, 0], A[0, 1], A[0, 2]
-    d, e, f = A[1, 0], A[1, 1], A[1, 2]
-    g, h, k = A[2, 0], A[2, 1], A[2, 2]
-    co0 = e * k - f * h
-    co1 = f * g - d * k
-    co2 = d * h - e * g
-    det = a * co0 + b * co1 + c * co2
+    """The inverse of a symmetric 3x3 (its upper triangle read) as a full matrix."""
+    c00, c01, c02, c11, c12, c22, _ = inv3(
+        A[0, 0], A[0, 1], A[0, 2], A[1, 1], A[1, 2], A[2, 2], 1.0, 0.0
+    )
     out = np.empty((3, 3))
-    out[0, 0] = co0 / det
-    out[1, 0] = co1 / det
-    out[2, 0] = co2 / det
-    out[0, 1] = (c * h - b * k) / det
-    out[1, 1] = (a * k - c * g) / det
-    out[2, 1] = (b * g - a * h) / det
-    out[0, 2] = (b * f - c * e) / det
-    out[1, 2] = (c * d - a * f) / det
-    out[2, 2] = (a * e - b * d) / det
+    out[0, 0], out[0, 1], out[0, 2] = c00, c01, c02
+    out[1, 0], out[1, 1], out[1, 2] = c01, c11, c12
+    out[2, 0], out[2, 1], out[2, 2] = c02, c12, c22
     return out
 
 
@@ -210,22 +193,42 @@ def _map_cost(
     Lx: FloatArray,
     Ly: FloatArray,
     z: FloatArray,
+    ones: FloatArray,
     k: int,
     inv_r: float,
 ) -> float:
     e0 = x[0] - x0[0]
     e1 = x[1] - x0[1]
-    e2 = _wrap(x[2] - x0[2])
+    e2 = wrap_angle(x[2] - x0[2])
     c = (
         Pinv[0, 0] * e0 * e0
         + Pinv[1, 1] * e1 * e1
         + Pinv[2, 2] * e2 * e2
         + 2.0 * (Pinv[0, 1] * e0 * e1 + Pinv[0, 2] * e0 * e2 + Pinv[1, 2] * e1 * e2)
     )
-    for q in range(k):
-        r = _wrap(z[q] - (np.arctan2(Ly[q] - x[1], Lx[q] - x[0]) - x[2]))
-        c += r * r * inv_r
+    c += squared_error(Lx, Ly, z, ones, k, x[0], x[1], x[2]) * inv_r
     return 0.5 * c
+
+
+@njit(cache=True, error_model="numpy")
+def _posterior_information(
+    A: FloatArray,
+    Pinv: FloatArray,
+    Lx: FloatArray,
+    Ly: FloatArray,
+    ones: FloatArray,
+    k: int,
+    x: FloatArray,
+    inv_r: float,
+) -> None:
+    """``A <- P^-1 + sum g g^T / var`` (the bearings' information from :mod:`.geometry`)."""
+    h00, h01, h02, h11, h12, h22 = information(Lx, Ly, ones, k, x[0], x[1])
+    A[0, 0] = Pinv[0, 0] + h00 * inv_r
+    A[0, 1] = A[1, 0] = Pinv[0, 1] + h01 * inv_r
+    A[0, 2] = A[2, 0] = Pinv[0, 2] + h02 * inv_r
+    A[1, 1] = Pinv[1, 1] + h11 * inv_r
+    A[1, 2] = A[2, 1] = Pinv[1, 2] + h12 * inv_r
+    A[2, 2] = Pinv[2, 2] + h22 * inv_r
 
 
 @njit(cache=True, error_model="numpy")
@@ -254,6 +257,7 @@ def iekf_update(
     Lx = np.empty(m)
     Ly = np.empty(m)
     zz = np.empty(m)
+    ones = np.ones(m)
     inv_r = 1.0 / var
     for h in range(H):
         k = 0
@@ -270,43 +274,31 @@ def iekf_update(
         P0 = covs[h] + 1e-12 * np.eye(3)
         Pinv = _inv3(P0)
         x = x0.copy()
-        cost = _map_cost(x, x0, Pinv, Lx, Ly, zz, k, inv_r)
+        cost = _map_cost(x, x0, Pinv, Lx, Ly, zz, ones, k, inv_r)
         A = np.empty((3, 3))
         b = np.empty(3)
         for _ in range(iters):
-            A[:, :] = Pinv
+            _posterior_information(A, Pinv, Lx, Ly, ones, k, x, inv_r)
             e0 = x[0] - x0[0]
             e1 = x[1] - x0[1]
-            e2 = _wrap(x[2] - x0[2])
+            e2 = wrap_angle(x[2] - x0[2])
             for r in range(3):
                 b[r] = -(Pinv[r, 0] * e0 + Pinv[r, 1] * e1 + Pinv[r, 2] * e2)
             for q in range(k):
                 dx = Lx[q] - x[0]
                 dy = Ly[q] - x[1]
                 r2 = dx * dx + dy * dy
-                g0 = dy / r2
-                g1 = -dx / r2
-                g2 = -1.0
-                res = _wrap(zz[q] - (np.arctan2(dy, dx) - x[2]))
-                A[0, 0] += g0 * g0 * inv_r
-                A[0, 1] += g0 * g1 * inv_r
-                A[0, 2] += g0 * g2 * inv_r
-                A[1, 1] += g1 * g1 * inv_r
-                A[1, 2] += g1 * g2 * inv_r
-                A[2, 2] += g2 * g2 * inv_r
-                b[0] += g0 * res * inv_r
-                b[1] += g1 * res * inv_r
-                b[2] += g2 * res * inv_r
-            A[1, 0] = A[0, 1]
-            A[2, 0] = A[0, 2]
-            A[2, 1] = A[1, 2]
+                res = wrap_angle(zz[q] - (np.arctan2(dy, dx) - x[2])) * inv_r
+                b[0] += dy / r2 * res
+                b[1] -= dx / r2 * res
+                b[2] -= res
             Ai = _inv3(A)
             step = Ai @ b
             scale = 1.0
             accepted = False
             for _h in range(7):
                 cand = x + scale * step
-                c2 = _map_cost(cand, x0, Pinv, Lx, Ly, zz, k, inv_r)
+                c2 = _map_cost(cand, x0, Pinv, Lx, Ly, zz, ones, k, inv_r)
                 if c2 <= cost:
                     x = cand
                     cost = c2
@@ -318,24 +310,9 @@ def iekf_update(
             if abs(step[0]) + abs(step[1]) < 1e-7 and abs(step[2]) < 1e-8:
                 break
         # covariance: inverse information at the final pose
-        A[:, :] = Pinv
-        for q in range(k):
-            dx = Lx[q] - x[0]
-            dy = Ly[q] - x[1]
-            r2 = dx * dx + dy * dy
-            g0 = dy / r2
-            g1 = -dx / r2
-            A[0, 0] += g0 * g0 * inv_r
-            A[0, 1] += g0 * g1 * inv_r
-            A[0, 2] -= g0 * inv_r
-            A[1, 1] += g1 * g1 * inv_r
-            A[1, 2] -= g1 * inv_r
-            A[2, 2] += inv_r
-        A[1, 0] = A[0, 1]
-        A[2, 0] = A[0, 2]
-        A[2, 1] = A[1, 2]
+        _posterior_information(A, Pinv, Lx, Ly, ones, k, x, inv_r)
         C = _inv3(A)
-        x[2] = _wrap(x[2])
+        x[2] = wrap_angle(x[2])
         out_p[h] = x
         out_c[h] = 0.5 * (C + C.T)
     return out_p, out_c
@@ -359,7 +336,7 @@ def distinct(
             b = kept[q]
             dx = poses[a, 0] - poses[b, 0]
             dy = poses[a, 1] - poses[b, 1]
-            dt = _wrap(poses[a, 2] - poses[b, 2])
+            dt = wrap_angle(poses[a, 2] - poses[b, 2])
             if dx * dx + dy * dy > max_dpos * max_dpos or abs(dt) > max_dtheta:
                 continue
             S = covs[a] + covs[b]
@@ -410,7 +387,7 @@ def collapse(
             b = leaders[g]
             dx = poses[a, 0] - poses[b, 0]
             dy = poses[a, 1] - poses[b, 1]
-            dt = _wrap(poses[a, 2] - poses[b, 2])
+            dt = wrap_angle(poses[a, 2] - poses[b, 2])
             Si = _inv3(covs[a] + covs[b])
             e0, e1, e2 = dx, dy, dt
             d2 = (
@@ -442,15 +419,15 @@ def collapse(
         w = np.exp(logw[a] - out_w[g])
         out_p[g, 0] += w * poses[a, 0]
         out_p[g, 1] += w * poses[a, 1]
-        out_p[g, 2] += w * _wrap(poses[a, 2] - poses[leaders[g], 2])
+        out_p[g, 2] += w * wrap_angle(poses[a, 2] - poses[leaders[g], 2])
     for g in range(ng):
-        out_p[g, 2] = _wrap(out_p[g, 2] + poses[leaders[g], 2])
+        out_p[g, 2] = wrap_angle(out_p[g, 2] + poses[leaders[g], 2])
     for a in range(n):
         g = group[a]
         w = np.exp(logw[a] - out_w[g])
         e0 = poses[a, 0] - out_p[g, 0]
         e1 = poses[a, 1] - out_p[g, 1]
-        e2 = _wrap(poses[a, 2] - out_p[g, 2])
+        e2 = wrap_angle(poses[a, 2] - out_p[g, 2])
         e = (e0, e1, e2)
         for i in range(3):
             for j in range(3):
