@@ -1,0 +1,145 @@
+"""``omniloc track`` end to end: files in, TUM and JSON lines out, evo's APE equals ours;
+bad files get one line on stderr and exit status 1."""
+
+from __future__ import annotations
+
+import json
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import omniloc
+from omniloc.cli import main
+from omniloc.evaluate.tracking import errors_against
+from omniloc.track import SimulatedRun, TrackState, preset, read_tum, simulate_run
+
+ROOM = omniloc.demo_room()
+
+
+@cache
+def _run() -> SimulatedRun:
+    sensor, _, _ = preset("generic")
+    return simulate_run(
+        ROOM, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=12.0, speed=0.2, rng=5
+    )
+
+
+def _write_inputs(folder: Path, degrees: bool = False) -> tuple[Path, Path, Path]:
+    run = _run()
+    lm = folder / "map.csv"
+    lm.write_text(
+        "id,x,y\n" + "".join(f"{k},{float(x)!r},{float(y)!r}\n" for k, (x, y) in enumerate(ROOM.xy))
+    )
+    odo = folder / "odometry.csv"
+    o = run.odometry
+    odo.write_text(
+        "t,v,w\n"
+        + "".join(
+            f"{float(t)!r},{float(v)!r},{float(w)!r}\n"
+            for t, v, w in zip(o.t, o.v, o.w, strict=True)
+        )
+    )
+    fr = folder / "frames.csv"
+    rows = []
+    for f in run.frames:
+        b = np.rad2deg(f.bearings) if degrees else f.bearings
+        rows += [f"{float(f.t)!r},{float(x)!r}\n" for x in b]
+    fr.write_text("t,bearing\n" + "".join(rows))
+    return lm, odo, fr
+
+
+def test_track_writes_tum_and_json_lines_and_evo_agrees(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lm, odo, fr = _write_inputs(tmp_path)
+    tum = tmp_path / "traj.tum"
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
+    assert main([*argv, "--out", str(tum), "--json"]) == 0
+    lines = [json.loads(s) for s in capsys.readouterr().out.splitlines()]
+    run = _run()
+    assert len(lines) == len(run.frames)
+    assert {"t", "state", "reason"} <= set(lines[0])
+    loc = [d for d in lines if d["state"] == "localized"]
+    assert len(loc) > len(lines) // 2  # a room with distinct landmarks: localized soon
+    for d in loc:
+        assert {"x", "y", "theta", "covariance", "hypotheses"} <= set(d)
+        assert np.asarray(d["covariance"]).shape == (3, 3)
+    # the TUM file holds exactly the localized frames
+    traj = read_tum(tum)
+    assert traj.shape == (len(loc), 4)
+    assert np.allclose(traj[:, 0], [d["t"] for d in loc], atol=1e-6)
+    # evo's absolute pose error (translation, no alignment) equals ours
+    evo_file = pytest.importorskip("evo.tools.file_interface")
+    from evo.core import metrics
+    from evo.core.trajectory import PoseTrajectory3D
+
+    est = evo_file.read_tum_trajectory_file(str(tum))
+    true_xyz, _ = run.truth.at(traj[:, 0])
+    half = 0.5 * true_xyz[:, 2]
+    ref = PoseTrajectory3D(
+        positions_xyz=np.column_stack([true_xyz[:, :2], np.zeros(len(traj))]),
+        orientations_quat_wxyz=np.column_stack(
+            [np.cos(half), np.zeros(len(traj)), np.zeros(len(traj)), np.sin(half)]
+        ),
+        timestamps=traj[:, 0],
+    )
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((ref, est))
+    evo_rmse = ape.get_statistic(metrics.StatisticsType.rmse)
+    from omniloc.track import Frame, track
+
+    ours = track(
+        ROOM,
+        run.odometry,
+        [Frame(f.t, f.bearings) for f in run.frames],
+        **dict(zip(("sensor", "motion", "config"), preset("generic"), strict=True)),
+    )
+    _, d_pos, _ = errors_against(run.truth, ours.estimates)
+    mask = np.array([e.state is TrackState.LOCALIZED for e in ours.estimates])
+    assert mask.sum() == len(traj)
+    our_rmse = float(np.sqrt(np.mean(d_pos[mask] ** 2)))
+    assert evo_rmse == pytest.approx(our_rmse, rel=1e-5, abs=1e-6)
+    assert our_rmse < 0.05
+
+
+def test_track_reads_degrees_and_prints_a_summary(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lm, odo, fr = _write_inputs(tmp_path, degrees=True)
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
+    assert main([*argv, "--degrees"]) == 0
+    out = capsys.readouterr().out
+    assert f"{len(_run().frames)} frames over" in out
+    assert "last frame: localized" in out
+
+
+@pytest.mark.parametrize(
+    ("odometry_text", "message"),
+    [
+        ("t,v,w\n0.0,0.1,0.0\n-1.0,0.1,0.0\n", "odometry"),
+        ("t,v,w\n0.0,nan,0.0\n", "finite"),
+        ("t,speed\n0.0,0.1\n", "odometry"),
+    ],
+)
+def test_bad_odometry_file_is_one_line_and_status_1(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], odometry_text: str, message: str
+) -> None:
+    lm, _, fr = _write_inputs(tmp_path)
+    odo = tmp_path / "bad.csv"
+    odo.write_text(odometry_text)
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and message in err
+
+
+def test_missing_frames_file_is_one_line_and_status_1(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lm, odo, _ = _write_inputs(tmp_path)
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo)]
+    assert main([*argv, "--frames", str(tmp_path / "nope.csv")]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "nope.csv" in err
