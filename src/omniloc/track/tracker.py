@@ -64,6 +64,18 @@ from .window import Window, replay
 
 __all__ = ["Tracker", "TrackerConfig"]
 
+#: What the tracker keeps per hypothesis besides its pose and covariance (filtered together).
+_PER_HYPOTHESIS = (
+    "_score",
+    "_support",
+    "_fit_m",
+    "_fit_n",
+    "_fast_m",
+    "_fast_n",
+    "_born",
+    "_ids",
+)
+
 log = logging.getLogger(__name__)
 
 FloatArray = NDArray[np.float64]
@@ -155,6 +167,10 @@ class TrackerConfig:
         New hypotheses are replayed through the frames of the last this many seconds.
     fit_window_s : float
         Time constant (s) of the counts of the recent-fit test.
+    fast_fit_window_s : float
+        A second, shorter time constant (s) for the same test, used only to leave
+        ``localized`` (suspect) quickly after a jump, before the slower counts, still full of
+        the good past, notice it; the ``kidnapped`` flag reads the slower counts.
     fit_explained : float
         Share of the bearings a right hypothesis explains (the rest is clutter), for the
         recent-fit test.
@@ -212,6 +228,7 @@ class TrackerConfig:
     prerank_s: float = 1.0
     replay_s: float = 10.0
     fit_window_s: float = 3.0
+    fast_fit_window_s: float = 0.75
     fit_explained: float = 0.6
     suspect_p: float = 1e-2
     kidnap_p: float = 1e-4
@@ -251,7 +268,13 @@ class TrackerConfig:
             if f.name in probs and not 0.0 < v < 1.0:
                 raise InputError(f"{f.name} must lie strictly between 0 and 1, got {v!r}")
             object.__setattr__(self, f.name, v)
-        for name in ("memory_s", "fit_window_s", "near_range_m", "candidate_cov_inflation"):
+        for name in (
+            "memory_s",
+            "fit_window_s",
+            "fast_fit_window_s",
+            "near_range_m",
+            "candidate_cov_inflation",
+        ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")
         if self.kidnap_p > self.suspect_p:
@@ -352,6 +375,8 @@ class Tracker:
         self._support = np.zeros(0)
         self._fit_m = np.zeros(0)
         self._fit_n = np.zeros(0)
+        self._fast_m = np.zeros(0)
+        self._fast_n = np.zeros(0)
         self._born = np.zeros(0)
         self._ids = np.zeros(0, dtype=np.int64)
         self._next_id = 0
@@ -503,7 +528,7 @@ class Tracker:
 
     # ---- hypotheses ----------------------------------------------------------------------
     def _keep(self, idx: NDArray[np.int64] | NDArray[np.bool_]) -> None:
-        for name in ("_poses", "_covs", "_score", "_support", "_fit_m", "_fit_n", "_born", "_ids"):
+        for name in ("_poses", "_covs", *_PER_HYPOTHESIS):
             setattr(self, name, getattr(self, name)[idx])
         self._memory.take(idx)
 
@@ -532,6 +557,8 @@ class Tracker:
         self._support = np.concatenate([self._support, support])
         self._fit_m = np.concatenate([self._fit_m, np.zeros(n)])
         self._fit_n = np.concatenate([self._fit_n, np.zeros(n)])
+        self._fast_m = np.concatenate([self._fast_m, np.zeros(n)])
+        self._fast_n = np.concatenate([self._fast_n, np.zeros(n)])
         self._born = np.concatenate([self._born, np.full(n, t)])
         self._ids = np.concatenate([self._ids, ids])
 
@@ -640,11 +667,12 @@ class Tracker:
         return int(idx.size)
 
     # ---- the recent-fit test -------------------------------------------------------------
-    def _fit_p(self) -> FloatArray:
+    def _fit_p(self, fast: bool = False) -> FloatArray:
         """Per hypothesis: the binomial probability of matching at most the recent matches
-        of the recent bearings if it were right (1 when too few bearings to tell)."""
-        n = self._fit_n
-        k = np.minimum(self._fit_m, n)
+        of the recent bearings if it were right (1 when too few bearings to tell); with
+        ``fast``, on the counts of the shorter time constant."""
+        n = self._fast_n if fast else self._fit_n
+        k = np.minimum(self._fast_m if fast else self._fit_m, n)
         p = np.ones_like(n)
         enough = n >= self.config.min_fit_bearings
         if enough.any():
@@ -712,7 +740,7 @@ class Tracker:
                 self._rules,
                 score=self._score * decay,
             )
-            for name in ("_score", "_support", "_fit_m", "_fit_n", "_born", "_ids"):
+            for name in _PER_HYPOTHESIS:
                 setattr(self, name, getattr(self, name)[ev.parent])
             decay = math.exp(-dt / c.memory_s)
             fdecay = math.exp(-dt / c.fit_window_s)
@@ -720,6 +748,9 @@ class Tracker:
             self._support = self._support * decay + ev.matched
             self._fit_m = self._fit_m * fdecay + ev.matched
             self._fit_n = self._fit_n * fdecay + b.size
+            qdecay = math.exp(-dt / c.fast_fit_window_s)
+            self._fast_m = self._fast_m * qdecay + ev.matched
+            self._fast_n = self._fast_n * qdecay + b.size
             good = np.isfinite(self._poses).all(axis=1) & np.isfinite(self._covs).all(axis=(1, 2))
             if not good.all():
                 self._keep(np.flatnonzero(good))
@@ -804,13 +835,15 @@ class Tracker:
         P = self._covs[i]
         pos_sd = math.sqrt(max(float(np.linalg.eigvalsh(P[:2, :2])[-1]), 0.0))
         hdg_sd = math.sqrt(max(float(P[2, 2]), 0.0))
-        suspect = bool(fit[i] < c.suspect_p)
+        fast = bool(self._fit_p(fast=True)[i] < fit[i])
+        m_i, n_i = (self._fast_m[i], self._fast_n[i]) if fast else (self._fit_m[i], self._fit_n[i])
+        suspect = bool(min(fit[i], self._fit_p(fast=True)[i]) < c.suspect_p)
         rivals = H - 1
         if suspect:
             return (
                 TrackState.AMBIGUOUS,
-                f"the best pose explains only {self._fit_m[i]:.0f} of {self._fit_n[i]:.0f} "
-                "recent bearings",
+                f"the best pose explains only {m_i:.0f} of {n_i:.0f} "
+                f"{'latest' if fast else 'recent'} bearings",
                 True,
                 i,
             )
