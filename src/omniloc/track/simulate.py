@@ -150,7 +150,7 @@ def simulate_run(
         v_cmd * (1.0 + v_noise * gen.standard_normal(n)),
         w_cmd + w_noise * gen.standard_normal(n),
     )
-    truth = GroundTruth(t, poses[:, 0], poses[:, 1], wrap(poses[:, 2]))
+    truth = GroundTruth(t, poses[:, 0], poses[:, 1], np.asarray(wrap(poses[:, 2])))
     p_det = 1.0 if sensor.p_detect is None else sensor.p_detect
     clutter = 0.0 if sensor.clutter is None else sensor.clutter
     half = sensor.half_fov if sensor.half_fov is not None else math.pi
