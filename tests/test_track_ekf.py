@@ -9,10 +9,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from omniloc._kernels import track as _kernels
 from omniloc.pose import predict_bearings
 from omniloc.sensor import SensorModel
 from omniloc.simulate import demo_room
-from omniloc._kernels import track as _kernels
 from omniloc.track import ekf
 from omniloc.track.motion import MotionModel, integrate
 

@@ -156,8 +156,8 @@ def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
 
     Examples
     --------
-    >>> compose([1.0, 2.0, np.pi / 2], [1.0, 0.0, 0.0]).round(6)
-    array([1.     , 3.     , 1.570796])
+    >>> compose([1.0, 2.0, np.pi / 2], [1.0, 0.0, 0.0]).round(6).tolist()
+    [1.0, 3.0, 1.570796]
     """
     p = _poses(pose, "pose")
     d = _poses(delta, "delta")

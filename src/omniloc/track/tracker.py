@@ -319,8 +319,8 @@ class Tracker:
     >>> room = omniloc.demo_room()
     >>> tracker = Tracker(room, SensorModel(sigma=np.deg2rad(0.3)))
     >>> truth = omniloc.Pose(5.6, 2.1, np.deg2rad(30))
-    >>> tracker.odometry([0.0], [0.0], [0.0])
     >>> for k in range(12):
+    ...     tracker.odometry([0.25 * k], [0.0], [0.0])  # standing still
     ...     z = omniloc.predict_bearings(room.xy, truth)
     ...     est = tracker.frame(0.25 * k, z)
     >>> est.state.value, round(est.pose.x, 2), round(est.pose.y, 2)
@@ -368,6 +368,7 @@ class Tracker:
         self._input_kind: str | None = None
         self._t: float | None = None  # time of the last frame (motion integrated up to it)
         self._warned_no_odometry = False
+        self._after_gap = False  # a gap was reported and no odometry row came since
         # Hypotheses.
         self._poses = np.zeros((0, 3))
         self._covs = np.zeros((0, 3, 3))
@@ -446,6 +447,7 @@ class Tracker:
         rows = np.stack([tt + self.motion.delay_s, vv, np.zeros_like(vv), ww], axis=1)
         self._rows.append(rows)
         self._last_row_t = float(tt[-1])
+        self._after_gap = False
 
     def increments(self, t: ArrayLike, dx: ArrayLike, dy: ArrayLike, dtheta: ArrayLike) -> None:
         """Incremental odometry: row k is the motion ``(dx, dy, dtheta)`` (m, m, rad, in the
@@ -496,6 +498,7 @@ class Tracker:
         if rows.size:
             self._rows.append(rows)
         self._last_row_t = float(tt[-1])
+        self._after_gap = False
 
     def _motion_to(self, t: float) -> tuple[FloatArray, FloatArray, float]:
         """Integrate the odometry from the last frame to ``t``: (delta, Q, longest stretch
@@ -687,7 +690,8 @@ class Tracker:
         A frame before any odometry is taken as the robot standing still until the first
         odometry row (with a warning in the log). A frame more than ``max_odometry_gap_s``
         after the last odometry row, or after a gap of that length between rows, leaves
-        the motion unknown: every hypothesis is dropped and the tracker relocalizes.
+        the motion unknown: every hypothesis is dropped and the tracker relocalizes; until
+        odometry resumes, the robot is then taken to stand still (as before the first row).
 
         Returns
         -------
@@ -718,12 +722,16 @@ class Tracker:
         delta, Q, gap = self._motion_to(tf)
         self._t = tf
         reason_gap = ""
-        if gap > c.max_odometry_gap_s:
+        if gap > c.max_odometry_gap_s and not self._after_gap:
+            self._after_gap = True
             reason_gap = f"odometry gap of {gap:.1f} s: motion unknown, relocalizing"
             self._drop_all()
             self._window.clear()
             self._localized_id = None
             delta, Q = np.zeros(3), np.zeros((3, 3))
+            # Once: until odometry resumes the robot is taken to stand still (as before
+            # the first row), so the frames after the gap can build up evidence again.
+            self._hold = np.zeros(3)
         self._window.append(tf, b, delta, Q)
         dt = 0.0 if t_prev is None else tf - t_prev
         if self.n_hypotheses:
