@@ -143,3 +143,39 @@ def test_missing_frames_file_is_one_line_and_status_1(
     assert main([*argv, "--frames", str(tmp_path / "nope.csv")]) == 1
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "nope.csv" in err
+
+
+MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
+
+
+def _truncated_mrclam(folder: Path, seconds: float) -> Path:
+    """The MRCLAM folder with every robot's files cut to their first ``seconds``."""
+    folder.mkdir()
+    (folder / "landmarks.csv").write_text((MRCLAM / "landmarks.csv").read_text())
+    for r in range(1, 6):
+        for kind in ("odometry", "frames", "groundtruth_10hz"):
+            name = f"robot{r}_{kind}.csv"
+            lines = (MRCLAM / name).read_text().splitlines()
+            col = lines[0].split(",").index("t")
+            t0 = float(lines[1].split(",")[col])
+            keep = [s for s in lines[1:] if float(s.split(",")[col]) < t0 + seconds]
+            (folder / name).write_text("\n".join([lines[0], *keep]) + "\n")
+    return folder
+
+
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_evaluate_mrclam_track_reports_runs_and_totals(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = _truncated_mrclam(tmp_path / "mrclam", 4.0)
+    out = tmp_path / "out"
+    argv = ["-q", "evaluate", "--dataset", "mrclam-track", str(data), "--kidnap", "0"]
+    assert main([*argv, "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    for r in range(1, 6):
+        assert f"robot{r}" in text
+    assert "all runs: time to localize median" in text
+    report = json.loads((out / "mrclam_track.json").read_text())
+    assert report["whole_runs"]["totals"]["runs"] == 5
+    assert report["kidnap_streams"] is None
+    assert (out / "mrclam_track_runs.csv").read_text().count("\n") == 6  # header + 5 runs
