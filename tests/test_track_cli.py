@@ -104,12 +104,14 @@ def test_track_writes_tum_and_json_lines_and_evo_agrees(
     assert our_rmse < 0.05
 
 
-def test_track_reads_degrees_and_prints_a_summary(
+def test_track_reads_degrees_prints_a_summary_and_plots(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     lm, odo, fr = _write_inputs(tmp_path, degrees=True)
     argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
-    assert main([*argv, "--degrees"]) == 0
+    png = tmp_path / "run.png"
+    assert main([*argv, "--degrees", "--plot", str(png)]) == 0
+    assert png.stat().st_size > 10_000
     out = capsys.readouterr().out
     assert f"{len(_run().frames)} frames over" in out
     assert "last frame: localized" in out

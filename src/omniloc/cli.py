@@ -265,11 +265,11 @@ def _add_track_parser(sub: Any) -> None:
     t.add_argument(
         "--groundtruth", type=Path, help="true track t,x,y,theta: errors in the summary and figure"
     )
-    t.add_argument("--out", type=Path, metavar="TRAJ.tum", help="localized poses, TUM format")
+    t.add_argument("--out", type=_out_path, metavar="TRAJ.tum", help="localized poses, TUM format")
     t.add_argument(
         "--json", action="store_true", help="one JSON object per frame on stdout (JSON lines)"
     )
-    t.add_argument("--plot", type=Path, metavar="OUT.png", help="save a figure of the run")
+    t.add_argument("--plot", type=_out_path, metavar="OUT.png", help="save a figure of the run")
 
 
 # --------------------------------------------------------------------------------------------
@@ -610,8 +610,7 @@ def _cmd_evaluate_track(args: argparse.Namespace) -> int:
         args.dataset[1], kidnapped=args.kidnap, rng=args.seed, progress=not args.quiet
     )
     print(tracking_summary(res))
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    out: Path = args.out  # made by _cmd_evaluate before the run
     res.to_csv(out / "mrclam_track_runs.csv")
     (out / "mrclam_track.json").write_text(json.dumps(res.as_dict(), indent=1))
     print(f"written: {out / 'mrclam_track_runs.csv'}, {out / 'mrclam_track.json'}")

@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import InputError
 from ..maps import LandmarkMap
 from ..track.records import TrackEstimate, TrackState
+from ._save import save_figure
 
 if TYPE_CHECKING:
     from ..track.data import GroundTruth
@@ -151,10 +152,7 @@ def plot_track(
     ax_err.grid(alpha=0.3)
     if title:
         fig.suptitle(title)
-    p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=110)
-    return p
+    return save_figure(fig, path)
 
 
 def _draw_hypotheses(ax: Any, estimates: Sequence[TrackEstimate], every_s: float) -> None:

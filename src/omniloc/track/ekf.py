@@ -183,7 +183,7 @@ def _geometry(
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Landmarks in each robot frame (H, N, 2), predicted bearings (H, N), squared ranges
     (H, N) and predicted bearing variances S (H, N)."""
-    pred, g = bearing_jacobian(L, poses)
+    pred, g = bearing_jacobian(np.broadcast_to(L, (poses.shape[0], *L.shape)), poses)
     pred = np.asarray(wrap(pred))
     r2 = 1.0 / (g[..., 0] ** 2 + g[..., 1] ** 2)
     r = np.sqrt(r2)
