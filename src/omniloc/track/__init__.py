@@ -4,8 +4,8 @@
   bearings, it reports ``lost``, ``ambiguous`` or ``localized`` after every frame;
 * :func:`track` (:mod:`.offline`) -- the same over a whole recording;
 * :mod:`.motion` -- the odometry's motion and noise (:class:`MotionModel`);
-* :mod:`.ekf`, :mod:`.step`, :mod:`.clutter` -- a set of pose hypotheses, each an extended
-  Kalman filter, and how a frame is taken in;
+* :mod:`.likelihood` -- what a frame of bearings says about a set of Gaussian pose
+  hypotheses, and how it moves them;
 * :mod:`.window`, :mod:`.relocalize` -- the recent frames, and new hypotheses from the
   interpretation tree;
 * :mod:`.presets` -- tuned parameters (``generic``, ``mrclam``);

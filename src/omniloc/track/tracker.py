@@ -6,31 +6,39 @@ competing hypotheses) or ``localized``, with the reason.
 
 How it works (``docs/tracking.md`` has the reasons and the figures)
 -------------------------------------------------------------------
-* **Hypotheses** are extended Kalman filters over the pose (:mod:`.ekf`): odometry moves
-  them (:mod:`.motion`), each frame updates them with a gated, spurious-aware association
-  (the assignment of bearings to landmarks or clutter that maximises the frame likelihood),
-  and earns each one the frame's log-likelihood ratio under the
-  :class:`~omniloc.sensor.SensorModel` (detections, clutter, visible landmarks not seen).
-  A hypothesis's *score* is the sum of those, forgetting with time constant
-  ``memory_s``; weights are the normalised ``exp(score)``.
-* **New hypotheses** come from :func:`~omniloc.localize` on the bearings of the last
-  ~second stacked by odometry (:mod:`.relocalize`), replayed through the window with the
-  exact model (:func:`.window.replay`) so that they are scored on the same frames as the
-  hypotheses already tracked. The tracker searches when it is lost or ambiguous (at most
-  every ``search_interval_s``), and when the localized hypothesis stops explaining the
-  bearings.
-* **Pruning**: hypotheses whose score falls ``prune_margin`` nats behind the best are
-  dropped; equal ones (Mahalanobis distance) are merged (the better score stays); at most
+The tracker keeps a posterior over the pose: a weighted set of Gaussian *hypotheses* plus the
+mass of *elsewhere* -- "the robot is at some pose no hypothesis covers" -- which is all of it
+when the tracker wakes up.
+
+* **Motion.** Odometry moves every hypothesis (an extended Kalman filter prediction with the
+  :class:`~omniloc.track.MotionModel`'s noise). Between frames a share ``kidnap_rate * dt`` of
+  the hypotheses' mass moves to elsewhere: the prior chance of being carried off, which keeps
+  the tracker able to notice it.
+* **Frames.** Each hypothesis earns the frame's likelihood ratio under the
+  :class:`~omniloc.sensor.SensorModel` -- detections, clutter, landmarks in view that were not
+  seen, summed over the assignments (:mod:`.likelihood`) -- and is updated by it (a mixture of
+  Kalman steps over the bearing's readings, collapsed). Elsewhere earns the same ratio
+  averaged over poses spread uniformly over the region the robot may be in. The weights are
+  Bayes' rule: nothing is forgotten, nothing is tempered unless ``evidence_weight`` says so.
+* **New hypotheses.** While not localized, at most every ``search_interval_s``, the bearings
+  of the last ``search_window_s`` seconds, stacked into the current frame by the odometry, go
+  to :func:`~omniloc.localize`, whose exhaustive search returns every pose they are
+  consistent with. Each candidate is then replayed through the frames of the last
+  ``replay_s`` seconds with the exact model (each bearing from its own frame's
+  odometry-predicted pose) and enters with the mass it had as a part of elsewhere when the
+  replay began -- its prior volume (Laplace's Occam factor) times elsewhere's mass then --
+  times the likelihood of the replayed frames: it is weighed on the same evidence as the
+  hypotheses already tracked.
+* **Pruning.** Hypotheses at the same pose (within ``merge_chi2`` and the metric bounds) merge
+  (their masses add); hypotheses below ``prune_weight`` are dropped; at most
   ``max_hypotheses`` are kept.
-* **Localized** only when the best hypothesis and those within ``cluster_position_m`` /
-  ``cluster_heading`` of it (the same place, read through rival assignments that have not
-  merged) hold ``localized_share`` of the mass, its
-  covariance is within ``max_position_sd_m`` / ``max_heading_sd``, it has matched enough
-  bearings and it explains the recent bearings (a binomial test of the share it matched
-  against ``fit_explained``).
-* **Kidnapping**: when the localized hypothesis fails that test strongly (p below
-  ``kidnap_p``), or a distant hypothesis takes the mass from it, the estimate is flagged
-  ``kidnapped``; the old hypothesis stays alongside the new ones until the evidence decides.
+* **Localized** only when the probability that the reported pose is within ``tolerance_m``
+  and ``tolerance_heading`` of the truth -- the mass of the best place times the chance, under
+  its covariance, that it is that close -- reaches ``localized_probability``. ``ambiguous``
+  otherwise, with the competing hypotheses; ``lost`` when elsewhere holds nearly all the mass.
+* **Kidnapping.** When the place the tracker was localized at loses its mass (below
+  ``kidnap_share``) to elsewhere or to another place, the estimate is flagged ``kidnapped``;
+  the old hypothesis stays alongside the new ones until the evidence decides.
 
 Bad input: times that go back, values that are not finite and frames before any odometry
 get a clear :class:`~omniloc.errors.InputError` or a stated behaviour (see
@@ -42,145 +50,130 @@ from __future__ import annotations
 
 import logging
 import math
+from collections import deque
 from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import betainc
+from scipy.special import erf
 
-from .._kernels import track as _kernels
 from ..angles import wrap
 from ..errors import InputError
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from . import ekf
-from .clutter import ClutterMemory, PersistentClutter
-from .motion import MotionModel, integrate, twist_of
+from .elsewhere import Elsewhere
+from .likelihood import FrameModel, frame_update, log_ratios
+from .motion import MotionModel, between, compose, integrate, inverse, move, twist_of
 from .records import Hypothesis, TrackEstimate, TrackState
 from .relocalize import search_window
-from .step import StepRules, advance, take_frame
-from .window import Window, replay
+from .window import Window, WindowFrame
 
 __all__ = ["Tracker", "TrackerConfig"]
-
-#: What the tracker keeps per hypothesis besides its pose and covariance (filtered together).
-_PER_HYPOTHESIS = (
-    "_score",
-    "_support",
-    "_fit_m",
-    "_fit_n",
-    "_fast_m",
-    "_fast_n",
-    "_born",
-    "_ids",
-)
 
 log = logging.getLogger(__name__)
 
 FloatArray = NDArray[np.float64]
 
+_INTS = {
+    "max_hypotheses",
+    "search_min_bearings",
+    "search_max_bearings",
+    "search_max_spurious",
+    "max_candidates",
+    "max_reported",
+    "elsewhere_samples",
+}
+_PROBABILITIES = {
+    "localized_probability",
+    "kidnap_share",
+    "lost_share",
+    "prune_weight",
+    "elsewhere_inject",
+    "search_miss",
+}
+_SHARES = {"fit_explained"}
+
 
 @dataclass(frozen=True)
 class TrackerConfig:
-    """How the tracker decides (every value has a unit; the defaults suit a camera at a few
-    frames per second; :func:`~omniloc.track.presets.preset` gives tuned sets).
+    """How the tracker decides (every value has a unit; :func:`~omniloc.track.preset` gives
+    tuned sets).
 
     Parameters
     ----------
-    memory_s : float
-        Time constant (s) with which a hypothesis's score forgets old frames.
+    localized_probability : float
+        ``localized`` needs at least this probability that the reported pose is within
+        ``tolerance_m`` and ``tolerance_heading`` of the truth.
+    tolerance_m : float
+        Position tolerance of that statement, metres.
+    tolerance_heading : float
+        Heading tolerance of that statement, radians.
+    lost_share : float
+        ``lost`` when elsewhere holds at least this share of the mass (or there is no
+        hypothesis).
+    kidnap_rate : float
+        Prior rate (per second) of being carried off: between frames this share per second
+        of the hypotheses' mass moves to elsewhere.
     evidence_weight : float
-        Factor on each frame's log-likelihood ratio in the scores (< 1: consecutive frames
-        from nearly the same pose are not independent evidence; their errors -- bearing
-        biases, landmark placement -- repeat).
-    localized_share : float
-        Share of the posterior mass the best hypothesis, with those at the same place (see
-        ``cluster_position_m``), needs to be ``localized``.
-    cluster_position_m, cluster_heading : float
-        Hypotheses within this many metres and radians of the best count with it towards
-        ``localized_share``: rival readings of one frame (a bearing between two tubes of a
-        cluster) leave near-copies of one pose that the merge, which needs the copies to
-        agree within their covariances, keeps apart.
-    max_position_sd_m : float
-        Largest position standard deviation (m, along the worst axis) of a localized pose.
-    max_heading_sd : float
-        Largest heading standard deviation (rad) of a localized pose.
-    min_support : float
-        Bearings the best hypothesis must have matched (counted with the score's
-        forgetting) to be localized.
+        Factor on every frame's log-likelihood ratio (1: Bayes' rule; below 1 when frames
+        from nearly one pose repeat their errors and should count less).
+    region : tuple of 4 floats or None
+        ``(xmin, xmax, ymin, ymax)``, metres: where the robot may be (the prior of elsewhere
+        and of new hypotheses). None: the landmarks' bounding box widened by
+        ``region_margin_m``.
+    region_margin_m : float
+        See ``region``.
+    elsewhere_samples : int
+        Particles that carry elsewhere (:mod:`.elsewhere`).
+    elsewhere_inject : float
+        Share of them drawn afresh from the region at each resampling.
     min_age_s : float
-        Time (s) a hypothesis must have been tracked before it can be localized.
-    prune_margin : float
-        Hypotheses this many nats behind the best are dropped.
-    max_hypotheses : int
-        At most this many hypotheses are kept (the best scores).
-    merge_chi2, merge_position_m, merge_heading : float
-        Two hypotheses closer than this squared Mahalanobis distance (on the sum of their
-        covariances), and within this many metres and radians, are the same; the better
-        one stays.
-    branches : int
-        A hypothesis splits into at most this many children on a frame that it can explain
-        in several ways (rival assignments of its bearings).
-    branch_margin : float
-        Rival assignments this many nats worse than the best are not followed.
-    split_sd : float
-        A hypothesis whose pose uncertainty spreads a landmark's predicted bearing by more
-        than this (rad) is split into a Gaussian mixture (0: never split).
-    split_target_sd : float
-        ... into components this narrow (rad of bearing).
-    split_max_children : int
-        ... at most this many.
-    persistent_clutter : bool
-        Clutter a hypothesis saw in the last second is likelier clutter again
-        (:mod:`.clutter`).
-    max_rows : int
-        At most this many hypotheses come out of a frame's splits and branches (the best
-        by score) before merging and pruning.
-    collapse_chi2 : float
-        A hypothesis's children (rival assignments) that end up closer than this squared
-        Mahalanobis distance become one Gaussian, their likelihoods summed (joint
-        probabilistic data association); distinct ones stay apart (0: never collapse).
+        A hypothesis must have been tracked this long (s) before its place can be
+        localized (a new one has been weighed only on its replay).
     search_window_s : float
-        Frames of the last this many seconds are stacked for a search (0: the current
-        frame alone).
+        Frames of the last this many seconds are stacked for a search.
     search_interval_s : float
         At most one search per this many seconds.
-    search_timeout_s : float
-        Time budget of one search.
     search_min_bearings : int
-        A search needs at least this many (stacked) bearings.
+        A search needs at least this many stacked (merged) bearings.
     search_max_bearings : int
         At most this many stacked bearings go into a search.
     search_max_spurious : int
         Bearings a search may leave unmatched.
+    search_timeout_s : float
+        Time budget of one search.
     near_range_m : float
-        Range (m) at which the travel over the search window is turned into bearing noise.
+        Range at which the travel over the search window is turned into bearing noise.
     candidate_cov_inflation : float
         Factor on a search solution's covariance before its replay.
-    max_candidates : int
-        At most this many search solutions are scored on the whole window (the best on
-        the last ``prerank_s`` seconds).
-    prerank_s : float
-        The window on which too many candidates are first ranked, seconds.
+    candidate_min_sd_m, candidate_min_sd_heading : float
+        ... and the least standard deviations it starts the replay with (m, rad).
+    fit_window_s : float
+        Time constant (s) of the counts of bearings a hypothesis explained recently.
+    fit_explained : float
+        ``localized`` needs the best hypothesis to explain at least this share of the
+        recent bearings (a wrong pose can hold the mass by explaining a few and calling the
+        rest clutter when the rivals explain fewer).
+    search_miss : float
+        Probability that a search misses the true pose: after a search, elsewhere holds at
+        least ``search_miss / (1 - search_miss)`` times the best candidate's mass.
     replay_s : float
         New hypotheses are replayed through the frames of the last this many seconds.
-    fit_window_s : float
-        Time constant (s) of the counts of the recent-fit test.
-    fast_fit_window_s : float
-        A second, shorter time constant (s) for the same test, used only to leave
-        ``localized`` (suspect) quickly after a jump, before the slower counts, still full of
-        the good past, notice it; the ``kidnapped`` flag reads the slower counts.
-    fit_explained : float
-        Share of the bearings a right hypothesis explains (the rest is clutter), for the
-        recent-fit test.
-    suspect_p : float
-        The localized hypothesis is suspect (search, not localized) when the binomial
-        probability of so few matches is below this.
-    kidnap_p : float
-        ... and rejected (flagged ``kidnapped``) below this.
-    min_fit_bearings : float
-        The recent-fit test needs at least this many recent bearings.
+    max_candidates : int
+        At most this many search solutions are replayed (the search's best).
+    merge_chi2 : float
+        Two hypotheses closer than this squared Mahalanobis distance (on the sum of their
+        covariances) ...
+    merge_position_m, merge_heading : float
+        ... and within this many metres and radians are one: their masses add.
+    prune_weight : float
+        Hypotheses holding less than this share of the mass are dropped.
+    max_hypotheses : int
+        At most this many hypotheses are kept (the heaviest).
+    kidnap_share : float
+        The place the tracker was localized at is taken to be left (flagged ``kidnapped``)
+        when its mass falls below this share.
     max_odometry_gap_s : float
         Odometry rows further apart than this (s) leave the motion unknown: the hypotheses
         are dropped and the tracker relocalizes.
@@ -193,71 +186,61 @@ class TrackerConfig:
         A value out of its range (the message names it).
     """
 
-    memory_s: float = 10.0
-    evidence_weight: float = 0.5
-    localized_share: float = 0.99
-    cluster_position_m: float = 0.15
-    cluster_heading: float = float(np.deg2rad(3.0))
-    max_position_sd_m: float = 0.1
-    max_heading_sd: float = float(np.deg2rad(1.5))
-    min_support: float = 6.0
-    min_age_s: float = 1.0
-    prune_margin: float = 15.0
-    max_hypotheses: int = 60
-    merge_chi2: float = 7.8
-    merge_position_m: float = 0.1
-    merge_heading: float = float(np.deg2rad(1.0))
-    branches: int = 4
-    branch_margin: float = 8.0
-    split_sd: float = float(np.deg2rad(4.0))
-    split_target_sd: float = float(np.deg2rad(1.5))
-    split_max_children: int = 9
-    persistent_clutter: bool = False
-    clutter_again: float = 0.35
-    max_rows: int = 300
-    collapse_chi2: float = 9.0
-    search_window_s: float = 0.0
+    localized_probability: float = 0.99
+    tolerance_m: float = 0.3
+    tolerance_heading: float = float(np.deg2rad(5.0))
+    lost_share: float = 0.99
+    kidnap_rate: float = 1e-3
+    evidence_weight: float = 1.0
+    region: tuple[float, float, float, float] | None = None
+    region_margin_m: float = 2.0
+    elsewhere_samples: int = 3000
+    elsewhere_inject: float = 0.02
+    min_age_s: float = 3.0
+    search_window_s: float = 1.5
     search_interval_s: float = 1.0
-    search_timeout_s: float = 0.1
     search_min_bearings: int = 4
-    search_max_bearings: int = 10
+    search_max_bearings: int = 12
     search_max_spurious: int = 2
-    near_range_m: float = 2.0
-    candidate_cov_inflation: float = 2.0
-    max_candidates: int = 200
-    prerank_s: float = 1.0
-    replay_s: float = 10.0
-    fit_window_s: float = 3.0
-    fast_fit_window_s: float = 0.75
-    fit_explained: float = 0.6
-    suspect_p: float = 1e-2
-    kidnap_p: float = 1e-4
-    min_fit_bearings: float = 6.0
+    search_timeout_s: float = 0.5
+    near_range_m: float = 1.5
+    candidate_cov_inflation: float = 4.0
+    candidate_min_sd_m: float = 0.05
+    candidate_min_sd_heading: float = float(np.deg2rad(1.0))
+    fit_window_s: float = 10.0
+    fit_explained: float = 0.0
+    search_miss: float = 0.5
+    replay_s: float = 4.0
+    max_candidates: int = 3000
+    merge_chi2: float = 9.0
+    merge_position_m: float = 0.3
+    merge_heading: float = float(np.deg2rad(5.0))
+    prune_weight: float = 1e-6
+    max_hypotheses: int = 50
+    kidnap_share: float = 0.5
     max_odometry_gap_s: float = 2.0
     max_reported: int = 10
 
     def __post_init__(self) -> None:
-        ints = {
-            "max_hypotheses",
-            "search_max_bearings",
-            "max_candidates",
-            "max_reported",
-            "branches",
-            "split_max_children",
-            "max_rows",
-            "search_min_bearings",
-        }
-        probs = {"localized_share", "fit_explained", "suspect_p", "kidnap_p"}
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name in {"persistent_clutter"}:
-                if not isinstance(v, (bool, np.bool_)):
-                    raise InputError(f"{f.name} must be True or False, got {v!r}")
-                object.__setattr__(self, f.name, bool(v))
+            if f.name == "region":
+                if v is None:
+                    continue
+                try:
+                    r = tuple(float(x) for x in v)
+                except (TypeError, ValueError) as exc:
+                    raise InputError(f"region must be (xmin, xmax, ymin, ymax), got {v!r}") from exc
+                if len(r) != 4 or not all(map(math.isfinite, r)) or r[0] >= r[1] or r[2] >= r[3]:
+                    raise InputError(
+                        f"region must be finite (xmin, xmax, ymin, ymax) with xmin < xmax and "
+                        f"ymin < ymax, got {v!r}"
+                    )
+                object.__setattr__(self, f.name, r)
                 continue
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise InputError(f"{f.name} must be a number, got {v!r}")
-            if f.name in ints:
+            if f.name in _INTS:
                 if int(v) != v or v < 1:
                     raise InputError(f"{f.name} must be a positive integer, got {v!r}")
                 object.__setattr__(self, f.name, int(v))
@@ -265,21 +248,25 @@ class TrackerConfig:
             v = float(v)
             if not math.isfinite(v) or v < 0:
                 raise InputError(f"{f.name} must be finite and >= 0, got {getattr(self, f.name)!r}")
-            if f.name in probs and not 0.0 < v < 1.0:
+            if f.name in _SHARES and v > 1.0:
+                raise InputError(f"{f.name} must lie between 0 and 1, got {v!r}")
+            if f.name in _PROBABILITIES and not 0.0 < v < 1.0:
                 raise InputError(f"{f.name} must lie strictly between 0 and 1, got {v!r}")
             object.__setattr__(self, f.name, v)
         for name in (
-            "memory_s",
             "fit_window_s",
-            "fast_fit_window_s",
+            "tolerance_m",
+            "tolerance_heading",
             "near_range_m",
             "candidate_cov_inflation",
+            "evidence_weight",
+            "search_window_s",
         ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")
-        if self.kidnap_p > self.suspect_p:
+        if self.search_min_bearings < 3:
             raise InputError(
-                f"kidnap_p ({self.kidnap_p}) must not exceed suspect_p ({self.suspect_p})"
+                f"search_min_bearings must be at least 3, got {self.search_min_bearings}"
             )
 
 
@@ -297,6 +284,27 @@ def _finite_1d(name: str, values: ArrayLike) -> FloatArray:
     return a
 
 
+def _logsumexp(a: FloatArray) -> float:
+    if a.size == 0:
+        return -math.inf
+    top = float(a.max())
+    if not math.isfinite(top):
+        return top
+    return top + math.log(float(np.exp(a - top).sum()))
+
+
+def within_tolerance(cov: FloatArray, tol_m: float, tol_heading: float) -> float:
+    """A lower bound on the probability that a Gaussian pose error of covariance ``cov`` is
+    within ``tol_m`` in position and ``tol_heading`` in heading: the position along its
+    widest axis taken for both (a circle of that variance), times the heading's share,
+    as if independent."""
+    lam = max(float(np.linalg.eigvalsh(cov[:2, :2])[-1]), 1e-30)
+    p_pos = 1.0 - math.exp(-0.5 * tol_m * tol_m / lam)
+    sd_h = math.sqrt(max(float(cov[2, 2]), 1e-30))
+    p_head = float(erf(tol_heading / (math.sqrt(2.0) * sd_h)))
+    return p_pos * p_head
+
+
 class Tracker:
     """Localization over time from odometry and frames of unlabelled bearings.
 
@@ -306,7 +314,8 @@ class Tracker:
         The map, metres.
     sensor : SensorModel, optional
         Noise, field of view, range, detection probability and clutter of the bearing
-        sensor (default: ``SensorModel(sigma=0.5 deg)``).
+        sensor (default: ``SensorModel(sigma=0.5 deg)``; without ``p_detect`` or ``clutter``
+        the tracker takes 0.5 and 0.5 per frame).
     motion : MotionModel, optional
         Odometry noise and latency (default: ``MotionModel()``).
     config : TrackerConfig, optional
@@ -344,22 +353,23 @@ class Tracker:
         self.config = config if config is not None else TrackerConfig()
         if not isinstance(self.config, TrackerConfig):
             raise InputError(f"config must be a TrackerConfig, got {type(config).__name__}")
-        self._L = np.ascontiguousarray(self.landmarks.xy)
         c = self.config
-        self._window = Window(max(c.replay_s, c.search_window_s))
-        self._rules = StepRules(
-            branches=c.branches,
-            branch_margin=c.branch_margin,
-            split=(
-                ekf.Split(c.split_sd, c.split_target_sd, c.split_max_children)
-                if c.split_sd > 0
-                else None
-            ),
-            clutter=PersistentClutter(p_again=c.clutter_again) if c.persistent_clutter else None,
-            max_rows=c.max_rows,
-            collapse_chi2=c.collapse_chi2,
-        )
-        self._memory = ClutterMemory()
+        self._L = np.ascontiguousarray(self.landmarks.xy, dtype=np.float64)
+        self._model = FrameModel.of(self.sensor)
+        if c.region is not None:
+            x0, x1, y0, y1 = c.region
+        else:
+            lo = self._L.min(axis=0) - c.region_margin_m
+            hi = self._L.max(axis=0) + c.region_margin_m
+            x0, x1, y0, y1 = float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])
+        #: The region the robot may be in, (xmin, xmax, ymin, ymax), metres.
+        self.region = (x0, x1, y0, y1)
+        # ln of the prior density of a pose, uniform over the region and all headings.
+        self._log_prior = -math.log((x1 - x0) * (y1 - y0) * 2.0 * math.pi)
+        self._elsewhere = Elsewhere(self.region, c.elsewhere_samples, c.elsewhere_inject)
+        self._window = Window(max(c.replay_s, c.search_window_s) + 1e-9)
+        # (t, ln elsewhere mass, cumulative normaliser) before each frame of the window.
+        self._history: deque[tuple[float, float, float]] = deque()
         # Odometry: rows (t, vx, vy, w) not yet integrated, and the twist holding now.
         self._rows: list[FloatArray] = []
         self._hold = np.zeros(3)
@@ -369,22 +379,20 @@ class Tracker:
         self._t: float | None = None  # time of the last frame (motion integrated up to it)
         self._warned_no_odometry = False
         self._after_gap = False  # a gap was reported and no odometry row came since
-        # Hypotheses.
-        self._poses = np.zeros((0, 3))
-        self._covs = np.zeros((0, 3, 3))
-        self._score = np.zeros(0)
-        self._support = np.zeros(0)
-        self._fit_m = np.zeros(0)
-        self._fit_n = np.zeros(0)
-        self._fast_m = np.zeros(0)
-        self._fast_n = np.zeros(0)
-        self._born = np.zeros(0)
+        # The posterior: hypotheses (normalised log masses) and elsewhere.
+        self._mu = np.zeros((0, 3))
+        self._P = np.zeros((0, 3, 3))
+        self._logw = np.zeros(0)
         self._ids = np.zeros(0, dtype=np.int64)
+        self._born = np.zeros(0)
+        self._fit_m = np.zeros(0)  # bearings explained, forgetting over fit_window_s
+        self._fit_n = np.zeros(0)  # bearings seen, the same
+        self._log_out = 0.0
+        self._norm = 0.0  # sum of the log normalisers so far
         self._next_id = 0
-        self._last_search: float = -math.inf
+        self._last_search = -math.inf
         self._bearings_since_search = 0
         self._localized_id: int | None = None
-        self._gap_reason = ""
         #: Number of searches run so far (for reports).
         self.searches = 0
 
@@ -392,7 +400,7 @@ class Tracker:
     @property
     def n_hypotheses(self) -> int:
         """Hypotheses tracked now."""
-        return int(self._poses.shape[0])
+        return int(self._mu.shape[0])
 
     def _check_row_times(self, t: FloatArray, what: str) -> None:
         d = np.diff(t)
@@ -529,76 +537,138 @@ class Tracker:
         )
         return delta, Q, gap
 
-    # ---- hypotheses ----------------------------------------------------------------------
-    def _keep(self, idx: NDArray[np.int64] | NDArray[np.bool_]) -> None:
-        for name in ("_poses", "_covs", *_PER_HYPOTHESIS):
-            setattr(self, name, getattr(self, name)[idx])
-        self._memory.take(idx)
+    # ---- the posterior -------------------------------------------------------------------
+    def _normalise(self) -> None:
+        total = float(np.logaddexp(self._log_out, _logsumexp(self._logw)))
+        self._log_out -= total
+        self._logw = self._logw - total
+        self._norm += total
 
-    def _add(
-        self,
-        poses: FloatArray,
-        covs: FloatArray,
-        score: FloatArray,
-        support: FloatArray,
-        t: float,
-        memory: ClutterMemory | None = None,
-    ) -> None:
-        n = poses.shape[0]
-        if n == 0:
-            return
-        if memory is None:
-            self._memory.extend(n)
-        else:
-            self._memory.bearings = np.concatenate([self._memory.bearings, memory.bearings])
-            self._memory.t = np.concatenate([self._memory.t, memory.t])
-        ids = np.arange(self._next_id, self._next_id + n)
-        self._next_id += n
-        self._poses = np.concatenate([self._poses, poses])
-        self._covs = np.concatenate([self._covs, covs])
-        self._score = np.concatenate([self._score, score])
-        self._support = np.concatenate([self._support, support])
-        self._fit_m = np.concatenate([self._fit_m, np.zeros(n)])
-        self._fit_n = np.concatenate([self._fit_n, np.zeros(n)])
-        self._fast_m = np.concatenate([self._fast_m, np.zeros(n)])
-        self._fast_n = np.concatenate([self._fast_n, np.zeros(n)])
-        self._born = np.concatenate([self._born, np.full(n, t)])
-        self._ids = np.concatenate([self._ids, ids])
+    def _keep(self, idx: NDArray[np.int64] | NDArray[np.bool_]) -> None:
+        self._mu = self._mu[idx]
+        self._P = self._P[idx]
+        self._logw = self._logw[idx]
+        self._ids = self._ids[idx]
+        self._born = self._born[idx]
+        self._fit_m = self._fit_m[idx]
+        self._fit_n = self._fit_n[idx]
 
     def _drop_all(self) -> None:
         self._keep(np.zeros(0, dtype=np.int64))
+        self._log_out = 0.0
+        self._localized_id = None
+        self._elsewhere.reset()
 
-    def _distinct(self, poses: FloatArray, covs: FloatArray) -> NDArray[np.bool_]:
-        """Which of these (sorted best first) are not the same as a better one."""
+    def _exclude(self) -> None:
+        """Elsewhere gives up the places the hypotheses cover (with their mass), and
+        resamples."""
+        if self.n_hypotheses:
+            share = self._elsewhere.exclude(self._mu, self._P)
+            if share > 0:
+                self._log_out += math.log1p(-share) if share < 1.0 else -math.inf
+                if not math.isfinite(self._log_out):
+                    self._log_out = -745.0
+                self._normalise()
+        self._elsewhere.resample()
+
+    def _same(self, i: int, mu: FloatArray, P: FloatArray) -> NDArray[np.bool_]:
+        """Which of the poses ``mu`` (covariances ``P``) are the same as hypothesis ``i``'s."""
         c = self.config
-        return np.asarray(
-            _kernels.distinct(
-                np.ascontiguousarray(poses),
-                np.ascontiguousarray(covs),
-                c.merge_chi2,
-                c.merge_position_m,
-                c.merge_heading,
-            )
+        d = mu - self._mu[i]
+        d[:, 2] = np.asarray(wrap(d[:, 2]))
+        near = (np.hypot(d[:, 0], d[:, 1]) <= c.merge_position_m) & (
+            np.abs(d[:, 2]) <= c.merge_heading
         )
+        if not near.any():
+            return near
+        S = P[near] + self._P[i]
+        try:
+            m2 = np.einsum("ni,nij,nj->n", d[near], np.linalg.inv(S), d[near])
+        except np.linalg.LinAlgError:
+            return np.zeros_like(near)
+        out = np.zeros_like(near)
+        out[np.flatnonzero(near)] = m2 <= c.merge_chi2
+        return out
 
     def _merge_and_prune(self) -> None:
-        H = self.n_hypotheses
-        if H == 0:
+        """Merge hypotheses at one pose (moment matching, masses added), drop the light ones,
+        keep at most ``max_hypotheses``."""
+        if self.n_hypotheses == 0:
             return
         c = self.config
-        order = np.argsort(-self._score, kind="stable")
+        order = np.argsort(-self._logw, kind="stable")
         self._keep(order)
-        keep = self._score >= self._score[0] - c.prune_margin
-        keep &= self._distinct(self._poses, self._covs)
-        idx = np.flatnonzero(keep)[: c.max_hypotheses]
+        keep = self._logw >= math.log(c.prune_weight)
+        self._keep(np.flatnonzero(keep))
+        H = self.n_hypotheses
+        alive = np.ones(H, dtype=bool)
+        for i in range(H):
+            if not alive[i]:
+                continue
+            rest = np.flatnonzero(alive)
+            rest = rest[rest > i]
+            if rest.size == 0:
+                break
+            same = rest[self._same(i, self._mu[rest], self._P[rest])]
+            if same.size == 0:
+                continue
+            grp = np.concatenate([[i], same])
+            w = np.exp(self._logw[grp] - self._logw[i])
+            w = w / w.sum()
+            d = self._mu[grp] - self._mu[i]
+            d[:, 2] = np.asarray(wrap(d[:, 2]))
+            mean = w @ d
+            dd = d - mean
+            self._P[i] = np.einsum("n,nij->ij", w, self._P[grp]) + np.einsum(
+                "n,ni,nj->ij", w, dd, dd
+            )
+            self._mu[i] = self._mu[i] + mean
+            self._mu[i, 2] = float(wrap(self._mu[i, 2]))
+            self._logw[i] = _logsumexp(self._logw[grp])
+            self._born[i] = float(self._born[grp].min())
+            self._fit_m[i] = float(w @ self._fit_m[grp])
+            self._fit_n[i] = float(w @ self._fit_n[grp])
+            if self._localized_id is not None and np.isin(self._localized_id, self._ids[same]):
+                self._localized_id = int(self._ids[i])
+            alive[same] = False
+        idx = np.flatnonzero(alive)
+        idx = idx[np.argsort(-self._logw[idx], kind="stable")][: c.max_hypotheses]
         self._keep(idx)
 
+    # ---- new hypotheses ------------------------------------------------------------------
+    def _replay(
+        self, poses: FloatArray, covs: FloatArray, frames: list[WindowFrame]
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Candidates at the last frame of ``frames``: moved back to the first frame by the
+        odometry, then filtered forward through every frame with the exact model. Returns
+        their poses and covariances at the last frame and their summed log-likelihood
+        ratios plus the ln of their prior volume, and their counts of bearings explained and
+        seen (with the recent-fit forgetting)."""
+        c = self.config
+        rel = between(frames[0].odom, frames[-1].odom)
+        mu = compose(poses, inverse(rel))
+        P = covs.copy()
+        sign, logdet = np.linalg.slogdet(2.0 * math.pi * P)
+        score = np.where(sign > 0, 0.5 * logdet, -math.inf) + self._log_prior
+        fit_m = np.zeros(mu.shape[0])
+        fit_n = np.zeros(mu.shape[0])
+        for k, f in enumerate(frames):
+            if k:
+                mu, P = move(mu, P, f.delta, f.Q)
+                decay = math.exp(-(f.t - frames[k - 1].t) / c.fit_window_s)
+                fit_m, fit_n = fit_m * decay, fit_n * decay
+            mu, P, lr, explained = frame_update(mu, P, f.bearings, self._L, self._model)
+            score = score + c.evidence_weight * lr
+            fit_m = fit_m + explained
+            fit_n = fit_n + f.bearings.size
+        return mu, P, score, fit_m, fit_n
+
     def _search(self, t: float) -> int:
-        """Search the window for new hypotheses; returns how many were added."""
+        """Search the recent frames for new hypotheses; returns how many were added."""
         c = self.config
         frames = self._window.since(t - c.search_window_s)
-        if sum(f.bearings.size for f in frames) < max(3, c.search_min_bearings):
-            return 0  # not enough to search (stacking may merge some: checked again there)
+        if sum(f.bearings.size for f in frames) < c.search_min_bearings:
+            return 0
         self._last_search = t
         self._bearings_since_search = 0
         cands = search_window(
@@ -612,76 +682,64 @@ class Tracker:
             timeout_s=c.search_timeout_s,
             cov_inflation=c.candidate_cov_inflation,
         )
-        if cands.n_bearings >= max(3, c.search_min_bearings):
+        if cands.n_bearings >= c.search_min_bearings:
             self.searches += 1
         if len(cands) == 0:
             return 0
-        poses, covs = cands.poses, cands.covs
-        if len(cands) > c.max_candidates:
-            # Too many to score on the whole window: the best on the last second go on
-            # (scored without branching: a cheap first cut).
-            pre = replay(
-                poses,
-                covs,
-                self._window.since(t - c.prerank_s),
-                self._L,
-                self.sensor,
-                StepRules(),
-                decay_per_s=1.0 / c.memory_s,
-                weight=c.evidence_weight,
-            )
-            top = pre.source[np.argsort(-pre.score, kind="stable")[: c.max_candidates]]
-            poses, covs = poses[top], covs[top]
+        poses = cands.poses[: c.max_candidates]
+        covs = cands.covs[: c.max_candidates].copy()
+        floor = np.array([c.candidate_min_sd_m, c.candidate_min_sd_m, c.candidate_min_sd_heading])
+        covs[:, [0, 1, 2], [0, 1, 2]] = np.maximum(covs[:, [0, 1, 2], [0, 1, 2]], floor**2)
+        # The replay starts at the oldest frame of the window whose prior masses are known.
         rframes = self._window.since(t - c.replay_s)
-        r = replay(
-            poses,
-            covs,
-            rframes,
-            self._L,
-            self.sensor,
-            self._rules,
-            decay_per_s=1.0 / c.memory_s,
-            weight=c.evidence_weight,
-        )
-        ok = (
-            np.isfinite(r.score)
-            & np.isfinite(r.poses).all(axis=1)
-            & np.isfinite(r.covs).all(axis=(1, 2))
-        )
-        best = max(r.score[ok].max(initial=-np.inf), self._score.max(initial=-np.inf))
-        ok &= r.score >= best - c.prune_margin
+        hist = {h[0]: h for h in self._history}
+        while rframes and rframes[0].t not in hist:
+            rframes = rframes[1:]
+        if not rframes:
+            return 0
+        # Candidate covariances are for the last frame; at the first one the odometry's noise
+        # over the replay is added (roughly: summed in the robot's frames).
+        Q = np.zeros((3, 3))
+        for f in rframes[1:]:
+            Q = Q + f.Q
+        covs = covs + Q
+        _, out0, norm0 = hist[rframes[0].t]
+        mu, P, score, fit_m, fit_n = self._replay(poses, covs, rframes)
+        logw = out0 + score + norm0 - self._norm
+        ok = np.isfinite(logw) & np.isfinite(mu).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
+        ok &= logw >= math.log(c.prune_weight)
         idx = np.flatnonzero(ok)
         if idx.size == 0:
             return 0
-        idx = idx[np.argsort(-r.score[idx], kind="stable")]
-        # Candidates that are hypotheses already tracked add nothing (the tracked one keeps
-        # its history); among themselves, the better score stays.
-        H = self.n_hypotheses
-        fresh = self._distinct(
-            np.concatenate([self._poses, r.poses[idx]]), np.concatenate([self._covs, r.covs[idx]])
-        )[H:]
-        idx = idx[fresh]
-        if idx.size == 0:
-            return 0
-        r.memory.take(idx)
-        self._add(
-            r.poses[idx], r.covs[idx], r.score[idx], r.matched[idx].astype(np.float64), t, r.memory
-        )
-        return int(idx.size)
-
-    # ---- the recent-fit test -------------------------------------------------------------
-    def _fit_p(self, fast: bool = False) -> FloatArray:
-        """Per hypothesis: the binomial probability of matching at most the recent matches
-        of the recent bearings if it were right (1 when too few bearings to tell); with
-        ``fast``, on the counts of the shorter time constant."""
-        n = self._fast_n if fast else self._fit_n
-        k = np.minimum(self._fast_m if fast else self._fit_m, n)
-        p = np.ones_like(n)
-        enough = n >= self.config.min_fit_bearings
-        if enough.any():
-            a = np.maximum(n[enough] - k[enough], 1e-9)
-            p[enough] = betainc(a, k[enough] + 1.0, 1.0 - self.config.fit_explained)
-        return p
+        idx = idx[np.argsort(-logw[idx], kind="stable")]
+        # The search misses the truth now and then (a degenerate view, a bearing out of its
+        # gate, more clutter than allowed for): then the robot is elsewhere and would explain
+        # the window about as well as the best candidate. Elsewhere keeps that share.
+        floor = math.log(c.search_miss / (1.0 - c.search_miss)) + float(logw[idx[0]])
+        self._log_out = float(np.logaddexp(self._log_out, floor))
+        added = 0
+        for j in idx:
+            # A candidate at a pose already tracked adds nothing: that hypothesis holds the
+            # evidence of this place (over a longer time than the replay).
+            if self.n_hypotheses:
+                H = self.n_hypotheses
+                dup = False
+                for i in range(H):
+                    if self._same(i, mu[j : j + 1], P[j : j + 1])[0]:
+                        dup = True
+                        break
+                if dup:
+                    continue
+            self._mu = np.concatenate([self._mu, mu[j : j + 1]])
+            self._P = np.concatenate([self._P, P[j : j + 1]])
+            self._logw = np.concatenate([self._logw, logw[j : j + 1]])
+            self._ids = np.concatenate([self._ids, [self._next_id]])
+            self._born = np.concatenate([self._born, [rframes[0].t]])
+            self._fit_m = np.concatenate([self._fit_m, fit_m[j : j + 1]])
+            self._fit_n = np.concatenate([self._fit_n, fit_n[j : j + 1]])
+            self._next_id += 1
+            added += 1
+        return added
 
     # ---- frames --------------------------------------------------------------------------
     def frame(self, t: float, bearings: ArrayLike) -> TrackEstimate:
@@ -722,187 +780,182 @@ class Tracker:
         delta, Q, gap = self._motion_to(tf)
         self._t = tf
         reason_gap = ""
+        kidnapped = False
         if gap > c.max_odometry_gap_s and not self._after_gap:
             self._after_gap = True
             reason_gap = f"odometry gap of {gap:.1f} s: motion unknown, relocalizing"
             self._drop_all()
             self._window.clear()
-            self._localized_id = None
+            self._history.clear()
             delta, Q = np.zeros(3), np.zeros((3, 3))
             # Once: until odometry resumes the robot is taken to stand still (as before
             # the first row), so the frames after the gap can build up evidence again.
             self._hold = np.zeros(3)
-        self._window.append(tf, b, delta, Q)
         dt = 0.0 if t_prev is None else tf - t_prev
+        self._elsewhere.move(delta, Q)
         if self.n_hypotheses:
-            self._poses, self._covs = advance(self._poses, self._covs, self._memory, delta, Q)
-            decay = math.exp(-dt / c.memory_s)
-            self._poses, self._covs, ev = take_frame(
-                self._poses,
-                self._covs,
-                self._memory,
-                tf,
-                b,
-                self._L,
-                self.sensor,
-                self._rules,
-                score=self._score * decay,
-            )
-            for name in _PER_HYPOTHESIS:
-                setattr(self, name, getattr(self, name)[ev.parent])
-            decay = math.exp(-dt / c.memory_s)
-            fdecay = math.exp(-dt / c.fit_window_s)
-            self._score = self._score * decay + c.evidence_weight * ev.loglik
-            self._support = self._support * decay + ev.matched
-            self._fit_m = self._fit_m * fdecay + ev.matched
-            self._fit_n = self._fit_n * fdecay + b.size
-            qdecay = math.exp(-dt / c.fast_fit_window_s)
-            self._fast_m = self._fast_m * qdecay + ev.matched
-            self._fast_n = self._fast_n * qdecay + b.size
-            good = np.isfinite(self._poses).all(axis=1) & np.isfinite(self._covs).all(axis=(1, 2))
+            self._mu, self._P = move(self._mu, self._P, delta, Q)
+            good = np.isfinite(self._mu).all(axis=1) & np.isfinite(self._P).all(axis=(1, 2))
             if not good.all():
                 self._keep(np.flatnonzero(good))
-        self._bearings_since_search += int(b.size)
+            # The prior chance of being carried off since the last frame.
+            f = -math.expm1(-c.kidnap_rate * dt)
+            if f > 0 and self.n_hypotheses:
+                moved = math.log(f) + _logsumexp(self._logw)
+                self._log_out = float(np.logaddexp(self._log_out, moved))
+                self._logw = self._logw + math.log1p(-f)
+        self._normalise()
+        self._history.append((tf, self._log_out, self._norm))
+        self._window.append(tf, b, delta, Q)
+        while self._history and self._history[0][0] < self._window[0].t:
+            self._history.popleft()
+        # The frame's evidence.
+        if self.n_hypotheses:
+            self._mu, self._P, lr, explained = frame_update(
+                self._mu, self._P, b, self._L, self._model
+            )
+            self._logw = self._logw + c.evidence_weight * lr
+            decay = math.exp(-dt / c.fit_window_s)
+            self._fit_m = self._fit_m * decay + explained
+            self._fit_n = self._fit_n * decay + b.size
+        lr_else = log_ratios(self._elsewhere.poses, b, self._L, self._model)
+        self._log_out += self._elsewhere.weigh(c.evidence_weight * lr_else)
+        self._normalise()
+        self._exclude()
         self._merge_and_prune()
-        # Decide whether to search.
-        fit = self._fit_p()
-        state_before, _, suspect, _ = self._decide(fit, tf)
-        if self._want_search(state_before, suspect, tf) and self._search(tf):
+        self._bearings_since_search += int(b.size)
+        state, reason, best = self._decide(tf)
+        if (
+            state is not TrackState.LOCALIZED
+            and self._bearings_since_search
+            and tf - self._last_search >= c.search_interval_s
+            and self._search(tf)
+        ):
+            self._normalise()
             self._merge_and_prune()
-            fit = self._fit_p()
-        state, reason, _suspect, best = self._decide(fit, tf)
+            state, reason, best = self._decide(tf)
         if reason_gap:
-            reason = reason_gap + ("; " + reason if state is not TrackState.LOST else "")
-        # Kidnapping: the hypothesis we were localized on no longer explains the bearings.
-        kidnapped = False
+            reason = reason_gap + "; " + reason
+        # Kidnapping: the place we were localized at lost its mass.
         if self._localized_id is not None:
             where = np.flatnonzero(self._ids == self._localized_id)
-            if where.size == 0:
-                kidnapped = True
-                reason = "the localized hypothesis was rejected by the evidence; " + reason
-            else:
+            share = 0.0
+            if where.size:
                 i = int(where[0])
-                if fit[i] < c.kidnap_p:
-                    kidnapped = True
-                    reason = (
-                        f"the localized pose explains {self._fit_m[i]:.0f} of "
-                        f"{self._fit_n[i]:.0f} recent bearings: kidnapped or lost; " + reason
-                    )
-                elif best is not None and best != i and state is TrackState.LOCALIZED:
-                    # another pose took over: the same place (merged) or a jump
-                    same = (
-                        bool(self._near(best)[i])
-                        or not self._distinct(self._poses[[i, best]], self._covs[[i, best]])[1]
-                    )
-                    if not same:
-                        kidnapped = True
-                        reason = "another pose took over the localized one; " + reason
-        if kidnapped:
-            self._localized_id = None
+                share = float(np.exp(self._logw[self._place(i)]).sum())
+            if share < c.kidnap_share:
+                kidnapped = True
+                self._localized_id = None
+                reason = (
+                    f"the place it was localized at now holds {100 * share:.1f} % of the mass: "
+                    "kidnapped or lost; " + reason
+                )
         if state is TrackState.LOCALIZED and best is not None:
             self._localized_id = int(self._ids[best])
-        elif not kidnapped and state is not TrackState.LOCALIZED:
-            # left localized without a rejection (e.g. ambiguity): keep watching that one
-            pass
-        return self._estimate(tf, state, reason, kidnapped)
+        return self._estimate(tf, state, reason, kidnapped, best)
 
-    def _want_search(self, state: TrackState, suspect: bool, t: float) -> bool:
-        """Search when not localized (lost or ambiguous) or when the localized hypothesis
-        is suspect, at most every ``search_interval_s`` (the search itself skips frames
-        with too few bearings)."""
+    def _place(self, i: int) -> NDArray[np.bool_]:
+        """Which hypotheses are at the place of hypothesis ``i`` (within the tolerances)."""
         c = self.config
-        if self._bearings_since_search == 0 or t - self._last_search < c.search_interval_s:
-            return False
-        return state is not TrackState.LOCALIZED or suspect
-
-    def _near(self, i: int) -> NDArray[np.bool_]:
-        """Which hypotheses are at the same place as hypothesis ``i`` (within
-        ``cluster_position_m`` and ``cluster_heading``; ``i`` included)."""
-        c = self.config
-        d = self._poses - self._poses[i]
+        d = self._mu - self._mu[i]
         dh = np.abs(np.asarray(wrap(d[:, 2])))
         return np.asarray(
-            (np.hypot(d[:, 0], d[:, 1]) <= c.cluster_position_m) & (dh <= c.cluster_heading)
+            (np.hypot(d[:, 0], d[:, 1]) <= c.tolerance_m) & (dh <= c.tolerance_heading)
         )
 
-    def _weights(self) -> FloatArray:
-        if self.n_hypotheses == 0:
-            return np.zeros(0)
-        s = self._score - self._score.max()
-        w = np.exp(s)
-        return np.asarray(w / w.sum())
+    def _place_estimate(self, i: int) -> tuple[FloatArray, FloatArray, float]:
+        """Mean, covariance (moment matched) and mass of the place of hypothesis ``i``."""
+        near = np.flatnonzero(self._place(i))
+        w = np.exp(self._logw[near])
+        mass = float(w.sum())
+        w = w / w.sum()
+        d = self._mu[near] - self._mu[i]
+        d[:, 2] = np.asarray(wrap(d[:, 2]))
+        mean = w @ d
+        dd = d - mean
+        P = np.einsum("n,nij->ij", w, self._P[near]) + np.einsum("n,ni,nj->ij", w, dd, dd)
+        mu = self._mu[i] + mean
+        mu[2] = float(wrap(mu[2]))
+        return mu, P, mass
 
-    def _decide(self, fit: FloatArray, t: float) -> tuple[TrackState, str, bool, int | None]:
-        """(state, reason, suspect, index of the best hypothesis)."""
+    def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
+        """(state, reason, index of the best hypothesis)."""
         c = self.config
+        out = math.exp(self._log_out)
         H = self.n_hypotheses
         if H == 0:
-            return TrackState.LOST, "no hypothesis fits the recent bearings", False, None
-        w = self._weights()
-        i = int(np.argmax(w))
-        P = self._covs[i]
-        pos_sd = math.sqrt(max(float(np.linalg.eigvalsh(P[:2, :2])[-1]), 0.0))
-        hdg_sd = math.sqrt(max(float(P[2, 2]), 0.0))
-        fast = bool(self._fit_p(fast=True)[i] < fit[i])
-        m_i, n_i = (self._fast_m[i], self._fast_n[i]) if fast else (self._fit_m[i], self._fit_n[i])
-        suspect = bool(min(fit[i], self._fit_p(fast=True)[i]) < c.suspect_p)
-        rivals = H - 1
-        if suspect:
+            return TrackState.LOST, "no hypothesis explains the recent bearings yet", None
+        i = int(np.argmax(self._logw))
+        _, P, mass = self._place_estimate(i)
+        p_tol = within_tolerance(P, c.tolerance_m, c.tolerance_heading)
+        p = mass * p_tol
+        rivals = H - int(self._place(i).sum())
+        if out >= c.lost_share:
             return (
-                TrackState.AMBIGUOUS,
-                f"the best pose explains only {m_i:.0f} of {n_i:.0f} "
-                f"{'latest' if fast else 'recent'} bearings",
-                True,
+                TrackState.LOST,
+                f"no hypothesis explains the recent bearings ({100 * (1 - out):.2g} % of the "
+                "mass on the hypotheses)",
                 i,
             )
-        share = float(w[self._near(i)].sum())
-        if share < c.localized_share:
+        age = t - float(self._born[self._place(i)].min())
+        fit = float(self._fit_m[i] / max(self._fit_n[i], 1e-9))
+        if p >= c.localized_probability and fit < c.fit_explained:
             return (
                 TrackState.AMBIGUOUS,
-                f"{H} hypotheses; the best place holds {100 * share:.0f} % of the mass",
-                False,
+                f"the best place explains only {100 * fit:.0f} % of the recent bearings "
+                f"(within tolerance with probability {p:.4f})",
                 i,
             )
-        if pos_sd > c.max_position_sd_m or hdg_sd > c.max_heading_sd:
+        if p >= c.localized_probability and age < c.min_age_s:
             return (
                 TrackState.AMBIGUOUS,
-                f"pose too uncertain (position sd {pos_sd:.2f} m, heading sd "
-                f"{math.degrees(hdg_sd):.1f} deg)",
-                False,
+                f"the best place is new (tracked {age:.1f} s; within tolerance with probability "
+                f"{p:.4f})",
                 i,
             )
-        if self._support[i] < c.min_support or t - self._born[i] < c.min_age_s:
+        if p >= c.localized_probability:
             return (
-                TrackState.AMBIGUOUS,
-                f"too little evidence yet ({self._support[i]:.0f} bearings matched)",
-                False,
+                TrackState.LOCALIZED,
+                f"within tolerance with probability {p:.4f}, fit {fit:.2f} (the place holds "
+                f"{100 * mass:.2f} % of the mass; {rivals} rival{'s' if rivals != 1 else ''}, "
+                f"{100 * out:.2g} % elsewhere)",
                 i,
+            )
+        if p_tol >= c.localized_probability:
+            why = f"the best place holds {100 * mass:.1f} % of the mass"
+        elif mass >= c.localized_probability:
+            why = f"the pose is too uncertain (within tolerance with probability {p_tol:.3f})"
+        else:
+            why = (
+                f"the best place holds {100 * mass:.1f} % of the mass and is within tolerance "
+                f"with probability {p_tol:.3f}"
             )
         return (
-            TrackState.LOCALIZED,
-            f"one place holds {100 * share:.1f} % of the mass ({rivals} rival"
-            f"{'s' if rivals != 1 else ''})",
-            False,
+            TrackState.AMBIGUOUS,
+            f"{why} ({rivals} rival{'s' if rivals != 1 else ''}, {100 * out:.2g} % elsewhere)",
             i,
         )
 
-    def _estimate(self, t: float, state: TrackState, reason: str, kidnapped: bool) -> TrackEstimate:
-        if self.n_hypotheses == 0:
+    def _estimate(
+        self, t: float, state: TrackState, reason: str, kidnapped: bool, best: int | None
+    ) -> TrackEstimate:
+        if best is None or self.n_hypotheses == 0:
             return TrackEstimate(t, TrackState.LOST, reason=reason, kidnapped=kidnapped)
-        w = self._weights()
-        order = np.argsort(-w, kind="stable")[: self.config.max_reported]
+        order = np.argsort(-self._logw, kind="stable")[: self.config.max_reported]
         hyps = tuple(
-            Hypothesis(Pose.from_array(self._poses[k]), self._covs[k].copy(), float(w[k]))
+            Hypothesis(
+                Pose.from_array(self._mu[k]), self._P[k].copy(), float(np.exp(self._logw[k]))
+            )
             for k in order
         )
-        best = order[0]
+        mu, P, _ = self._place_estimate(best)
         if state is TrackState.LOST:
-            state = TrackState.AMBIGUOUS
+            return TrackEstimate(t, state, reason=reason, kidnapped=kidnapped)
         return TrackEstimate(
             t,
             state,
-            pose=Pose.from_array(self._poses[best]),
-            covariance=self._covs[best].copy(),
+            pose=Pose.from_array(mu),
+            covariance=P,
             hypotheses=hyps,
             reason=reason,
             kidnapped=kidnapped,

@@ -7,27 +7,23 @@ relative motion and covariance from the frame before. Two things read it:
 * the relocalization (:mod:`.relocalize`) stacks the bearings of the last ~second into the
   current robot frame, for :func:`~omniloc.localize` (which needs one pose for all its
   bearings), and
-* the replay (:func:`replay`) scores new hypotheses on the window, frame by frame backwards
-  from the current one, each bearing predicted from the odometry-predicted pose of its own
-  frame.
+* the tracker's replay scores new hypotheses on the window, frame by frame from the oldest,
+  each bearing predicted from the odometry-predicted pose of its own frame.
 """
 
 from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterator
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..angles import wrap
-from ..sensor import SensorModel
-from .clutter import ClutterMemory
-from .motion import between, compose, inverse
-from .step import StepRules, advance, take_frame
+from .motion import between, compose
 
-__all__ = ["Replayed", "Window", "WindowFrame", "replay", "stack_bearings"]
+__all__ = ["Window", "WindowFrame", "stack_bearings"]
 
 FloatArray = NDArray[np.float64]
 
@@ -146,129 +142,3 @@ def stack_bearings(
     counts = np.array([len(g) for g in groups], dtype=np.float64)
     order = np.argsort(merged)
     return merged[order], counts[order], travel
-
-
-@dataclass(frozen=True)
-class Replayed:
-    """Candidates scored on the window (one row per candidate kept).
-
-    Attributes
-    ----------
-    poses, covs : ndarray, shapes (C, 3) and (C, 3, 3)
-        At the last frame, after taking it in.
-    score : ndarray, shape (C,)
-        Sum of the frames' log-likelihood ratios, with the tracker's forgetting and
-        weight.
-    matched : ndarray of int, shape (C,)
-        Bearings matched over the window.
-    memory : ClutterMemory
-        The clutter each saw in the last frame.
-    source : ndarray of int, shape (C,)
-        The input candidate of each row.
-    """
-
-    poses: FloatArray
-    covs: FloatArray
-    score: FloatArray
-    matched: NDArray[np.int64]
-    memory: ClutterMemory
-    source: NDArray[np.int64]
-
-
-def _inverse_motion(delta: FloatArray, Q: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The motion back along ``delta`` and its covariance (first order)."""
-    c, s = np.cos(delta[2]), np.sin(delta[2])
-    dx, dy = delta[0], delta[1]
-    J = np.array([[-c, -s, s * dx - c * dy], [s, -c, c * dx + s * dy], [0.0, 0.0, -1.0]])
-    return inverse(delta), J @ Q @ J.T
-
-
-def replay(
-    poses: FloatArray,
-    covs: FloatArray,
-    frames: list[WindowFrame],
-    landmarks_xy: FloatArray,
-    sensor: SensorModel,
-    rules: StepRules,
-    *,
-    decay_per_s: float = 0.0,
-    weight: float = 1.0,
-) -> Replayed:
-    """Score candidate poses of the LAST frame on the frames before it.
-
-    Each candidate first takes in the last frame (:func:`.step.take_frame`: that is the
-    hypothesis the tracker will go on with), then a copy of it is filtered *backwards*
-    through the window, frame by frame (:func:`.step.advance` with the inverse of the
-    odometry's motion, so that every bearing is predicted from its own frame's pose and
-    the uncertainty grows into the past, as it should: the candidate is known now, from the
-    search). The backward predictive log-likelihoods sum to the likelihood of the window's
-    frames given the candidate, with the tracker's forgetting (older frames count less),
-    which makes a new hypothesis comparable to the ones already tracked.
-
-    Parameters
-    ----------
-    poses, covs : ndarray, shapes (C, 3) and (C, 3, 3)
-        Candidate poses at the last frame and their covariances.
-    frames : list of WindowFrame
-        The window, in time order, ending with the current frame.
-    landmarks_xy : ndarray, shape (N, 2)
-    sensor : SensorModel
-    rules : StepRules
-    decay_per_s : float
-        Forgetting rate of the score (1 / memory), as the tracker applies it.
-    weight : float
-        Factor on each frame's log-likelihood ratio, as the tracker applies it.
-
-    Returns
-    -------
-    Replayed
-    """
-    C = poses.shape[0]
-    memory = ClutterMemory(C)
-    if C == 0 or not frames:
-        return Replayed(poses, covs, np.zeros(C), np.zeros(C, dtype=np.int64), memory, np.arange(C))
-    rules = replace(rules, max_rows=None)  # every candidate keeps its children here
-    last = frames[-1]
-    p, P, ev = take_frame(poses, covs, memory, last.t, last.bearings, landmarks_xy, sensor, rules)
-    # The hypotheses to go on with: each candidate's best reading of the current frame.
-    keep = _best_per_root(ev.parent, ev.loglik, 1)
-    source = ev.parent[keep]
-    now_p, now_c = p[keep], P[keep]
-    memory.take(keep)
-    n = keep.size
-    score = weight * ev.loglik[keep]
-    matched = ev.matched[keep].astype(np.int64)
-    # Backwards through the window (a copy: the memory of the past is not the tracker's).
-    back = ClutterMemory(n)
-    back.bearings, back.t = memory.bearings.copy(), memory.t.copy()
-    bp, bP = now_p.copy(), now_c.copy()
-    broot = np.arange(n)
-    bscore = np.zeros(n)
-    bmatched = np.zeros(n, dtype=np.int64)
-    later = last
-    for f in reversed(frames[:-1]):
-        d_inv, Q_inv = _inverse_motion(later.delta, later.Q)
-        bp, bP = advance(bp, bP, back, d_inv, Q_inv)
-        bp, bP, ev = take_frame(bp, bP, back, f.t, f.bearings, landmarks_xy, sensor, rules)
-        age = last.t - f.t
-        bscore = bscore[ev.parent] + weight * np.exp(-decay_per_s * age) * ev.loglik
-        bmatched = bmatched[ev.parent] + ev.matched
-        broot = broot[ev.parent]
-        later = f
-        if broot.size > n:
-            k = _best_per_root(broot, bscore, rules.branches)
-            bp, bP, bscore, bmatched, broot = bp[k], bP[k], bscore[k], bmatched[k], broot[k]
-            back.take(k)
-    k = _best_per_root(broot, bscore, 1)
-    score[broot[k]] += bscore[k]
-    matched[broot[k]] += bmatched[k]
-    return Replayed(now_p, now_c, score, matched, memory, source)
-
-
-def _best_per_root(root: NDArray[np.int64], score: FloatArray, k: int) -> NDArray[np.int64]:
-    """Indices of the ``k`` best scores of each root, in root order."""
-    order = np.lexsort((-score, root))
-    r = root[order]
-    start = np.concatenate([[0], np.flatnonzero(np.diff(r)) + 1])
-    rank = np.arange(r.size) - np.repeat(start, np.diff(np.concatenate([start, [r.size]])))
-    return np.asarray(order[rank < k])
