@@ -208,13 +208,15 @@ def test_track_refuses_frames_out_of_order() -> None:
 
 
 def test_config_errors_name_the_option() -> None:
-    with pytest.raises(InputError, match="localized_share"):
-        TrackerConfig(localized_share=1.5)
+    with pytest.raises(InputError, match="localized_probability"):
+        TrackerConfig(localized_probability=1.5)
     with pytest.raises(InputError, match="max_hypotheses"):
         TrackerConfig(max_hypotheses=0)
-    with pytest.raises(InputError, match="memory_s"):
-        TrackerConfig(memory_s=-1.0)
-    with pytest.raises(InputError, match="kidnap_p"):
-        TrackerConfig(kidnap_p=0.5, suspect_p=0.01)
+    with pytest.raises(InputError, match="kidnap_rate"):
+        TrackerConfig(kidnap_rate=-1.0)
+    with pytest.raises(InputError, match="region"):
+        TrackerConfig(region=(1.0, 0.0, 0.0, 1.0))
+    with pytest.raises(InputError, match="search_min_bearings"):
+        TrackerConfig(search_min_bearings=2)
     with pytest.raises(InputError, match="sensor must be a SensorModel"):
         Tracker(GRID, sensor="sigma=1")  # type: ignore[arg-type]
