@@ -22,15 +22,18 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..angles import wrap
 from ..errors import OmnilocError
 from ..maps import LandmarkMap
 from ..search import localize
 from ..sensor import SensorModel
+from .motion import between
 from .window import WindowFrame, stack_bearings
 
-__all__ = ["Candidates", "search_window"]
+__all__ = ["Candidates", "refine_on_frames", "search_window"]
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True)
@@ -102,9 +105,12 @@ def search_window(
         Empty when fewer than ``min_bearings`` bearings were stacked or nothing fits.
     """
     noise = sensor.noise
-    b, counts, travel = stack_bearings(frames, merge_tol=2.0 * noise)
+    b, counts, travel, member = stack_bearings(frames, merge_tol=2.0 * noise)
     if b.size > max_bearings:
         keep = np.sort(np.argsort(-counts, kind="stable")[:max_bearings])
+        new_index = np.full(b.size, -1, dtype=np.int64)
+        new_index[keep] = np.arange(keep.size)
+        member = new_index[member]
         b, counts = b[keep], counts[keep]
     m = int(b.size)
     if m < max(3, min_bearings):
@@ -130,8 +136,96 @@ def search_window(
     if not res:
         return Candidates(np.zeros((0, 3)), np.zeros((0, 3, 3)), m, res.complete)
     poses = np.array([s.pose.as_array() for s in res.solutions])
-    covs = np.array([np.asarray(s.covariance, dtype=np.float64) for s in res.solutions])
-    bad = ~np.isfinite(covs).all(axis=(1, 2))
-    covs[bad] = np.diag([1.0, 1.0, 0.1])
+    assign = np.array(
+        [[-1 if a is None else int(a) for a in s.assignment] for s in res.solutions],
+        dtype=np.int64,
+    )
+    poses, covs = refine_on_frames(landmarks.xy, frames, member, assign, poses, noise)
     covs = covs * cov_inflation
     return Candidates(poses, covs, m, res.complete)
+
+
+def refine_on_frames(
+    landmarks_xy: FloatArray,
+    frames: list[WindowFrame],
+    member: IntArray,
+    assign: IntArray,
+    poses: FloatArray,
+    sigma: float,
+    iterations: int = 6,
+) -> tuple[FloatArray, FloatArray]:
+    """Refine poses of the last frame found on stacked bearings with the exact model: each
+    bearing seen from its own frame's pose (the candidate composed with the odometry from
+    that frame), the landmark its merged bearing was assigned (Gauss-Newton on the wrapped
+    residuals, all candidates at once).
+
+    Parameters
+    ----------
+    landmarks_xy : ndarray, shape (N, 2)
+    frames : list of WindowFrame
+        The frames whose bearings were stacked, in time order.
+    member : ndarray of int, shape (n,)
+        Merged bearing of each of the frames' bearings (-1: left out of the search).
+    assign : ndarray of int, shape (C, k)
+        Landmark row of each merged bearing per candidate (-1: clutter).
+    poses : ndarray, shape (C, 3)
+        Candidate poses of the last frame.
+    sigma : float
+        Bearing noise, radians.
+
+    Returns
+    -------
+    poses, covs : ndarray, shapes (C, 3) and (C, 3, 3)
+        Refined poses and ``sigma^2 (J^T J)^-1`` (a candidate whose pairs do not fix the pose
+        keeps its pose, with a wide covariance).
+    """
+    C = poses.shape[0]
+    wide = np.diag([1.0, 1.0, 0.1])
+    if C == 0:
+        return poses, np.zeros((0, 3, 3))
+    ref = frames[-1].odom
+    rel = np.concatenate(
+        [np.repeat(between(ref, f.odom)[None], f.bearings.size, axis=0) for f in frames]
+    )
+    z = np.concatenate([f.bearings for f in frames])
+    use = member >= 0
+    rel, z, member = rel[use], z[use], member[use]
+    lm = np.where(member[None, :] >= 0, assign[:, member], -1)  # (C, n)
+    ok = lm >= 0
+    Lx = np.where(ok, landmarks_xy[np.maximum(lm, 0), 0], 0.0)
+    Ly = np.where(ok, landmarks_xy[np.maximum(lm, 0), 1], 0.0)
+    T = poses.copy()
+    tx, ty, phi = rel[:, 0], rel[:, 1], rel[:, 2]
+    info = np.zeros((C, 3, 3))
+    for _ in range(iterations):
+        c, s_ = np.cos(T[:, 2])[:, None], np.sin(T[:, 2])[:, None]
+        px = T[:, 0:1] + c * tx - s_ * ty
+        py = T[:, 1:2] + s_ * tx + c * ty
+        dx, dy = Lx - px, Ly - py
+        q = np.maximum(dx * dx + dy * dy, 1e-12)
+        h = np.arctan2(dy, dx) - (T[:, 2:3] + phi)
+        r = np.where(ok, np.asarray(wrap(z - h)), 0.0)
+        J = np.empty((C, z.size, 3))
+        J[..., 0] = dy / q
+        J[..., 1] = -dx / q
+        dpx = -s_ * tx - c * ty
+        dpy = c * tx - s_ * ty
+        J[..., 2] = J[..., 0] * dpx + J[..., 1] * dpy - 1.0
+        J[~ok] = 0.0
+        info = np.einsum("cni,cnj->cij", J, J)
+        g = np.einsum("cni,cn->ci", J, r)
+        good = np.abs(np.linalg.det(info)) > 1e-12
+        step = np.zeros((C, 3))
+        if good.any():
+            step[good] = np.linalg.solve(info[good], g[good][..., None])[..., 0]
+        step = np.where(np.isfinite(step), step, 0.0)
+        T = T + step
+        T[:, 2] = np.asarray(wrap(T[:, 2]))
+    covs = np.repeat(wide[None], C, axis=0)
+    good = (np.abs(np.linalg.det(info)) > 1e-12) & np.isfinite(T).all(axis=1)
+    if good.any():
+        covs[good] = sigma * sigma * np.linalg.inv(info[good])
+    bad = ~good | ~np.isfinite(covs).all(axis=(1, 2))
+    T[bad] = poses[bad]
+    covs[bad] = wide
+    return T, covs

@@ -76,6 +76,7 @@ log = logging.getLogger(__name__)
 FloatArray = NDArray[np.float64]
 
 _INTS = {
+    "min_confirmations",
     "max_hypotheses",
     "search_min_bearings",
     "search_max_bearings",
@@ -128,6 +129,11 @@ class TrackerConfig:
         Particles that carry elsewhere (:mod:`.elsewhere`).
     elsewhere_inject : float
         Share of them drawn afresh from the region at each resampling.
+    min_confirmations : int
+        ``localized`` needs the best place to have been found by this many searches on
+        frames that do not overlap (track confirmation: one window of a few bearings on a
+        map of clusters can be explained by a wrong pose; several seldom are, by the same
+        one).
     min_age_s : float
         A hypothesis must have been tracked this long (s) before its place can be
         localized (a new one has been weighed only on its replay).
@@ -156,8 +162,10 @@ class TrackerConfig:
         recent bearings (a wrong pose can hold the mass by explaining a few and calling the
         rest clutter when the rivals explain fewer).
     search_miss : float
-        Probability that a search misses the true pose: after a search, elsewhere holds at
-        least ``search_miss / (1 - search_miss)`` times the best candidate's mass.
+        Probability that a search misses the true pose. After a search that returns
+        candidates, elsewhere and the hypotheses it did not find again lose this factor of
+        their mass (between searches, elsewhere explains each frame at least as well as the
+        best hypothesis).
     replay_s : float
         New hypotheses are replayed through the frames of the last this many seconds.
     max_candidates : int
@@ -197,6 +205,7 @@ class TrackerConfig:
     elsewhere_samples: int = 3000
     elsewhere_inject: float = 0.02
     min_age_s: float = 3.0
+    min_confirmations: int = 2
     search_window_s: float = 1.5
     search_interval_s: float = 1.0
     search_min_bearings: int = 4
@@ -209,7 +218,7 @@ class TrackerConfig:
     candidate_min_sd_heading: float = float(np.deg2rad(1.0))
     fit_window_s: float = 10.0
     fit_explained: float = 0.0
-    search_miss: float = 0.5
+    search_miss: float = 0.7
     replay_s: float = 4.0
     max_candidates: int = 3000
     merge_chi2: float = 9.0
@@ -385,6 +394,8 @@ class Tracker:
         self._logw = np.zeros(0)
         self._ids = np.zeros(0, dtype=np.int64)
         self._born = np.zeros(0)
+        self._conf = np.zeros(0, dtype=np.int64)  # searches that found this place
+        self._conf_t = np.zeros(0)  # end of the last search window that did
         self._fit_m = np.zeros(0)  # bearings explained, forgetting over fit_window_s
         self._fit_n = np.zeros(0)  # bearings seen, the same
         self._log_out = 0.0
@@ -550,6 +561,8 @@ class Tracker:
         self._logw = self._logw[idx]
         self._ids = self._ids[idx]
         self._born = self._born[idx]
+        self._conf = self._conf[idx]
+        self._conf_t = self._conf_t[idx]
         self._fit_m = self._fit_m[idx]
         self._fit_n = self._fit_n[idx]
 
@@ -626,6 +639,8 @@ class Tracker:
             self._mu[i, 2] = float(wrap(self._mu[i, 2]))
             self._logw[i] = _logsumexp(self._logw[grp])
             self._born[i] = float(self._born[grp].min())
+            self._conf[i] = int(self._conf[grp].max())
+            self._conf_t[i] = float(self._conf_t[grp].max())
             self._fit_m[i] = float(w @ self._fit_m[grp])
             self._fit_n[i] = float(w @ self._fit_n[grp])
             if self._localized_id is not None and np.isin(self._localized_id, self._ids[same]):
@@ -712,33 +727,45 @@ class Tracker:
         if idx.size == 0:
             return 0
         idx = idx[np.argsort(-logw[idx], kind="stable")]
-        # The search misses the truth now and then (a degenerate view, a bearing out of its
-        # gate, more clutter than allowed for): then the robot is elsewhere and would explain
-        # the window about as well as the best candidate. Elsewhere keeps that share.
-        floor = math.log(c.search_miss / (1.0 - c.search_miss)) + float(logw[idx[0]])
-        self._log_out = float(np.logaddexp(self._log_out, floor))
         added = 0
+        w0 = frames[0].t
+        found = np.zeros(self.n_hypotheses, dtype=bool)
         for j in idx:
             # A candidate at a pose already tracked adds nothing: that hypothesis holds the
-            # evidence of this place (over a longer time than the replay).
+            # evidence of this place (over a longer time than the replay); a search on frames
+            # it has not been confirmed by confirms it.
             if self.n_hypotheses:
                 H = self.n_hypotheses
-                dup = False
+                dup = -1
                 for i in range(H):
                     if self._same(i, mu[j : j + 1], P[j : j + 1])[0]:
-                        dup = True
+                        dup = i
                         break
-                if dup:
+                if dup >= 0:
+                    if dup < found.size:
+                        found[dup] = True
+                    if w0 > self._conf_t[dup]:
+                        self._conf[dup] += 1
+                        self._conf_t[dup] = t
                     continue
             self._mu = np.concatenate([self._mu, mu[j : j + 1]])
             self._P = np.concatenate([self._P, P[j : j + 1]])
             self._logw = np.concatenate([self._logw, logw[j : j + 1]])
             self._ids = np.concatenate([self._ids, [self._next_id]])
             self._born = np.concatenate([self._born, [rframes[0].t]])
+            self._conf = np.concatenate([self._conf, [1]])
+            self._conf_t = np.concatenate([self._conf_t, [t]])
             self._fit_m = np.concatenate([self._fit_m, fit_m[j : j + 1]])
             self._fit_n = np.concatenate([self._fit_n, fit_n[j : j + 1]])
             self._next_id += 1
             added += 1
+        # Search theory: the search would have found the true place with probability
+        # 1 - search_miss; the places it did not find -- elsewhere, and the hypotheses it did
+        # not find again -- are that much less likely to hold the robot.
+        miss = math.log(c.search_miss)
+        self._log_out += miss
+        H0 = found.size
+        self._logw[:H0] = np.where(found, self._logw[:H0], self._logw[:H0] + miss)
         return added
 
     # ---- frames --------------------------------------------------------------------------
@@ -814,12 +841,19 @@ class Tracker:
             self._mu, self._P, lr, explained = frame_update(
                 self._mu, self._P, b, self._L, self._model
             )
+            best_lr = float(lr.max())
             self._logw = self._logw + c.evidence_weight * lr
             decay = math.exp(-dt / c.fit_window_s)
             self._fit_m = self._fit_m * decay + explained
             self._fit_n = self._fit_n * decay + b.size
+        else:
+            best_lr = -math.inf
         lr_else = log_ratios(self._elsewhere.poses, b, self._L, self._model)
-        self._log_out += self._elsewhere.weigh(c.evidence_weight * lr_else)
+        # Elsewhere explains a frame as well as its particles do, and at least as well as any
+        # hypothesis: a robot that is truly elsewhere would explain its bearings like a true
+        # pose does, and only searches (search_miss) can rule such a place out.
+        pf = self._elsewhere.weigh(c.evidence_weight * lr_else)
+        self._log_out += max(pf, c.evidence_weight * best_lr)
         self._normalise()
         self._exclude()
         self._merge_and_prune()
@@ -899,6 +933,15 @@ class Tracker:
             )
         age = t - float(self._born[self._place(i)].min())
         fit = float(self._fit_m[i] / max(self._fit_n[i], 1e-9))
+        conf = int(self._conf[self._place(i)].max())
+        if p >= c.localized_probability and conf < c.min_confirmations:
+            return (
+                TrackState.AMBIGUOUS,
+                f"the best place was found by {conf} search{'es' if conf != 1 else ''} on "
+                f"separate frames, {c.min_confirmations} needed (within tolerance with "
+                f"probability {p:.4f})",
+                i,
+            )
         if p >= c.localized_probability and fit < c.fit_explained:
             return (
                 TrackState.AMBIGUOUS,

@@ -26,6 +26,7 @@ from .motion import between, compose
 __all__ = ["Window", "WindowFrame", "stack_bearings"]
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True)
@@ -99,7 +100,7 @@ class Window:
 
 def stack_bearings(
     frames: list[WindowFrame], merge_tol: float
-) -> tuple[FloatArray, FloatArray, float]:
+) -> tuple[FloatArray, FloatArray, float, IntArray]:
     """The bearings of several frames in the robot frame of the last one, rotation only,
     with bearings closer than ``merge_tol`` (radians) merged into their mean.
 
@@ -114,9 +115,12 @@ def stack_bearings(
         How many bearings each merged one stands for.
     travel : float
         Largest distance (m) from a frame's dead-reckoned position to the last one's.
+    member : ndarray of int, shape (n,)
+        For each of the frames' bearings, in order (frame by frame), the merged bearing it
+        went into.
     """
     if not frames:
-        return np.zeros(0), np.zeros(0), 0.0
+        return np.zeros(0), np.zeros(0), 0.0, np.zeros(0, dtype=np.int64)
     ref = frames[-1].odom
     parts = []
     travel = 0.0
@@ -124,21 +128,27 @@ def stack_bearings(
         rel = between(ref, f.odom)
         travel = max(travel, float(np.hypot(rel[0], rel[1])))
         parts.append(f.bearings + rel[2])
-    b = np.concatenate(parts) if parts else np.zeros(0)
-    if b.size == 0:
-        return b, np.zeros(0), travel
-    b = np.sort(np.asarray(wrap(b)))
+    raw = np.asarray(wrap(np.concatenate(parts))) if parts else np.zeros(0)
+    if raw.size == 0:
+        return raw, np.zeros(0), travel, np.zeros(0, dtype=np.int64)
+    order = np.argsort(raw, kind="stable")
+    b = raw[order]
     # Greedy chaining of sorted bearings (across the -pi/pi seam too).
-    groups: list[list[float]] = [[float(b[0])]]
-    for x in b[1:]:
-        if x - groups[-1][-1] <= merge_tol:
-            groups[-1].append(float(x))
-        else:
-            groups.append([float(x)])
-    if len(groups) > 1 and b[0] + 2 * np.pi - groups[-1][-1] <= merge_tol:
-        groups[0] = [x - 2 * np.pi for x in groups.pop()] + groups[0]
-    merged = np.array([np.mean(g) for g in groups])
+    group = np.zeros(b.size, dtype=np.int64)
+    for k in range(1, b.size):
+        group[k] = group[k - 1] + (b[k] - b[k - 1] > merge_tol)
+    n_groups = int(group[-1]) + 1
+    if n_groups > 1 and b[0] + 2 * np.pi - b[-1] <= merge_tol:
+        last = group == n_groups - 1
+        b = np.where(last, b - 2 * np.pi, b)
+        group[last] = 0
+        n_groups -= 1
+    merged = np.array([b[group == g].mean() for g in range(n_groups)])
+    counts = np.bincount(group, minlength=n_groups).astype(np.float64)
     merged = np.asarray(wrap(merged))
-    counts = np.array([len(g) for g in groups], dtype=np.float64)
-    order = np.argsort(merged)
-    return merged[order], counts[order], travel
+    by_value = np.argsort(merged, kind="stable")
+    rank = np.empty(n_groups, dtype=np.int64)
+    rank[by_value] = np.arange(n_groups)
+    member = np.empty(raw.size, dtype=np.int64)
+    member[order] = rank[group]
+    return merged[by_value], counts[by_value], travel, member
