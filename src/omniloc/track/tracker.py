@@ -91,7 +91,6 @@ _PROBABILITIES = {
     "lost_share",
     "prune_weight",
     "elsewhere_inject",
-    "search_miss",
 }
 _SHARES = {"fit_explained"}
 
@@ -161,11 +160,14 @@ class TrackerConfig:
         ``localized`` needs the best hypothesis to explain at least this share of the
         recent bearings (a wrong pose can hold the mass by explaining a few and calling the
         rest clutter when the rivals explain fewer).
-    search_miss : float
-        Probability that a search misses the true pose. After a search that returns
-        candidates, elsewhere and the hypotheses it did not find again lose this factor of
-        their mass (between searches, elsewhere explains each frame at least as well as the
-        best hypothesis).
+    search_miss : float or None
+        None (the default): Bayes' rule -- elsewhere earns each frame's likelihood ratio
+        averaged over its particles, like any hypothesis. A probability: the chance that a
+        search misses the true pose, for maps and sensors where the searches often do (a
+        narrow camera on a map of near-symmetric clusters): between searches elsewhere then
+        explains each frame at least as well as the best hypothesis, and after a search
+        that returns candidates, elsewhere and the hypotheses it did not find again lose
+        this factor of their mass. Conservative: it says ``localized`` far less often.
     replay_s : float
         New hypotheses are replayed through the frames of the last this many seconds.
     max_candidates : int
@@ -218,7 +220,7 @@ class TrackerConfig:
     candidate_min_sd_heading: float = float(np.deg2rad(1.0))
     fit_window_s: float = 10.0
     fit_explained: float = 0.0
-    search_miss: float = 0.7
+    search_miss: float | None = None
     replay_s: float = 4.0
     max_candidates: int = 3000
     merge_chi2: float = 9.0
@@ -233,6 +235,15 @@ class TrackerConfig:
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name == "search_miss":
+                if v is None:
+                    continue
+                if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
+                    raise InputError(f"search_miss must be None or a number, got {v!r}")
+                if not 0.0 < float(v) < 1.0:
+                    raise InputError(f"search_miss must lie strictly between 0 and 1, got {v!r}")
+                object.__setattr__(self, f.name, float(v))
+                continue
             if f.name == "region":
                 if v is None:
                     continue
@@ -684,6 +695,15 @@ class Tracker:
         frames = self._window.since(t - c.search_window_s)
         if sum(f.bearings.size for f in frames) < c.search_min_bearings:
             return 0
+        # The shortest window ending now that holds enough bearings: stacking moves
+        # bearings by the odometry's rotation only, so every frame more adds the error of
+        # the travel left out (and sightings of one landmark that no longer merge).
+        n = 0
+        for k in range(len(frames) - 1, -1, -1):
+            n += frames[k].bearings.size
+            if n >= c.search_min_bearings:
+                frames = frames[k:]
+                break
         self._last_search = t
         self._bearings_since_search = 0
         cands = search_window(
@@ -722,11 +742,11 @@ class Tracker:
         mu, P, score, fit_m, fit_n = self._replay(poses, covs, rframes)
         logw = out0 + score + norm0 - self._norm
         ok = np.isfinite(logw) & np.isfinite(mu).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
-        ok &= logw >= math.log(c.prune_weight)
         idx = np.flatnonzero(ok)
         if idx.size == 0:
             return 0
         idx = idx[np.argsort(-logw[idx], kind="stable")]
+        light = logw < math.log(c.prune_weight)
         added = 0
         w0 = frames[0].t
         found = np.zeros(self.n_hypotheses, dtype=bool)
@@ -748,6 +768,11 @@ class Tracker:
                         self._conf[dup] += 1
                         self._conf_t[dup] = t
                     continue
+            if light[j]:
+                # Too light to be tracked -- but it was still looked for above: a search
+                # that finds a tracked place again confirms it, whatever the weight the
+                # replay gave the candidate.
+                continue
             self._mu = np.concatenate([self._mu, mu[j : j + 1]])
             self._P = np.concatenate([self._P, P[j : j + 1]])
             self._logw = np.concatenate([self._logw, logw[j : j + 1]])
@@ -762,6 +787,8 @@ class Tracker:
         # Search theory: the search would have found the true place with probability
         # 1 - search_miss; the places it did not find -- elsewhere, and the hypotheses it did
         # not find again -- are that much less likely to hold the robot.
+        if c.search_miss is None:
+            return added
         miss = math.log(c.search_miss)
         self._log_out += miss
         H0 = found.size
@@ -849,11 +876,14 @@ class Tracker:
         else:
             best_lr = -math.inf
         lr_else = log_ratios(self._elsewhere.poses, b, self._L, self._model)
-        # Elsewhere explains a frame as well as its particles do, and at least as well as any
-        # hypothesis: a robot that is truly elsewhere would explain its bearings like a true
-        # pose does, and only searches (search_miss) can rule such a place out.
+        # Elsewhere explains a frame as well as its particles do (Bayes' rule); with
+        # search_miss, at least as well as any hypothesis: a robot that is truly elsewhere
+        # would explain its bearings like a true pose does, and only searches can rule such a
+        # place out.
         pf = self._elsewhere.weigh(c.evidence_weight * lr_else)
-        self._log_out += max(pf, c.evidence_weight * best_lr)
+        if c.search_miss is not None:
+            pf = max(pf, c.evidence_weight * best_lr)
+        self._log_out += pf
         self._normalise()
         self._exclude()
         self._merge_and_prune()
