@@ -185,15 +185,9 @@ def ekf_config(noise: MotionNoise, opts: dict[str, Any]) -> EkfConfig:
 
 
 def make_tracker(landmarks: LandmarkMap, start: Pose | None) -> LocalizerOverTime:
-    """LEAD: ADAPT THIS FACTORY to the Tracker's constructor and the sensor's settings.
-
-    It must return a fresh localizer for one stream (``odometry(t, v, w)``, ``frame(t,
-    bearings) -> TrackEstimate``); ``start`` is None (the tracker is not told where it
-    starts). The settings are the tracker's ``mrclam`` preset when ``omniloc.track`` has
-    presets (as on the ``track`` branch: ``preset("mrclam") -> (sensor, motion, config)``),
-    else the MRCLAM sensor settings omniloc's evaluation uses
-    (``omniloc.evaluate.DATASET_DEFAULTS["mrclam"]``) and the tracker's defaults.
-    """
+    """A fresh omniloc Tracker for one stream, with the ``mrclam`` preset (``start`` is
+    ignored: the tracker is not told where it starts). Without presets (an older omniloc) the
+    MRCLAM sensor settings of ``omniloc.evaluate.DATASET_DEFAULTS`` and the defaults."""
     import omniloc.track as track
     from omniloc.evaluate import DATASET_DEFAULTS
     from omniloc.sensor import SensorModel
@@ -672,6 +666,12 @@ def main(argv: list[str] | None = None) -> int:
         help=f"kidnapped (and plain) streams scored from {LARGE:,} particles on",
     )
     ap.add_argument("--passes", type=int, default=2, help="coordinate-descent passes")
+    ap.add_argument(
+        "--tracker-only",
+        action="store_true",
+        help="run omniloc's Tracker only and put its rows beside the baselines' rows already "
+        "in --out (the baselines are seeded: their figures do not change between runs)",
+    )
     args = ap.parse_args(argv)
     default_particles = "2000" if args.quick else "2000,10000,50000"
     args.particles = [int(p) for p in (args.particles or default_particles).split(",")]
@@ -729,15 +729,39 @@ def main(argv: list[str] | None = None) -> int:
         md = tables(results)
         if TUNING_RECORD.is_file():
             md += "\n\n" + tuning_summary(json.loads(TUNING_RECORD.read_text()))
+        baselines = (
+            f" (the baselines' rows: {meta['baselines_measured']})"
+            if meta.get("baselines_measured")
+            else ""
+        )
         head = (
-            f"Measured {meta['when']} ({meta['machine']}, Python {meta['python']}, numpy "
-            f"{meta['numpy']}): `{meta['command']}`, {meta['wall_s']:.0f} s"
+            f"Measured {meta['when']}{baselines} ({meta['machine']}, Python {meta['python']}, "
+            f"numpy {meta['numpy']}): `{meta['command']}`, {meta['wall_s']:.0f} s"
             + ("" if final else " (INCOMPLETE: the run was still going)")
             + ".\n\n"
         )
         out.with_suffix(".md").write_text(head + md + "\n")
         return md
 
+    if args.tracker_only:
+        if not out.is_file():
+            print(f"{out}: no earlier results to add the tracker to; run without --tracker-only")
+            return 1
+        earlier = json.loads(out.read_text())
+        old_meta = earlier.get("meta", {})
+        if (old_meta.get("seed"), old_meta.get("kidnapped_streams")) != (args.seed, len(kid)):
+            print(
+                f"{out} holds other streams (seed {old_meta.get('seed')}, "
+                f"{old_meta.get('kidnapped_streams')} kidnappings): run the same --seed and "
+                "--kidnap"
+            )
+            return 1
+        meta.update({k: v for k, v in old_meta.items() if k not in ("when", "command", "omniloc")})
+        meta["baselines_measured"] = old_meta.get("when")
+        results.update(earlier.get("results", {}))
+        t_start -= float(old_meta.get("wall_s", 0.0))
+        print(save({"tracker": run_tracker([*runs, *kid, *plain], print)}, final=True))
+        return 0
     save({"tracker": run_tracker([*runs, *kid, *plain], print)})
     run_all(
         runs,

@@ -218,5 +218,9 @@ def test_config_errors_name_the_option() -> None:
         TrackerConfig(region=(1.0, 0.0, 0.0, 1.0))
     with pytest.raises(InputError, match="search_min_bearings"):
         TrackerConfig(search_min_bearings=2)
+    for bad in (0.0, 1.0, "0.5", True):
+        with pytest.raises(InputError, match="search_miss"):
+            TrackerConfig(search_miss=bad)  # type: ignore[arg-type]
+    assert TrackerConfig().search_miss is None and TrackerConfig(search_miss=0.5).search_miss == 0.5
     with pytest.raises(InputError, match="sensor must be a SensorModel"):
         Tracker(GRID, sensor="sigma=1")  # type: ignore[arg-type]

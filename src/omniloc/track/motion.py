@@ -85,7 +85,7 @@ class MotionModel:
     --------
     >>> m = MotionModel.mrclam()
     >>> m.delay_s
-    0.2
+    0.25
     """
 
     along_per_m: float = 0.004

@@ -98,8 +98,8 @@ def track(
     >>> room = omniloc.demo_room()
     >>> truth = omniloc.Pose(5.6, 2.1, np.deg2rad(30))
     >>> z = omniloc.predict_bearings(room.xy, truth)
-    >>> frames = [Frame(0.25 * k, z) for k in range(12)]
-    >>> still = Odometry(0.25 * np.arange(12), np.zeros(12), np.zeros(12))
+    >>> frames = [Frame(0.25 * k, z) for k in range(16)]
+    >>> still = Odometry(0.25 * np.arange(16), np.zeros(16), np.zeros(16))
     >>> run = track(room, still, frames,
     ...             sensor=SensorModel(sigma=np.deg2rad(0.3)))
     >>> run.estimates[-1].state.value

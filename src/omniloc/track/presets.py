@@ -37,7 +37,7 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
     --------
     >>> sensor, motion, config = preset("mrclam")
     >>> round(float(np.rad2deg(sensor.fov)), 1), motion.delay_s
-    (67.0, 0.2)
+    (67.0, 0.25)
     """
     try:
         p = Preset(name)
@@ -57,6 +57,12 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
             p_detect=0.35,
             clutter=0.41,
         )
-        config = TrackerConfig(region=(-1.0, 5.5, -6.0, 6.5))
+        # search_miss: on this map (six tight clusters, near-symmetric under a half turn)
+        # with one or two bearings per frame the searches miss the truth in about half of
+        # their answers, and with Bayes' rule for elsewhere a wrong candidate takes the mass
+        # (4 % of the frames localized and wrong on the five whole runs); with searches
+        # that may miss, the tracker is honest there but almost never says localized
+        # (docs/tracking.md).
+        config = TrackerConfig(region=(-1.0, 5.5, -6.0, 6.5), search_miss=0.85)
         return sensor, MotionModel.mrclam(), config
     return SensorModel(sigma=float(np.deg2rad(0.5))), MotionModel(), TrackerConfig()

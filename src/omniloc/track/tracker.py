@@ -20,8 +20,12 @@ when the tracker wakes up.
   Kalman steps over the bearing's readings, collapsed). Elsewhere earns the same ratio
   averaged over poses spread uniformly over the region the robot may be in. The weights are
   Bayes' rule: nothing is forgotten, nothing is tempered unless ``evidence_weight`` says so.
+  (With ``search_miss`` set, elsewhere instead explains each frame at least as well as the
+  best hypothesis, and only searches take mass from it: for sensors and maps where the
+  searches often miss the true pose; see :class:`TrackerConfig`.)
 * **New hypotheses.** While not localized, at most every ``search_interval_s``, the bearings
-  of the last ``search_window_s`` seconds, stacked into the current frame by the odometry, go
+  of the shortest run of recent frames (at most ``search_window_s`` seconds) that holds
+  ``search_min_bearings`` of them, stacked into the current frame by the odometry, go
   to :func:`~omniloc.localize`, whose exhaustive search returns every pose they are
   consistent with. Each candidate is then replayed through the frames of the last
   ``replay_s`` seconds with the exact model (each bearing from its own frame's
@@ -348,7 +352,7 @@ class Tracker:
     >>> room = omniloc.demo_room()
     >>> tracker = Tracker(room, SensorModel(sigma=np.deg2rad(0.3)))
     >>> truth = omniloc.Pose(5.6, 2.1, np.deg2rad(30))
-    >>> for k in range(12):
+    >>> for k in range(16):
     ...     tracker.odometry([0.25 * k], [0.0], [0.0])  # standing still
     ...     z = omniloc.predict_bearings(room.xy, truth)
     ...     est = tracker.frame(0.25 * k, z)
