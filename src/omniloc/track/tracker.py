@@ -317,6 +317,15 @@ def _logsumexp(a: FloatArray) -> float:
     return top + math.log(float(np.exp(a - top).sum()))
 
 
+def _logsumexp_rows(a: FloatArray) -> FloatArray:
+    """ln of the sum of exp over each row of ``a`` (C, K); -inf for a row of -inf."""
+    top = np.max(a, axis=1)
+    safe = np.where(np.isfinite(top), top, 0.0)
+    with np.errstate(divide="ignore"):
+        out = safe + np.log(np.exp(a - safe[:, None]).sum(axis=1))
+    return np.where(np.isfinite(top), out, top)
+
+
 def within_tolerance(cov: FloatArray, tol_m: float, tol_heading: float) -> float:
     """A lower bound on the probability that a Gaussian pose error of covariance ``cov`` is
     within ``tol_m`` in position and ``tol_heading`` in heading: the position along its
@@ -668,18 +677,19 @@ class Tracker:
     # ---- new hypotheses ------------------------------------------------------------------
     def _replay(
         self, poses: FloatArray, covs: FloatArray, frames: list[WindowFrame]
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         """Candidates at the last frame of ``frames``: moved back to the first frame by the
         odometry, then filtered forward through every frame with the exact model. Returns
-        their poses and covariances at the last frame and their summed log-likelihood
-        ratios plus the ln of their prior volume, and their counts of bearings explained and
-        seen (with the recent-fit forgetting)."""
+        their poses and covariances at the last frame, the ln of their prior volume, their
+        log-likelihood ratios summed from each frame of the replay to its end (C, K), and
+        their counts of bearings explained and seen (with the recent-fit forgetting)."""
         c = self.config
         rel = between(frames[0].odom, frames[-1].odom)
         mu = compose(poses, inverse(rel))
         P = covs.copy()
         sign, logdet = np.linalg.slogdet(2.0 * math.pi * P)
-        score = np.where(sign > 0, 0.5 * logdet, -math.inf) + self._log_prior
+        volume = np.where(sign > 0, 0.5 * logdet, -math.inf) + self._log_prior
+        lrs = np.zeros((mu.shape[0], len(frames)))
         fit_m = np.zeros(mu.shape[0])
         fit_n = np.zeros(mu.shape[0])
         for k, f in enumerate(frames):
@@ -688,10 +698,11 @@ class Tracker:
                 decay = math.exp(-(f.t - frames[k - 1].t) / c.fit_window_s)
                 fit_m, fit_n = fit_m * decay, fit_n * decay
             mu, P, lr, explained = frame_update(mu, P, f.bearings, self._L, self._model)
-            score = score + c.evidence_weight * lr
+            lrs[:, k] = c.evidence_weight * lr
             fit_m = fit_m + explained
             fit_n = fit_n + f.bearings.size
-        return mu, P, score, fit_m, fit_n
+        to_end = np.cumsum(lrs[:, ::-1], axis=1)[:, ::-1]
+        return mu, P, volume, to_end, fit_m, fit_n
 
     def _search(self, t: float) -> int:
         """Search the recent frames for new hypotheses; returns how many were added."""
@@ -742,9 +753,16 @@ class Tracker:
         for f in rframes[1:]:
             Q = Q + f.Q
         covs = covs + Q
-        _, out0, norm0 = hist[rframes[0].t]
-        mu, P, score, fit_m, fit_n = self._replay(poses, covs, rframes)
-        logw = out0 + score + norm0 - self._norm
+        mu, P, volume, to_end, fit_m, fit_n = self._replay(poses, covs, rframes)
+        # A candidate is a part of elsewhere that has come to light: it may have left
+        # elsewhere at any frame of the replay (elsewhere's mass then, which holds the chance
+        # of a kidnapping, times its evidence from that frame on), not only at the first --
+        # a candidate whose replay reaches back across a kidnapping must not be judged by
+        # the frames from before it.
+        entry = np.array(
+            [hist[f.t][1] + hist[f.t][2] if f.t in hist else -math.inf for f in rframes]
+        )
+        logw = _logsumexp_rows(entry[None, :] + to_end) + volume - self._norm
         ok = np.isfinite(logw) & np.isfinite(mu).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
         idx = np.flatnonzero(ok)
         if idx.size == 0:
