@@ -108,6 +108,31 @@ def test_notices_the_kidnapping_and_recovers() -> None:
     assert back.any() and t[back][0] < jump + 10.0
 
 
+def test_hypotheses_stay_in_the_region() -> None:
+    # The region is the prior's support: candidates the search finds outside it (here, the
+    # poses that the grid's symmetry makes equally good) and filters that wander off are
+    # dropped, never reported.
+    run = simulate_run(
+        GRID, SENSOR, Pose(5.0, 4.2, 0.0), duration_s=8.0, speed=0.25, turn_rate=0.0, rng=3
+    )
+    region = (2.0, 8.0, 1.0, 7.0)
+    res = track(
+        GRID,
+        run.odometry,
+        run.frames,
+        sensor=SENSOR,
+        motion=MOTION,
+        config=TrackerConfig(search_interval_s=2.0, region=region),
+    )
+    poses = np.array([h.pose.as_array() for e in res.estimates for h in e.hypotheses])
+    assert poses.shape[0] > 0
+    m = CONFIG.tolerance_m
+    assert (poses[:, 0] >= region[0] - m).all() and (poses[:, 0] <= region[1] + m).all()
+    assert (poses[:, 1] >= region[2] - m).all() and (poses[:, 1] <= region[3] + m).all()
+    truth = run.truth.pose_at(res.estimates[-1].t)
+    assert any(h.pose.distance_to(truth)[0] < 0.3 for h in res.estimates[-1].hypotheses)
+
+
 def _frames(n: int = 8, t0: float = 0.0) -> list[Frame]:
     truth = Pose(5.0, 4.2, 0.3)
     seen = GRID.xy[SENSOR.visible(GRID.xy, truth)]

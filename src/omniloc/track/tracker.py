@@ -573,6 +573,19 @@ class Tracker:
         return delta, Q, gap
 
     # ---- the posterior -------------------------------------------------------------------
+    def _inside(self, mu: FloatArray) -> NDArray[np.bool_]:
+        """Which poses lie in the region the robot may be in (the prior is zero outside it;
+        a refinement or a filter that wanders off, kilometres away, is dropped), with
+        ``tolerance_m`` of slack at its edges."""
+        x0, x1, y0, y1 = self.region
+        m = self.config.tolerance_m
+        return np.asarray(
+            (mu[:, 0] >= x0 - m)
+            & (mu[:, 0] <= x1 + m)
+            & (mu[:, 1] >= y0 - m)
+            & (mu[:, 1] <= y1 + m)
+        )
+
     def _normalise(self) -> None:
         total = float(np.logaddexp(self._log_out, _logsumexp(self._logw)))
         self._log_out -= total
@@ -764,6 +777,7 @@ class Tracker:
         )
         logw = _logsumexp_rows(entry[None, :] + to_end) + volume - self._norm
         ok = np.isfinite(logw) & np.isfinite(mu).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
+        ok &= self._inside(mu)
         idx = np.flatnonzero(ok)
         if idx.size == 0:
             return 0
@@ -872,6 +886,7 @@ class Tracker:
         if self.n_hypotheses:
             self._mu, self._P = move(self._mu, self._P, delta, Q)
             good = np.isfinite(self._mu).all(axis=1) & np.isfinite(self._P).all(axis=(1, 2))
+            good &= self._inside(self._mu)
             if not good.all():
                 self._keep(np.flatnonzero(good))
             # The prior chance of being carried off since the last frame.
@@ -895,6 +910,9 @@ class Tracker:
             decay = math.exp(-dt / c.fit_window_s)
             self._fit_m = self._fit_m * decay + explained
             self._fit_n = self._fit_n * decay + b.size
+            inside = self._inside(self._mu)
+            if not inside.all():
+                self._keep(np.flatnonzero(inside))
         else:
             best_lr = -math.inf
         lr_else = log_ratios(self._elsewhere.poses, b, self._L, self._model)
