@@ -61,7 +61,7 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # with one or two bearings per frame the searches miss the truth in about half of
         # their answers, and with Bayes' rule for elsewhere a wrong candidate takes the mass
         # (4 % of the frames localized and wrong on the five whole runs); with searches
-        # that may miss, the tracker is honest there but almost never says localized
+        # that may miss it is far less often wrong there but almost never localized
         # (docs/tracking.md).
         config = TrackerConfig(region=(-1.0, 5.5, -6.0, 6.5), search_miss=0.85)
         return sensor, MotionModel.mrclam(), config
