@@ -43,11 +43,15 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
-def _float_array(name: str, values: object) -> FloatArray:
+def _float_array(name: str, values: object, *, scalar: bool = False) -> FloatArray:
+    """A read-only 1-D copy of finite floats, or an InputError naming ``name`` and the first
+    bad entry; with ``scalar`` a single number is taken as one row."""
     try:
         a = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise InputError(f"{name} must be an array of real numbers: {exc}") from exc
+    if scalar:
+        a = np.atleast_1d(a)
     if a.ndim != 1:
         raise InputError(f"{name} must have shape (n,), got {a.shape}")
     bad = np.flatnonzero(~np.isfinite(a))

@@ -66,6 +66,7 @@ from ..errors import InputError
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
+from .data import _float_array
 from .elsewhere import Elsewhere
 from .likelihood import FrameModel, frame_update, log_ratios
 from .motion import MotionModel, between, compose, integrate, inverse, move, twist_of
@@ -294,20 +295,6 @@ class TrackerConfig:
             )
 
 
-def _finite_1d(name: str, values: ArrayLike) -> FloatArray:
-    try:
-        a = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be real numbers: {exc}") from exc
-    a = np.atleast_1d(a)
-    if a.ndim != 1:
-        raise InputError(f"{name} must have shape (n,), got {a.shape}")
-    bad = np.flatnonzero(~np.isfinite(a))
-    if bad.size:
-        raise InputError(f"{name}[{int(bad[0])}] is not finite: {a[bad[0]]!r}")
-    return a
-
-
 def _logsumexp(a: FloatArray) -> float:
     if a.size == 0:
         return -math.inf
@@ -475,9 +462,9 @@ class Tracker:
             (within the call or against earlier rows), or rows older than a frame already
             processed (their motion would be lost). Nothing is changed then.
         """
-        tt = _finite_1d("odometry t", t)
-        vv = _finite_1d("odometry v", v)
-        ww = _finite_1d("odometry w", w)
+        tt = _float_array("odometry t", t, scalar=True)
+        vv = _float_array("odometry v", v, scalar=True)
+        ww = _float_array("odometry w", w, scalar=True)
         if not (tt.shape == vv.shape == ww.shape):
             raise InputError(
                 f"odometry t, v and w must have one value per row: got {tt.size}, {vv.size}, "
@@ -505,9 +492,13 @@ class Tracker:
             As :meth:`odometry`; also a non-zero first increment, or two rows at one time
             with a non-zero motion between them.
         """
-        tt = _finite_1d("increments t", t)
+        tt = _float_array("increments t", t, scalar=True)
         dd = np.stack(
-            [_finite_1d(n, a) for n, a in (("dx", dx), ("dy", dy), ("dtheta", dtheta))], axis=1
+            [
+                _float_array(n, a, scalar=True)
+                for n, a in (("dx", dx), ("dy", dy), ("dtheta", dtheta))
+            ],
+            axis=1,
         )
         if dd.shape[0] != tt.size:
             raise InputError(
@@ -860,7 +851,7 @@ class Tracker:
             raise InputError(f"frame time must be finite, got {t!r}")
         if self._t is not None and tf < self._t:
             raise InputError(f"frames out of time order: t={tf!r} after a frame at t={self._t!r}")
-        b = _finite_1d("frame bearings", bearings)
+        b = _float_array("frame bearings", bearings, scalar=True)
         b = np.asarray(wrap(b))
         if self._input_kind is None and not self._warned_no_odometry:
             log.warning("frame at t=%s before any odometry: the robot is taken to stand still", tf)
