@@ -1,16 +1,22 @@
-"""The tracker's compiled kernel (numba): odometry integration.
+"""The tracker's compiled kernels (numba): odometry integration and the frame update.
 
-:mod:`omniloc.track.motion` validates the input and says what it means; this is the one
-implementation of composing pieces of constant body twist with their noise.
+:mod:`omniloc.track.motion` validates the input and says what it means; ``integrate_pieces``
+is the one implementation of composing pieces of constant body twist with their noise.
+:mod:`omniloc.track.likelihood` says what a frame's likelihood and update are;
+``frame_update_kernel`` is their one implementation.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-__all__ = ["integrate_pieces"]
+from .geometry import wrap_angle
+
+__all__ = ["frame_update_kernel", "integrate_pieces"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -69,3 +75,131 @@ def integrate_pieces(
         tt += phi
     out = np.array([tx, ty, tt])
     return out, 0.5 * (Q + Q.T)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _predict_one(
+    mu: FloatArray,
+    P: FloatArray,
+    L: FloatArray,
+    p_detect: float,
+    half_fov: float,
+    max_range2: float,
+    min_range2: float,
+    min_q: float,
+    h: FloatArray,
+    J: FloatArray,
+    var: FloatArray,
+    d: FloatArray,
+) -> None:
+    """One hypothesis's predicted bearings ``h``, their Jacobians ``J`` (N, 3), variances
+    from the pose ``var`` and detection probabilities ``d``, written in place
+    (``half_fov`` < 0: no field of view)."""
+    for n in range(L.shape[0]):
+        dx = L[n, 0] - mu[0]
+        dy = L[n, 1] - mu[1]
+        q = max(dx * dx + dy * dy, min_q)
+        h[n] = wrap_angle(math.atan2(dy, dx) - mu[2])
+        J[n, 0] = dy / q
+        J[n, 1] = -dx / q
+        J[n, 2] = -1.0
+        v = 0.0
+        for i in range(3):
+            for j in range(3):
+                v += J[n, i] * P[i, j] * J[n, j]
+        var[n] = max(v, 0.0)
+        if half_fov < 0.0:
+            vis = 1.0
+        else:
+            sd = math.sqrt(var[n]) + 1e-9
+            vis = 0.5 * math.erfc(-((half_fov - abs(h[n])) / sd) / math.sqrt(2.0))
+        if q > max_range2 or q < min_range2:
+            vis = 0.0
+        d[n] = p_detect * vis
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def frame_update_kernel(
+    mu: FloatArray,
+    P: FloatArray,
+    bearings: FloatArray,
+    L: FloatArray,
+    sigma2: float,
+    kappa: float,
+    p_detect: float,
+    half_fov: float,
+    max_range2: float,
+    min_range2: float,
+    min_q: float,
+    min_reading: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Take one frame of bearings into H Gaussian hypotheses ``(mu, P)`` (copies are
+    returned): the log-likelihood ratio of the frame (H,), the expected number of its
+    bearings that are landmarks (H,), and each hypothesis updated by the mixture of each
+    bearing's readings, one bearing at a time (see :mod:`omniloc.track.likelihood`)."""
+    mu = mu.copy()
+    P = P.copy()
+    H = mu.shape[0]
+    N = L.shape[0]
+    log_ratio = np.zeros(H)
+    explained = np.zeros(H)
+    h = np.empty(N)
+    J = np.empty((N, 3))
+    var = np.empty(N)
+    d = np.empty(N)
+    a = np.empty(N)
+    nu = np.empty(N)
+    PJ = np.empty(3)
+    mean = np.empty(3)
+    M = np.empty((3, 3))
+    norm = 1.0 / (math.sqrt(2.0 * math.pi) * kappa)
+    for k in range(H):
+        m = mu[k]
+        C = P[k]
+        _predict_one(m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d)
+        s = 0.0
+        for n in range(N):
+            s += math.log1p(-min(d[n], 1.0 - 1e-12))
+        log_ratio[k] = s
+        for z in bearings:
+            _predict_one(m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d)
+            total = 1.0
+            for n in range(N):
+                S = var[n] + sigma2
+                nu[n] = wrap_angle(z - h[n])
+                rho = d[n] / max(1.0 - d[n], 1e-12)
+                a[n] = rho * math.exp(-0.5 * nu[n] * nu[n] / S) / math.sqrt(S) * norm
+                total += a[n]
+            log_ratio[k] += math.log(total)
+            explained[k] += 1.0 - 1.0 / total
+            mean[:] = 0.0
+            M[:, :] = 0.0  # minus the shrink plus the spread of the readings
+            used = False
+            for n in range(N):
+                b = a[n] / total
+                if not b > min_reading:
+                    continue
+                used = True
+                S = var[n] + sigma2
+                for i in range(3):
+                    PJ[i] = C[i, 0] * J[n, 0] + C[i, 1] * J[n, 1] + C[i, 2] * J[n, 2]
+                for i in range(3):
+                    Ki = PJ[i] / S
+                    mean[i] += b * Ki * nu[n]
+                    for j in range(3):
+                        Kj = PJ[j] / S
+                        M[i, j] += b * (Ki * Kj * nu[n] * nu[n] - S * Ki * Kj)
+            if not used:
+                continue
+            for i in range(3):
+                for j in range(3):
+                    M[i, j] -= mean[i] * mean[j]
+            for i in range(3):
+                for j in range(i, 3):
+                    v = C[i, j] + 0.5 * (M[i, j] + M[j, i])
+                    C[i, j] = v
+                    C[j, i] = v
+            for i in range(3):
+                m[i] += mean[i]
+            m[2] = wrap_angle(m[2])
+    return mu, P, log_ratio, explained

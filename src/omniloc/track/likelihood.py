@@ -38,9 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import ndtr
 
-from ..angles import wrap
+from .._kernels.track import frame_update_kernel
 from ..sensor import SensorModel
 
 __all__ = ["FrameModel", "frame_update", "log_ratios"]
@@ -96,36 +95,6 @@ class FrameModel:
         )
 
 
-def _predict(
-    mu: FloatArray, P: FloatArray | None, L: FloatArray, model: FrameModel
-) -> tuple[FloatArray, FloatArray | None, FloatArray, FloatArray]:
-    """Predicted bearings (H, N), their Jacobians (H, N, 3) (None without ``P``), their
-    variances from the pose (H, N) and the detection probabilities (H, N)."""
-    dx = L[None, :, 0] - mu[:, None, 0]
-    dy = L[None, :, 1] - mu[:, None, 1]
-    q = np.maximum(dx * dx + dy * dy, MIN_RANGE_M**2)
-    h = np.asarray(wrap(np.arctan2(dy, dx) - mu[:, None, 2]))
-    if P is None:
-        J = None
-        var = np.zeros_like(h)
-    else:
-        J = np.empty((*h.shape, 3))
-        J[..., 0] = dy / q
-        J[..., 1] = -dx / q
-        J[..., 2] = -1.0
-        var = np.maximum(np.einsum("hni,hij,hnj->hn", J, P, J), 0.0)
-    if model.half_fov is None:
-        vis = np.ones_like(h)
-    else:
-        sd = np.sqrt(var) + 1e-9
-        vis = ndtr((model.half_fov - np.abs(h)) / sd)
-    if model.max_range is not None:
-        vis = vis * (q <= model.max_range**2)
-    if model.min_range is not None:
-        vis = vis * (q >= model.min_range**2)
-    return h, J, var, model.p_detect * vis
-
-
 def frame_update(
     mu: FloatArray,
     P: FloatArray,
@@ -155,46 +124,22 @@ def frame_update(
         Expected number of the frame's bearings that are landmarks (the sum of their
         posterior probabilities of not being clutter).
     """
-    mu = mu.copy()
-    P = P.copy()
-    H = mu.shape[0]
-    log_ratio = np.zeros(H)
-    explained = np.zeros(H)
-    if H == 0:
-        return mu, P, log_ratio, explained
-    kappa = math.exp(model.log_kappa)
-    _, _, _, d = _predict(mu, P, L, model)
-    log_ratio += np.log1p(-np.minimum(d, 1.0 - 1e-12)).sum(axis=1)
-    for z in np.asarray(bearings, dtype=np.float64).reshape(-1):
-        h, J, var, d = _predict(mu, P, L, model)
-        assert J is not None
-        S = var + model.sigma2
-        nu = np.asarray(wrap(z - h))
-        rho = d / np.maximum(1.0 - d, 1e-12)
-        a = rho * np.exp(-0.5 * nu * nu / S) / np.sqrt(2.0 * math.pi * S) / kappa  # (H, N)
-        total = 1.0 + a.sum(axis=1)
-        log_ratio += np.log(total)
-        beta = a / total[:, None]
-        explained += 1.0 - 1.0 / total
-        use = beta > MIN_READING_PROBABILITY
-        if not use.any():
-            continue
-        # Kalman step per reading: K = P J^T / S, delta = K nu, P_j = P - K S K^T.
-        PJ = np.einsum("hij,hnj->hni", P, J)  # (H, N, 3)
-        K = PJ / S[..., None]
-        delta = K * nu[..., None]
-        delta[~use] = 0.0
-        b = np.where(use, beta, 0.0)
-        mean = np.einsum("hn,hni->hi", b, delta)
-        # Covariance of the mixture (clutter: P unchanged): P - sum_j b_j K_j S_j K_j^T
-        # plus the spread of the readings' means about their mean.
-        shrink = np.einsum("hn,hni,hnj->hij", b * S, K, K)
-        spread = np.einsum("hn,hni,hnj->hij", b, delta, delta) - np.einsum("hi,hj->hij", mean, mean)
-        P = P - shrink + spread
-        P = 0.5 * (P + np.swapaxes(P, 1, 2))
-        mu = mu + mean
-        mu[:, 2] = np.asarray(wrap(mu[:, 2]))
-    return mu, P, log_ratio, explained
+    if mu.shape[0] == 0:
+        return mu.copy(), P.copy(), np.zeros(0), np.zeros(0)
+    return frame_update_kernel(
+        np.ascontiguousarray(mu, dtype=np.float64),
+        np.ascontiguousarray(P, dtype=np.float64),
+        np.ascontiguousarray(np.asarray(bearings, dtype=np.float64).reshape(-1)),
+        np.ascontiguousarray(L, dtype=np.float64),
+        model.sigma2,
+        math.exp(model.log_kappa),
+        model.p_detect,
+        -1.0 if model.half_fov is None else model.half_fov,
+        math.inf if model.max_range is None else model.max_range**2,
+        0.0 if model.min_range is None else model.min_range**2,
+        MIN_RANGE_M**2,
+        MIN_READING_PROBABILITY,
+    )
 
 
 def log_ratios(
@@ -215,13 +160,5 @@ def log_ratios(
     """
     if poses.shape[0] == 0:
         return np.zeros(0)
-    h, _, _, d = _predict(poses, None, L, model)
-    kappa = math.exp(model.log_kappa)
-    lr = np.log1p(-np.minimum(d, 1.0 - 1e-12)).sum(axis=1)
-    rho = d / np.maximum(1.0 - d, 1e-12)
-    c = 1.0 / math.sqrt(2.0 * math.pi * model.sigma2) / kappa
-    for z in np.asarray(bearings, dtype=np.float64).reshape(-1):
-        nu = np.asarray(wrap(z - h))
-        a = rho * c * np.exp(-0.5 * nu * nu / model.sigma2)
-        lr += np.log1p(a.sum(axis=1))
-    return np.asarray(lr)
+    # An exactly known pose is a hypothesis without covariance: the update leaves it.
+    return frame_update(poses, np.zeros((poses.shape[0], 3, 3)), bearings, L, model)[2]

@@ -59,6 +59,7 @@ from dataclasses import dataclass, fields
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial import cKDTree
 from scipy.special import erf
 
 from ..angles import wrap
@@ -631,6 +632,34 @@ class Tracker:
         out[np.flatnonzero(near)] = m2 <= c.merge_chi2
         return out
 
+    def _same_pairs(
+        self, mu_a: FloatArray, P_a: FloatArray, mu_b: FloatArray, P_b: FloatArray
+    ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """The pairs ``(a, b)`` of poses of ``mu_a`` and ``mu_b`` (covariances ``P_a``, ``P_b``)
+        that are the same, as :meth:`_same` judges them, ordered by ``a`` then ``b``: all
+        pairs at once (a k-d tree finds those within ``merge_position_m``)."""
+        c = self.config
+        none = np.zeros(0, dtype=np.int64)
+        if mu_a.shape[0] == 0 or mu_b.shape[0] == 0:
+            return none, none
+        near = cKDTree(mu_a[:, :2]).sparse_distance_matrix(
+            cKDTree(mu_b[:, :2]), c.merge_position_m, output_type="ndarray"
+        )
+        ia, ib = near["i"].astype(np.int64), near["j"].astype(np.int64)
+        d = mu_a[ia] - mu_b[ib]
+        d[:, 2] = np.asarray(wrap(d[:, 2]))
+        keep = np.abs(d[:, 2]) <= c.merge_heading
+        ia, ib, d = ia[keep], ib[keep], d[keep]
+        S = P_a[ia] + P_b[ib]
+        m2 = np.full(ia.size, np.inf)
+        ok = np.linalg.det(S) > 0.0 if ia.size else np.zeros(0, dtype=bool)
+        if ok.any():
+            m2[ok] = np.einsum("ni,nij,nj->n", d[ok], np.linalg.inv(S[ok]), d[ok])
+        same = m2 <= c.merge_chi2
+        ia, ib = ia[same], ib[same]
+        order = np.lexsort((ib, ia))
+        return ia[order], ib[order]
+
     def _merge_and_prune(self) -> None:
         """Merge hypotheses at one pose (moment matching, masses added), drop the light ones,
         keep at most ``max_hypotheses``."""
@@ -774,53 +803,65 @@ class Tracker:
             return 0
         idx = idx[np.argsort(-logw[idx], kind="stable")]
         light = logw < math.log(c.prune_weight)
-        added = 0
         w0 = frames[0].t
-        found = np.zeros(self.n_hypotheses, dtype=bool)
-        for j in idx:
+        H0 = self.n_hypotheses
+        found = np.zeros(H0, dtype=bool)
+        # The tracked hypothesis each candidate is the same as (the first one), and which
+        # candidates are the same as each other.
+        dup_of = np.full(mu.shape[0], -1, dtype=np.int64)
+        ja, ib = self._same_pairs(mu, P, self._mu, self._P)
+        first, at = np.unique(ja, return_index=True)
+        dup_of[first] = ib[at]
+        ca, cb = self._same_pairs(mu, P, mu, P)
+        twins: dict[int, list[int]] = {}
+        for a, b in zip(ca.tolist(), cb.tolist(), strict=True):
+            if a != b:
+                twins.setdefault(a, []).append(b)
+        accepted = np.zeros(mu.shape[0], dtype=bool)
+        added: list[int] = []
+        for j in idx.tolist():
             # A candidate at a pose already tracked adds nothing: that hypothesis holds the
             # evidence of this place (over a longer time than the replay); a search on frames
-            # it has not been confirmed by confirms it.
-            if self.n_hypotheses:
-                H = self.n_hypotheses
-                dup = -1
-                for i in range(H):
-                    if self._same(i, mu[j : j + 1], P[j : j + 1])[0]:
-                        dup = i
-                        break
-                if dup >= 0:
-                    if dup < found.size:
-                        found[dup] = True
-                    if w0 > self._conf_t[dup]:
-                        self._conf[dup] += 1
-                        self._conf_t[dup] = t
-                    continue
+            # it has not been confirmed by confirms it. A candidate at the pose of one added
+            # by this search before it adds nothing either.
+            dup = int(dup_of[j])
+            if dup >= 0:
+                found[dup] = True
+                if w0 > self._conf_t[dup]:
+                    self._conf[dup] += 1
+                    self._conf_t[dup] = t
+                continue
+            if any(accepted[k] for k in twins.get(j, ())):
+                continue
             if light[j]:
                 # Too light to be tracked -- but it was still looked for above: a search
                 # that finds a tracked place again confirms it, whatever the weight the
                 # replay gave the candidate.
                 continue
-            self._mu = np.concatenate([self._mu, mu[j : j + 1]])
-            self._P = np.concatenate([self._P, P[j : j + 1]])
-            self._logw = np.concatenate([self._logw, logw[j : j + 1]])
-            self._ids = np.concatenate([self._ids, [self._next_id]])
-            self._born = np.concatenate([self._born, [rframes[0].t]])
-            self._conf = np.concatenate([self._conf, [1]])
-            self._conf_t = np.concatenate([self._conf_t, [t]])
-            self._fit_m = np.concatenate([self._fit_m, fit_m[j : j + 1]])
-            self._fit_n = np.concatenate([self._fit_n, fit_n[j : j + 1]])
-            self._next_id += 1
-            added += 1
+            accepted[j] = True
+            added.append(j)
+        if added:
+            new = np.asarray(added, dtype=np.int64)
+            k = new.size
+            self._mu = np.concatenate([self._mu, mu[new]])
+            self._P = np.concatenate([self._P, P[new]])
+            self._logw = np.concatenate([self._logw, logw[new]])
+            self._ids = np.concatenate([self._ids, self._next_id + np.arange(k)])
+            self._born = np.concatenate([self._born, np.full(k, rframes[0].t)])
+            self._conf = np.concatenate([self._conf, np.ones(k, dtype=self._conf.dtype)])
+            self._conf_t = np.concatenate([self._conf_t, np.full(k, t)])
+            self._fit_m = np.concatenate([self._fit_m, fit_m[new]])
+            self._fit_n = np.concatenate([self._fit_n, fit_n[new]])
+            self._next_id += k
         # Search theory: the search would have found the true place with probability
         # 1 - search_miss; the places it did not find -- elsewhere, and the hypotheses it did
         # not find again -- are that much less likely to hold the robot.
         if c.search_miss is None:
-            return added
+            return len(added)
         miss = math.log(c.search_miss)
         self._log_out += miss
-        H0 = found.size
         self._logw[:H0] = np.where(found, self._logw[:H0], self._logw[:H0] + miss)
-        return added
+        return len(added)
 
     # ---- frames --------------------------------------------------------------------------
     def frame(self, t: float, bearings: ArrayLike) -> TrackEstimate:

@@ -1,0 +1,124 @@
+"""The frame likelihood and update of the tracker's hypotheses (omniloc.track.likelihood),
+checked against the formulas written out by hand for one hypothesis."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.stats import norm
+
+from omniloc.sensor import SensorModel
+from omniloc.track.likelihood import FrameModel, frame_update, log_ratios
+
+SIGMA = np.deg2rad(1.0)
+
+
+def _model(**kw: float) -> FrameModel:
+    base: dict[str, float] = dict(sigma=SIGMA, p_detect=0.6, clutter=0.5)
+    base.update(kw)
+    return FrameModel.of(SensorModel(**base))
+
+
+def _bearing(pose: np.ndarray, lm: np.ndarray) -> float:
+    a = math.atan2(lm[1] - pose[1], lm[0] - pose[0]) - pose[2]
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+def test_a_frame_without_bearings_costs_the_landmarks_in_view_and_moves_nothing() -> None:
+    model = _model(fov=np.deg2rad(90.0), max_range=6.0)
+    L = np.array([[3.0, 0.0], [3.0, 0.5], [-3.0, 0.0], [10.0, 0.0]])  # 2 in view, 1 behind, 1 far
+    mu = np.array([[0.0, 0.0, 0.0]])
+    P = np.diag([1e-6, 1e-6, 1e-8])[None]
+    mu2, P2, lr, explained = frame_update(mu, P, np.zeros(0), L, model)
+    assert math.isclose(lr[0], 2 * math.log(1 - 0.6), rel_tol=1e-9)
+    assert explained[0] == 0.0
+    np.testing.assert_array_equal(mu2, mu)
+    np.testing.assert_array_equal(P2, P)
+
+
+def test_one_bearing_earns_the_mixture_of_clutter_and_the_landmark() -> None:
+    model = _model()
+    L = np.array([[4.0, 1.0]])
+    mu = np.array([[0.0, 0.0, 0.2]])
+    P = np.diag([0.01, 0.02, 0.003])[None]
+    z = _bearing(mu[0], L[0]) + np.deg2rad(2.0)
+    _, _, lr, explained = frame_update(mu, P, np.array([z]), L, model)
+    dx, dy = L[0] - mu[0, :2]
+    q = dx * dx + dy * dy
+    J = np.array([dy / q, -dx / q, -1.0])
+    S = J @ P[0] @ J + SIGMA**2
+    kappa = 0.5 / (2 * math.pi)
+    p = 0.6
+    g = norm.pdf(np.deg2rad(2.0), scale=math.sqrt(S))
+    expected = math.log(1 - p) + math.log(1 + p / (1 - p) * g / kappa)
+    assert math.isclose(lr[0], expected, rel_tol=1e-9)
+    a = p / (1 - p) * g / kappa
+    assert math.isclose(explained[0], a / (1 + a), rel_tol=1e-9)
+
+
+def test_a_bearing_that_can_only_be_the_landmark_is_a_kalman_step() -> None:
+    # Clutter so rare that the reading is the landmark with probability ~1.
+    model = _model(p_detect=0.9, clutter=1e-9)
+    L = np.array([[5.0, -1.0]])
+    mu = np.array([[0.3, 0.1, -0.1]])
+    P = np.diag([0.04, 0.02, 0.001])[None]
+    z = _bearing(mu[0], L[0]) - np.deg2rad(1.5)
+    mu2, P2, _, _ = frame_update(mu, P, np.array([z]), L, model)
+    dx, dy = L[0] - mu[0, :2]
+    q = dx * dx + dy * dy
+    J = np.array([dy / q, -dx / q, -1.0])
+    S = J @ P[0] @ J + SIGMA**2
+    K = P[0] @ J / S
+    np.testing.assert_allclose(mu2[0], mu[0] + K * (z - _bearing(mu[0], L[0])), atol=1e-12)
+    np.testing.assert_allclose(P2[0], P[0] - np.outer(K, K) * S, atol=1e-12)
+
+
+def test_a_landmark_closer_than_the_minimum_range_explains_nothing() -> None:
+    model = _model(min_range=1.0)
+    L = np.array([[0.5, 0.0]])
+    mu = np.array([[0.0, 0.0, 0.0]])
+    P = np.diag([1e-4, 1e-4, 1e-5])[None]
+    mu2, _, lr, explained = frame_update(mu, P, np.array([0.0]), L, model)
+    assert lr[0] == 0.0 and explained[0] == 0.0
+    np.testing.assert_array_equal(mu2, mu)
+    assert log_ratios(mu, np.array([0.0]), L, model)[0] == 0.0
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n_hyp=st.integers(1, 6),
+    n_lm=st.integers(1, 8),
+    n_b=st.integers(0, 4),
+    fov=st.sampled_from([None, 1.2, 4.0]),
+)
+def test_hypotheses_are_updated_independently(
+    seed: int, n_hyp: int, n_lm: int, n_b: int, fov: float | None
+) -> None:
+    rng = np.random.default_rng(seed)
+    kw: dict[str, float] = {} if fov is None else {"fov": fov}
+    model = _model(max_range=8.0, **kw)
+    L = rng.uniform(-5, 5, (n_lm, 2))
+    mu = np.c_[rng.uniform(-5, 5, (n_hyp, 2)), rng.uniform(-3, 3, n_hyp)]
+    A = rng.normal(size=(n_hyp, 3, 3)) * 0.1
+    P = A @ A.transpose(0, 2, 1) + 1e-4 * np.eye(3)
+    b = rng.uniform(-math.pi, math.pi, n_b)
+    together = frame_update(mu, P, b, L, model)
+    for k in range(n_hyp):
+        alone = frame_update(mu[k : k + 1], P[k : k + 1], b, L, model)
+        for x, y in zip(together, alone, strict=True):
+            np.testing.assert_allclose(x[k], y[0], rtol=1e-12, atol=1e-12)
+    # Exactly known poses (particles): the formula of the module's docstring, by hand.
+    expected = []
+    for pose in mu:
+        h = np.array([_bearing(pose, lm) for lm in L])
+        r = np.hypot(*(L - pose[:2]).T)
+        d = 0.6 * (r <= 8.0) * (1.0 if fov is None else (np.abs(h) < fov / 2))
+        kappa = 0.5 / (2 * math.pi if fov is None else fov)
+        nu = (b[:, None] - h[None, :] + math.pi) % (2 * math.pi) - math.pi
+        g = norm.pdf(nu, scale=SIGMA)
+        expected.append(np.log1p(-d).sum() + np.log1p((d / (1 - d) * g / kappa).sum(axis=1)).sum())
+    np.testing.assert_allclose(log_ratios(mu, b, L, model), expected, rtol=1e-9, atol=1e-9)
