@@ -267,3 +267,26 @@ def test_dataset_defaults_are_the_recordings_own_estimates() -> None:
 def test_bad_sensing_is_refused() -> None:
     with pytest.raises(InputError, match="sensing"):
         SweepConfig(sensing="sonar")
+
+
+@needs_data
+def test_mrclam_tracking_preset_takes_no_landmark_nearer_than_the_recordings_report() -> None:
+    # The preset's min_range is below every distance from the true pose at which the
+    # recordings report a landmark (the nearest is 0.896 m), and close to it.
+    import csv
+
+    from omniloc.track import preset
+
+    with open(DATA / "mrclam-ds6" / "landmarks.csv", newline="") as f:
+        xy = {int(r["id"]): (float(r["x"]), float(r["y"])) for r in csv.DictReader(f)}
+    nearest = np.inf
+    for r in range(1, 6):
+        with open(DATA / "mrclam-ds6" / f"robot{r}_frames.csv", newline="") as f:
+            for row in csv.DictReader(f):
+                x, y = float(row["gt_x"]), float(row["gt_y"])
+                for it in filter(None, row["landmarks"].split(";")):
+                    lx, ly = xy[int(it.split(":")[0])]
+                    nearest = min(nearest, float(np.hypot(lx - x, ly - y)))
+    sensor = preset("mrclam")[0]
+    assert sensor.min_range is not None
+    assert 0.9 * nearest <= sensor.min_range <= nearest
