@@ -76,6 +76,16 @@ def test_wakes_up_ambiguous_on_a_symmetric_view() -> None:
     assert not any(e.localized for e in res.estimates if e.t < 5.0)
 
 
+def test_hypothesis_weights_are_probabilities_that_leave_room_for_elsewhere() -> None:
+    # Each weight is the probability that the robot is there; with elsewhere they sum to 1,
+    # so the reported ones sum to less while elsewhere still holds mass (at wake-up).
+    _, res = _scenario()
+    sums = [sum(h.weight for h in e.hypotheses) for e in res.estimates if e.hypotheses]
+    assert all(0.0 <= h.weight <= 1.0 for e in res.estimates for h in e.hypotheses)
+    assert max(sums) <= 1.0 + 1e-9
+    assert sums[0] < 0.99
+
+
 def test_disambiguates_while_moving_and_tracks() -> None:
     run, res = _scenario()
     d, h = _errors(run, res)

@@ -51,7 +51,9 @@ class Hypothesis:
     covariance : ndarray, shape (3, 3)
         Covariance of (x, y, theta), m^2 and rad^2.
     weight : float
-        Posterior weight among the hypotheses reported with it (they sum to 1).
+        Posterior probability that the robot is at this hypothesis. All the hypotheses and
+        *elsewhere* (a pose none of them covers) sum to 1, so the reported ones (at most
+        ``TrackerConfig.max_reported``) sum to 1 less elsewhere's share and any not reported.
     """
 
     pose: Pose
