@@ -613,31 +613,13 @@ class Tracker:
                 self._normalise()
         self._elsewhere.resample()
 
-    def _same(self, i: int, mu: FloatArray, P: FloatArray) -> NDArray[np.bool_]:
-        """Which of the poses ``mu`` (covariances ``P``) are the same as hypothesis ``i``'s."""
-        c = self.config
-        d = mu - self._mu[i]
-        d[:, 2] = np.asarray(wrap(d[:, 2]))
-        near = (np.hypot(d[:, 0], d[:, 1]) <= c.merge_position_m) & (
-            np.abs(d[:, 2]) <= c.merge_heading
-        )
-        if not near.any():
-            return near
-        S = P[near] + self._P[i]
-        try:
-            m2 = np.einsum("ni,nij,nj->n", d[near], np.linalg.inv(S), d[near])
-        except np.linalg.LinAlgError:
-            return np.zeros_like(near)
-        out = np.zeros_like(near)
-        out[np.flatnonzero(near)] = m2 <= c.merge_chi2
-        return out
-
     def _same_pairs(
         self, mu_a: FloatArray, P_a: FloatArray, mu_b: FloatArray, P_b: FloatArray
     ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """The pairs ``(a, b)`` of poses of ``mu_a`` and ``mu_b`` (covariances ``P_a``, ``P_b``)
-        that are the same, as :meth:`_same` judges them, ordered by ``a`` then ``b``: all
-        pairs at once (a k-d tree finds those within ``merge_position_m``)."""
+        that are the same pose, ordered by ``a`` then ``b``: within ``merge_position_m`` (a k-d
+        tree finds those pairs) and ``merge_heading`` of each other, and within
+        ``merge_chi2`` in the Mahalanobis distance of their summed covariances."""
         c = self.config
         none = np.zeros(0, dtype=np.int64)
         if mu_a.shape[0] == 0 or mu_b.shape[0] == 0:
@@ -672,14 +654,18 @@ class Tracker:
         self._keep(np.flatnonzero(keep))
         H = self.n_hypotheses
         alive = np.ones(H, dtype=bool)
+        # Each hypothesis absorbs the weaker ones at its pose that are still alive (pairs of
+        # the hypotheses as they are before any merge: a merge changes only the absorber,
+        # which no later hypothesis is compared with).
+        pa, pb = self._same_pairs(self._mu, self._P, self._mu, self._P)
+        later = pb > pa
+        pa, pb = pa[later], pb[later]
+        starts = np.searchsorted(pa, np.arange(H + 1))
         for i in range(H):
             if not alive[i]:
                 continue
-            rest = np.flatnonzero(alive)
-            rest = rest[rest > i]
-            if rest.size == 0:
-                break
-            same = rest[self._same(i, self._mu[rest], self._P[rest])]
+            same = pb[starts[i] : starts[i + 1]]
+            same = same[alive[same]]
             if same.size == 0:
                 continue
             grp = np.concatenate([[i], same])
