@@ -132,11 +132,14 @@ def frame_update_kernel(
     min_range2: float,
     min_q: float,
     min_reading: float,
+    update: bool,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
     """Take one frame of bearings into H Gaussian hypotheses ``(mu, P)`` (copies are
     returned): the log-likelihood ratio of the frame (H,), the expected number of its
     bearings that are landmarks (H,), and each hypothesis updated by the mixture of each
-    bearing's readings, one bearing at a time (see :mod:`omniloc.track.likelihood`)."""
+    bearing's readings, one bearing at a time (see :mod:`omniloc.track.likelihood`).
+    ``update`` False: exactly known poses (particles, ``P`` zero), which no bearing moves --
+    the ratio only, from one prediction per pose."""
     mu = mu.copy()
     P = P.copy()
     H = mu.shape[0]
@@ -162,9 +165,15 @@ def frame_update_kernel(
             s += math.log1p(-min(d[n], 1.0 - 1e-12))
         log_ratio[k] = s
         for z in bearings:
-            _predict_one(m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d)
+            if update:
+                _predict_one(
+                    m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d
+                )
             total = 1.0
             for n in range(N):
+                if d[n] == 0.0:
+                    a[n] = 0.0
+                    continue
                 S = var[n] + sigma2
                 nu[n] = wrap_angle(z - h[n])
                 rho = d[n] / max(1.0 - d[n], 1e-12)
@@ -172,6 +181,8 @@ def frame_update_kernel(
                 total += a[n]
             log_ratio[k] += math.log(total)
             explained[k] += 1.0 - 1.0 / total
+            if not update:
+                continue
             mean[:] = 0.0
             M[:, :] = 0.0  # minus the shrink plus the spread of the readings
             used = False

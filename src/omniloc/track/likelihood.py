@@ -126,6 +126,19 @@ def frame_update(
     """
     if mu.shape[0] == 0:
         return mu.copy(), P.copy(), np.zeros(0), np.zeros(0)
+    return _kernel(mu, P, bearings, L, model, update=True)
+
+
+def _kernel(
+    mu: FloatArray,
+    P: FloatArray,
+    bearings: FloatArray,
+    L: FloatArray,
+    model: FrameModel,
+    *,
+    update: bool,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """The compiled kernel on the model's numbers (:func:`frame_update_kernel`)."""
     return frame_update_kernel(
         np.ascontiguousarray(mu, dtype=np.float64),
         np.ascontiguousarray(P, dtype=np.float64),
@@ -139,6 +152,7 @@ def frame_update(
         0.0 if model.min_range is None else model.min_range**2,
         MIN_RANGE_M**2,
         MIN_READING_PROBABILITY,
+        update,
     )
 
 
@@ -160,5 +174,5 @@ def log_ratios(
     """
     if poses.shape[0] == 0:
         return np.zeros(0)
-    # An exactly known pose is a hypothesis without covariance: the update leaves it.
-    return frame_update(poses, np.zeros((poses.shape[0], 3, 3)), bearings, L, model)[2]
+    # An exactly known pose is a hypothesis without covariance, which no bearing moves.
+    return _kernel(poses, np.zeros((poses.shape[0], 3, 3)), bearings, L, model, update=False)[2]
