@@ -18,6 +18,7 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from ..angles import wrap
 from .motion import compose
@@ -99,11 +100,19 @@ class Elsewhere:
             Pinv = np.linalg.inv(P)
         except np.linalg.LinAlgError:
             return 0.0
-        for k in range(mu.shape[0]):
-            d = self.poses - mu[k]
+        # Only particles inside the ellipse that the hypothesis's region projects to in x, y
+        # can be covered: a k-d tree finds those within its longest half-axis.
+        lam = np.linalg.eigvalsh(0.5 * (P[:, :2, :2] + np.swapaxes(P[:, :2, :2], 1, 2)))[:, -1]
+        radius = np.sqrt(COVERED_CHI2 * np.maximum(lam, 0.0)) * (1.0 + 1e-9) + 1e-12
+        near = cKDTree(self.poses[:, :2]).query_ball_point(mu[:, :2], radius)
+        for k, rows in enumerate(near):
+            if not rows:
+                continue
+            idx = np.asarray(rows, dtype=np.int64)
+            d = self.poses[idx] - mu[k]
             d[:, 2] = np.asarray(wrap(d[:, 2]))
             m2 = np.einsum("ni,ij,nj->n", d, Pinv[k], d)
-            covered |= m2 <= COVERED_CHI2
+            covered[idx[m2 <= COVERED_CHI2]] = True
         if not covered.any():
             return 0.0
         w = np.exp(self.logw)

@@ -100,6 +100,10 @@ _PROBABILITIES = {
 }
 _SHARES = {"fit_explained"}
 
+#: Below this many pairs of poses, all pairs are compared directly (building two k-d trees
+#: costs more).
+_BRUTE_PAIRS = 4096
+
 
 @dataclass(frozen=True)
 class TrackerConfig:
@@ -624,10 +628,15 @@ class Tracker:
         none = np.zeros(0, dtype=np.int64)
         if mu_a.shape[0] == 0 or mu_b.shape[0] == 0:
             return none, none
-        near = cKDTree(mu_a[:, :2]).sparse_distance_matrix(
-            cKDTree(mu_b[:, :2]), c.merge_position_m, output_type="ndarray"
-        )
-        ia, ib = near["i"].astype(np.int64), near["j"].astype(np.int64)
+        if mu_a.shape[0] * mu_b.shape[0] <= _BRUTE_PAIRS:
+            gap = mu_a[:, None, :2] - mu_b[None, :, :2]
+            ia, ib = np.nonzero((gap**2).sum(axis=2) <= c.merge_position_m**2)
+        else:
+            near = cKDTree(mu_a[:, :2]).sparse_distance_matrix(
+                cKDTree(mu_b[:, :2]), c.merge_position_m, output_type="ndarray"
+            )
+            ia, ib = near["i"], near["j"]
+        ia, ib = ia.astype(np.int64), ib.astype(np.int64)
         d = mu_a[ia] - mu_b[ib]
         d[:, 2] = np.asarray(wrap(d[:, 2]))
         keep = np.abs(d[:, 2]) <= c.merge_heading
