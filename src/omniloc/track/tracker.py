@@ -621,9 +621,9 @@ class Tracker:
         self, mu_a: FloatArray, P_a: FloatArray, mu_b: FloatArray, P_b: FloatArray
     ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """The pairs ``(a, b)`` of poses of ``mu_a`` and ``mu_b`` (covariances ``P_a``, ``P_b``)
-        that are the same pose, ordered by ``a`` then ``b``: within ``merge_position_m`` (a k-d
-        tree finds those pairs) and ``merge_heading`` of each other, and within
-        ``merge_chi2`` in the Mahalanobis distance of their summed covariances."""
+        that are the same pose, ordered by ``a`` then ``b``: within ``merge_position_m`` (found
+        by a k-d tree, or directly for small sets) and ``merge_heading`` of each other, and
+        within ``merge_chi2`` in the Mahalanobis distance of their summed covariances."""
         c = self.config
         none = np.zeros(0, dtype=np.int64)
         if mu_a.shape[0] == 0 or mu_b.shape[0] == 0:
