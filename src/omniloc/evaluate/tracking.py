@@ -19,6 +19,10 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
 * *localized and correct after*: the share of frames from the first correct frame on that
   are correct.
 * *confidently wrong*: frames whose state is ``localized`` but whose pose is not correct.
+* *weight calibration*: over the frames with hypotheses, the weight of the strongest one
+  (the localizer's probability that the robot is there) against whether it is within
+  tolerance, in tenths of [0, 1]; its expected calibration error (``best_weight_ece``) says
+  how far those weights are from the frequencies (0: calibrated).
 * *RMSE*: position and heading errors over the ``localized`` frames.
 * *kidnapping*: at ``jump_t`` the stream continues elsewhere. *Detection delay*: from the jump
   to the first frame that is no longer localized-and-wrong (the localizer left ``localized``,
@@ -61,6 +65,7 @@ __all__ = [
     "splice",
     "tracker_factory",
     "tracking_summary",
+    "weight_ece",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -68,6 +73,9 @@ RngLike = np.random.Generator | int | None
 
 #: Ground truth whose samples are further apart than this (s) is not trusted for scoring.
 MAX_GAP_S = 0.5
+
+#: Bins of the strongest hypothesis's weight (tenths of [0, 1]) for its calibration.
+WEIGHT_BINS = 10
 
 
 class LocalizerOverTime(Protocol):
@@ -316,6 +324,9 @@ class RunScore:
     recovery_s: float
     false_alarms: int
     cpu_s: float
+    #: Per tenth of [0, 1] of the strongest hypothesis's weight: (frames, sum of the weights,
+    #: frames where that hypothesis was within tolerance).
+    weight_bins: tuple[tuple[int, float, int], ...] = ()
 
     @property
     def realtime_factor(self) -> float:
@@ -373,6 +384,7 @@ def score_run(
         if back.any():
             recovery = float(t[np.flatnonzero(back)[0]] - jump)
     false_alarms = int((kid & pre).sum())
+    weight_bins = _weight_bins(estimates, truth, scored, pos_tol_m, heading_tol_deg)
     ends = [float(stream.odometry.t[-1])] + ([t[-1]] if t.size else [])
     return RunScore(
         name=stream.name,
@@ -390,7 +402,48 @@ def score_run(
         recovery_s=recovery,
         false_alarms=false_alarms,
         cpu_s=cpu_s,
+        weight_bins=weight_bins,
     )
+
+
+def _weight_bins(
+    estimates: Sequence[TrackEstimate],
+    truth: FloatArray,
+    scored: NDArray[np.bool_],
+    pos_tol_m: float,
+    heading_tol_deg: float,
+) -> tuple[tuple[int, float, int], ...]:
+    """The strongest hypothesis's weight against its correctness, per tenth of [0, 1]."""
+    n = np.zeros(WEIGHT_BINS, dtype=np.int64)
+    total = np.zeros(WEIGHT_BINS)
+    right = np.zeros(WEIGHT_BINS, dtype=np.int64)
+    for k, e in enumerate(estimates):
+        if not scored[k] or not e.hypotheses:
+            continue
+        h = max(e.hypotheses, key=lambda hyp: hyp.weight)
+        w = min(max(float(h.weight), 0.0), 1.0)
+        b = min(int(w * WEIGHT_BINS), WEIGHT_BINS - 1)
+        d_pos = math.hypot(h.pose.x - truth[k, 0], h.pose.y - truth[k, 1])
+        d_hdg = abs(math.degrees(float(wrap(h.pose.theta - truth[k, 2]))))
+        n[b] += 1
+        total[b] += w
+        right[b] += int(d_pos <= pos_tol_m and d_hdg <= heading_tol_deg)
+    return tuple((int(a), float(c), int(r)) for a, c, r in zip(n, total, right, strict=True))
+
+
+def weight_ece(bins: Sequence[Sequence[float]]) -> float:
+    """Expected calibration error of binned weights ``(frames, sum of weights, correct)``
+    (NaN without frames).
+
+    Examples
+    --------
+    >>> round(weight_ece([(2, 1.8, 1), (2, 0.4, 0)]), 3)
+    0.3
+    """
+    frames = sum(int(b[0]) for b in bins)
+    if not frames:
+        return NAN
+    return float(sum(abs(b[1] - b[2]) for b in bins if b[0]) / frames)
 
 
 def _nanmedian(x: Sequence[float]) -> float:
@@ -430,6 +483,10 @@ class TrackingResult:
         plain = [r for r in rs if not math.isfinite(r.jump_t)]
         cpu = sum(r.cpu_s for r in rs)
         dur = sum(r.duration_s for r in rs)
+        bins = [
+            tuple(sum(float(r.weight_bins[b][i]) for r in rs if r.weight_bins) for i in range(3))
+            for b in range(WEIGHT_BINS)
+        ]
         return {
             "runs": float(len(rs)),
             "frames_scored": float(scored),
@@ -449,6 +506,8 @@ class TrackingResult:
                 sum(r.false_alarms > 0 for r in plain) / len(plain) if plain else NAN
             ),
             "realtime_factor": dur / cpu if cpu > 0 else NAN,
+            "best_weight_frames": float(sum(b[0] for b in bins)),
+            "best_weight_ece": weight_ece(bins),
         }
 
     def to_csv(self, path: str | Path) -> None:
@@ -647,6 +706,10 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
         f"{_fmt(100 * tot['confidently_wrong_rate'], '.2f')} % of frames; position RMSE "
         f"{_fmt(tot['pos_rmse_m'], '.3f')} m, heading RMSE {_fmt(tot['heading_rmse_deg'])} deg; "
         f"{_fmt(tot['realtime_factor'], '.0f')}x real time"
+    )
+    lines.append(
+        f"strongest hypothesis's weight against the truth ({int(tot['best_weight_frames'])} "
+        f"frames with hypotheses): expected calibration error {_fmt(tot['best_weight_ece'], '.3f')}"
     )
     if report.kidnap is not None:
         k = report.kidnap

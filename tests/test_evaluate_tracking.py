@@ -1,0 +1,56 @@
+"""Scoring of localizers over time (omniloc.evaluate.tracking): the calibration of the
+strongest hypothesis's weight, measured beside success."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omniloc import LandmarkMap, Pose
+from omniloc.evaluate.tracking import Stream, TrackingResult, score_run, weight_ece, whole_run
+from omniloc.track import Frame, Odometry, TrackState
+from omniloc.track.data import GroundTruth
+from omniloc.track.records import Hypothesis, TrackEstimate
+
+TRUE = Pose(1.0, 2.0, 0.3)
+
+
+def _stream(n: int) -> Stream:
+    t = np.arange(n, dtype=float)
+    truth = GroundTruth(
+        t=np.arange(-1.0, n + 1.0, 0.1),
+        x=np.full(10 * (n + 2), TRUE.x),
+        y=np.full(10 * (n + 2), TRUE.y),
+        theta=np.full(10 * (n + 2), TRUE.theta),
+    )
+    odo = Odometry(t=t, v=np.zeros(n), w=np.zeros(n))
+    frames = [Frame(float(k), np.array([0.1])) for k in t]
+    lm = LandmarkMap(np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]]))
+    return whole_run("s", lm, odo, frames, truth)
+
+
+def _ambiguous(t: float, pose: Pose, weight: float) -> TrackEstimate:
+    hyps = (Hypothesis(pose, np.eye(3) * 1e-4, weight), Hypothesis(Pose(9, 9, 0), np.eye(3), 0.01))
+    return TrackEstimate(t, TrackState.AMBIGUOUS, pose=pose, covariance=np.eye(3), hypotheses=hyps)
+
+
+def test_the_strongest_hypothesis_weight_is_scored_against_the_truth() -> None:
+    stream = _stream(12)
+    wrong = Pose(4.0, 2.0, 0.3)
+    est = [_ambiguous(float(k), TRUE if k < 5 else wrong, 0.95) for k in range(10)]
+    est += [TrackEstimate(10.0, TrackState.LOST), _ambiguous(11.0, TRUE, 0.15)]
+    r = score_run(stream, est)
+    assert r.weight_bins[9] == (10, pytest.approx(9.5), 5)
+    assert r.weight_bins[1] == (1, pytest.approx(0.15), 1)
+    assert sum(b[0] for b in r.weight_bins) == 11  # the lost frame has no weight to score
+    # Half right at 0.95, right at 0.15: (|9.5 - 5| + |0.15 - 1|) / 11.
+    tot = TrackingResult("x", [r, r]).totals()
+    assert tot["best_weight_frames"] == 22
+    assert math.isclose(tot["best_weight_ece"], (4.5 + 0.85) / 11)
+
+
+def test_weight_ece_of_nothing_is_not_a_number() -> None:
+    assert math.isnan(weight_ece([(0, 0.0, 0)] * 10))
+    assert weight_ece([(4, 2.0, 2)]) == 0.0
