@@ -4,6 +4,7 @@ strongest hypothesis's weight, measured beside success."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -54,3 +55,16 @@ def test_the_strongest_hypothesis_weight_is_scored_against_the_truth() -> None:
 def test_weight_ece_of_nothing_is_not_a_number() -> None:
     assert math.isnan(weight_ece([(0, 0.0, 0)] * 10))
     assert weight_ece([(4, 2.0, 2)]) == 0.0
+
+
+def test_runs_csv_has_the_weight_calibration_as_plain_columns(tmp_path: Path) -> None:
+    import csv
+
+    stream = _stream(4)
+    est = [_ambiguous(float(k), TRUE, 0.95) for k in range(4)]
+    TrackingResult("x", [score_run(stream, est)]).to_csv(tmp_path / "runs.csv")
+    with open(tmp_path / "runs.csv", newline="") as fh:
+        (row,) = list(csv.DictReader(fh))
+    assert "weight_bins" not in row
+    assert int(row["best_weight_frames"]) == 4
+    assert math.isclose(float(row["best_weight_ece"]), 0.05)

@@ -33,10 +33,11 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
 
 from __future__ import annotations
 
+import csv
 import math
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Protocol
 
@@ -49,7 +50,7 @@ from ..maps import LandmarkMap
 from ..pose import Pose
 from ..track.data import Frame, GroundTruth, Odometry
 from ..track.records import TrackEstimate, TrackState
-from .common import NAN, jsonable, progress_bar, write_records_csv
+from .common import NAN, jsonable, progress_bar
 
 __all__ = [
     "LocalizerOverTime",
@@ -333,6 +334,28 @@ class RunScore:
         """Seconds of recording processed per CPU second."""
         return self.duration_s / self.cpu_s if self.cpu_s > 0 else math.inf
 
+    def csv_row(self) -> dict[str, object]:
+        """The run as one CSV row: every figure, the weight bins as their frame count and
+        expected calibration error."""
+        row: dict[str, object] = {
+            f.name: getattr(self, f.name) for f in fields(self) if f.name != "weight_bins"
+        }
+        row["best_weight_frames"] = sum(int(b[0]) for b in self.weight_bins)
+        row["best_weight_ece"] = weight_ece(self.weight_bins)
+        return row
+
+
+def _write_runs_csv(path: str | Path, runs: Sequence[RunScore]) -> None:
+    """One row per run (:meth:`RunScore.csv_row`)."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    rows = [r.csv_row() for r in runs]
+    with out.open("w", newline="") as fh:
+        if rows:
+            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            w.writeheader()
+            w.writerows(rows)
+
 
 def score_run(
     stream: Stream,
@@ -512,7 +535,7 @@ class TrackingResult:
 
     def to_csv(self, path: str | Path) -> None:
         """Write one row per run."""
-        write_records_csv(Path(path), self.runs)
+        _write_runs_csv(path, self.runs)
 
     def as_dict(self) -> dict[str, object]:
         """Plain-JSON totals (all, whole runs, kidnapped) and the runs."""
@@ -646,7 +669,7 @@ class TrackingReport:
     def to_csv(self, path: str | Path) -> None:
         """One row per stream (whole runs, then kidnap streams)."""
         runs = list(self.whole.runs) + ([] if self.kidnap is None else list(self.kidnap.runs))
-        write_records_csv(Path(path), runs)
+        _write_runs_csv(path, runs)
 
 
 def evaluate_mrclam_tracking(
