@@ -94,11 +94,16 @@ def _predict_one(
 ) -> None:
     """One hypothesis's predicted bearings ``h``, their Jacobians ``J`` (N, 3), variances
     from the pose ``var`` and detection probabilities ``d``, written in place
-    (``half_fov`` < 0: no field of view)."""
+    (``half_fov`` < 0: no field of view). For a landmark out of range only ``d`` (0) is
+    written."""
     for n in range(L.shape[0]):
         dx = L[n, 0] - mu[0]
         dy = L[n, 1] - mu[1]
         q = max(dx * dx + dy * dy, min_q)
+        if q > max_range2 or q < min_range2:
+            # Out of range: never detected (the rest is not read for such a landmark).
+            d[n] = 0.0
+            continue
         h[n] = wrap_angle(math.atan2(dy, dx) - mu[2])
         J[n, 0] = dy / q
         J[n, 1] = -dx / q
@@ -113,8 +118,6 @@ def _predict_one(
         else:
             sd = math.sqrt(var[n]) + 1e-9
             vis = 0.5 * math.erfc(-((half_fov - abs(h[n])) / sd) / math.sqrt(2.0))
-        if q > max_range2 or q < min_range2:
-            vis = 0.0
         d[n] = p_detect * vis
 
 
