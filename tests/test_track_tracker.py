@@ -293,3 +293,51 @@ def test_config_errors_name_the_option() -> None:
     assert TrackerConfig().search_miss is None and TrackerConfig(search_miss=0.5).search_miss == 0.5
     with pytest.raises(InputError, match="sensor must be a SensorModel"):
         Tracker(GRID, sensor="sigma=1")  # type: ignore[arg-type]
+
+
+def _random_poses(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
+    mu = np.c_[rng.uniform(0, 3, (n, 2)), rng.uniform(-np.pi, np.pi, n)]
+    A = rng.normal(size=(n, 3, 3)) * rng.uniform(0.02, 0.3, (n, 1, 1))
+    return mu, A @ A.transpose(0, 2, 1) + 1e-6 * np.eye(3)
+
+
+@pytest.mark.parametrize("n", [5, 40, 150])  # direct pairing, and the k-d tree beyond 4,096
+def test_same_pose_pairs_are_those_of_the_definition(n: int) -> None:
+    rng = np.random.default_rng(n)
+    mu_a, P_a = _random_poses(rng, n)
+    mu_b, P_b = _random_poses(rng, n + 7)
+    # near twins of a's poses among b's, in another order
+    m = n // 2
+    mu_b[-m:] = mu_a[:m][::-1] + rng.normal(0, [0.05, 0.05, 0.02], (m, 3))
+    tracker = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    c = tracker.config
+    want = []
+    for i in range(n):
+        for j in range(n + 7):
+            d = mu_a[i] - mu_b[j]
+            d[2] = np.angle(np.exp(1j * d[2]))
+            if np.hypot(d[0], d[1]) <= c.merge_position_m and abs(d[2]) <= c.merge_heading:
+                if d @ np.linalg.solve(P_a[i] + P_b[j], d) <= c.merge_chi2:
+                    want.append((i, j))
+    ia, ib = tracker._same_pairs(mu_a, P_a, mu_b, P_b)
+    assert list(zip(ia.tolist(), ib.tolist(), strict=True)) == want
+    assert len(want) >= m // 2  # the twins were found
+
+
+def test_elsewhere_gives_up_exactly_the_particles_a_hypothesis_covers() -> None:
+    from omniloc.track.elsewhere import COVERED_CHI2, Elsewhere
+
+    rng = np.random.default_rng(2)
+    mu, P = _random_poses(rng, 6)
+    P[0] = np.array([[0.5, 0.45, 0.0], [0.45, 0.5, 0.0], [0.0, 0.0, 2.0]])  # long, tilted
+    ew = Elsewhere((0.0, 3.0, 0.0, 3.0), 20_000, 0.1, seed=1)
+    before = ew.poses.copy()
+    covered = np.zeros(ew.n, dtype=bool)
+    for k in range(mu.shape[0]):
+        d = before - mu[k]
+        d[:, 2] = np.angle(np.exp(1j * d[:, 2]))
+        covered |= np.einsum("ni,ij,nj->n", d, np.linalg.inv(P[k]), d) <= COVERED_CHI2
+    share = ew.exclude(mu, P)
+    assert covered.sum() > 100
+    assert share == pytest.approx(covered.mean())
+    assert np.isneginf(ew.logw[covered]).all() and np.isfinite(ew.logw[~covered]).all()
