@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputError, OmnilocError
 from ..maps import LandmarkMap
@@ -22,6 +22,8 @@ __all__ = [
     "NAN",
     "Calibration",
     "calibration",
+    "calibration_of_bins",
+    "confidence_bins",
     "fmt_value",
     "jsonable",
     "known_pairs_errors",
@@ -164,6 +166,39 @@ class Calibration:
     ece: float
 
 
+def confidence_bins(
+    confidence: Sequence[float], correct: Sequence[bool], bins: int = 10
+) -> tuple[NDArray[np.int64], FloatArray, NDArray[np.int64]]:
+    """Per bin of [0, 1] (``bins`` equal bins): the cases, the sum of their confidences and
+    how many were correct -- sums that pool over sets of cases (cases with no answer count as
+    confidence 0, not correct)."""
+    conf = np.nan_to_num(np.asarray(confidence, dtype=np.float64), nan=0.0)
+    ok = np.asarray(correct, dtype=bool)
+    if conf.shape != ok.shape:
+        raise InputError("calibration needs one correctness flag per confidence")
+    edges = np.linspace(0.0, 1.0, bins + 1)
+    idx = np.clip(np.searchsorted(edges, conf, side="right") - 1, 0, bins - 1)
+    return (
+        np.bincount(idx, minlength=bins).astype(np.int64),
+        np.bincount(idx, weights=conf, minlength=bins).astype(np.float64),
+        np.bincount(idx, weights=ok.astype(float), minlength=bins).astype(np.int64),
+    )
+
+
+def calibration_of_bins(
+    counts: ArrayLike, confidence_sums: ArrayLike, correct: ArrayLike
+) -> Calibration:
+    """The reliability from per-bin sums (:func:`confidence_bins`, or several of them added)."""
+    n_b = np.asarray(counts, dtype=np.int64)
+    sums = np.asarray(confidence_sums, dtype=np.float64)
+    right = np.asarray(correct, dtype=np.float64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mean_c = sums / n_b
+        frac = right / n_b
+    ece = float(np.sum(np.abs(right - sums)) / max(int(n_b.sum()), 1))
+    return Calibration(np.linspace(0.0, 1.0, n_b.size + 1), mean_c, frac, n_b, ece)
+
+
 def calibration(
     confidence: Sequence[float], correct: Sequence[bool], bins: int = 10
 ) -> Calibration:
@@ -176,17 +211,4 @@ def calibration(
     >>> round(c.ece, 3)
     0.3
     """
-    conf = np.nan_to_num(np.asarray(confidence, dtype=np.float64), nan=0.0)
-    ok = np.asarray(correct, dtype=bool)
-    if conf.shape != ok.shape:
-        raise InputError("calibration needs one correctness flag per confidence")
-    edges = np.linspace(0.0, 1.0, bins + 1)
-    idx = np.clip(np.searchsorted(edges, conf, side="right") - 1, 0, bins - 1)
-    counts = np.bincount(idx, minlength=bins)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        mean_c = np.bincount(idx, weights=conf, minlength=bins) / counts
-        frac = np.bincount(idx, weights=ok.astype(float), minlength=bins) / counts
-    n = max(int(conf.size), 1)
-    gaps = np.where(counts > 0, np.abs(frac - mean_c), 0.0)
-    ece = float(np.sum(counts / n * gaps))
-    return Calibration(edges, mean_c, frac, counts.astype(np.int64), ece)
+    return calibration_of_bins(*confidence_bins(confidence, correct, bins))

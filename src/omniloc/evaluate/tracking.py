@@ -50,7 +50,7 @@ from ..maps import LandmarkMap
 from ..pose import Pose
 from ..track.data import Frame, GroundTruth, Odometry
 from ..track.records import TrackEstimate, TrackState
-from .common import NAN, jsonable, progress_bar
+from .common import NAN, calibration_of_bins, confidence_bins, jsonable, progress_bar
 
 __all__ = [
     "LocalizerOverTime",
@@ -436,22 +436,20 @@ def _weight_bins(
     pos_tol_m: float,
     heading_tol_deg: float,
 ) -> tuple[tuple[int, float, int], ...]:
-    """The strongest hypothesis's weight against its correctness, per tenth of [0, 1]."""
-    n = np.zeros(WEIGHT_BINS, dtype=np.int64)
-    total = np.zeros(WEIGHT_BINS)
-    right = np.zeros(WEIGHT_BINS, dtype=np.int64)
+    """The strongest hypothesis's weight against its correctness, per tenth of [0, 1]
+    (:func:`~omniloc.evaluate.common.confidence_bins`)."""
+    weights: list[float] = []
+    right: list[bool] = []
     for k, e in enumerate(estimates):
         if not scored[k] or not e.hypotheses:
             continue
         h = max(e.hypotheses, key=lambda hyp: hyp.weight)
-        w = min(max(float(h.weight), 0.0), 1.0)
-        b = min(int(w * WEIGHT_BINS), WEIGHT_BINS - 1)
         d_pos = math.hypot(h.pose.x - truth[k, 0], h.pose.y - truth[k, 1])
         d_hdg = abs(math.degrees(float(wrap(h.pose.theta - truth[k, 2]))))
-        n[b] += 1
-        total[b] += w
-        right[b] += int(d_pos <= pos_tol_m and d_hdg <= heading_tol_deg)
-    return tuple((int(a), float(c), int(r)) for a, c, r in zip(n, total, right, strict=True))
+        weights.append(min(max(float(h.weight), 0.0), 1.0))
+        right.append(d_pos <= pos_tol_m and d_hdg <= heading_tol_deg)
+    n, total, ok = confidence_bins(weights, right, WEIGHT_BINS)
+    return tuple((int(a), float(c), int(r)) for a, c, r in zip(n, total, ok, strict=True))
 
 
 def weight_ece(bins: Sequence[Sequence[float]]) -> float:
@@ -463,10 +461,10 @@ def weight_ece(bins: Sequence[Sequence[float]]) -> float:
     >>> round(weight_ece([(2, 1.8, 1), (2, 0.4, 0)]), 3)
     0.3
     """
-    frames = sum(int(b[0]) for b in bins)
-    if not frames:
+    if not sum(int(b[0]) for b in bins):
         return NAN
-    return float(sum(abs(b[1] - b[2]) for b in bins if b[0]) / frames)
+    n, total, ok = zip(*bins, strict=True)
+    return calibration_of_bins(n, total, ok).ece
 
 
 def _nanmedian(x: Sequence[float]) -> float:

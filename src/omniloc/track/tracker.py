@@ -300,22 +300,23 @@ class TrackerConfig:
             )
 
 
-def _logsumexp(a: FloatArray) -> float:
-    if a.size == 0:
-        return -math.inf
-    top = float(a.max())
-    if not math.isfinite(top):
-        return top
-    return top + math.log(float(np.exp(a - top).sum()))
-
-
 def _logsumexp_rows(a: FloatArray) -> FloatArray:
-    """ln of the sum of exp over each row of ``a`` (C, K); -inf for a row of -inf."""
+    """ln of the sum of exp over each row of ``a`` (C, K); -inf for a row of -inf. (By hand:
+    scipy.special.logsumexp costs more than the sums it does here.)"""
     top = np.max(a, axis=1)
     safe = np.where(np.isfinite(top), top, 0.0)
     with np.errstate(divide="ignore"):
         out = safe + np.log(np.exp(a - safe[:, None]).sum(axis=1))
     return np.where(np.isfinite(top), out, top)
+
+
+def _logsumexp(a: FloatArray) -> float:
+    """ln of the sum of exp of ``a`` (-inf when empty)."""
+    return (
+        float(_logsumexp_rows(np.asarray(a, dtype=np.float64).reshape(1, -1))[0])
+        if a.size
+        else -math.inf
+    )
 
 
 def within_tolerance(cov: FloatArray, tol_m: float, tol_heading: float) -> float:
