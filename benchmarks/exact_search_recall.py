@@ -49,6 +49,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 import omniloc.track.tracker as tracker_module  # noqa: E402
+from omniloc._kernels.geometry import det3, inv3, wrap_angle  # noqa: E402
 from omniloc.angles import wrap  # noqa: E402
 from omniloc.evaluate.tracking import mrclam_streams, run_stream, segment_of  # noqa: E402
 from omniloc.track import Tracker, preset  # noqa: E402
@@ -65,17 +66,12 @@ TRUTH_M, TRUTH_DEG = 0.5, 8.0
 
 @njit(cache=True)
 def _det3(a: FloatArray) -> float:
+    """Determinant of a general 3x3 (the project's ``geometry.det3`` takes a symmetric one)."""
     return float(
         a[0, 0] * (a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1])
         - a[0, 1] * (a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0])
         + a[0, 2] * (a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0])
     )
-
-
-@njit(cache=True)
-def _wrap(a: float) -> float:
-    t = (a + math.pi) % (2.0 * math.pi) - math.pi
-    return t - 2.0 * math.pi if t >= math.pi else t
 
 
 @njit(cache=True)
@@ -158,20 +154,20 @@ def exact_frames_search(
                                     M[r, k] = A[r, jj]
                                 k += 1
                         nv[j] = (-1.0) ** j * _det3(M)
-                    # ... and the least-norm solution A^T (A A^T)^-1 b (Cramer's rule).
+                    # ... and the least-norm solution A^T (A A^T)^-1 b.
                     for r in range(3):
                         for k in range(3):
                             AA[r, k] = A[r, 0] * A[k, 0] + A[r, 1] * A[k, 1]
                             AA[r, k] += A[r, 2] * A[k, 2] + A[r, 3] * A[k, 3]
-                    dA = _det3(AA)
+                    dA = det3(AA[0, 0], AA[0, 1], AA[0, 2], AA[1, 1], AA[1, 2], AA[2, 2])
                     if abs(dA) < 1e-12:
                         continue
-                    for r in range(3):
-                        for k in range(3):
-                            M[k, 0], M[k, 1], M[k, 2] = AA[k, 0], AA[k, 1], AA[k, 2]
-                        for k in range(3):
-                            M[k, r] = b[k]
-                        y[r] = _det3(M) / dA
+                    c00, c01, c02, c11, c12, c22, _ = inv3(
+                        AA[0, 0], AA[0, 1], AA[0, 2], AA[1, 1], AA[1, 2], AA[2, 2], 1.0, 0.0
+                    )
+                    y[0] = c00 * b[0] + c01 * b[1] + c02 * b[2]
+                    y[1] = c01 * b[0] + c11 * b[1] + c12 * b[2]
+                    y[2] = c02 * b[0] + c12 * b[1] + c22 * b[2]
                     for j in range(4):
                         x0[j] = A[0, j] * y[0] + A[1, j] * y[1] + A[2, j] * y[2]
                     qa = nv[0] * nv[0] + nv[1] * nv[1]
@@ -201,10 +197,10 @@ def exact_frames_search(
                                 q = dx * dx + dy * dy
                                 if q > max_range * max_range or q < min_range * min_range:
                                     continue
-                                h = _wrap(math.atan2(dy, dx) - ft)
+                                h = wrap_angle(math.atan2(dy, dx) - ft)
                                 if abs(h) > half_fov:
                                     continue
-                                e = abs(_wrap(z[i] - h))
+                                e = abs(wrap_angle(z[i] - h))
                                 if e < best:
                                     best = e
                                     asg[i] = j
