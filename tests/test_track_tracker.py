@@ -341,3 +341,28 @@ def test_elsewhere_gives_up_exactly_the_particles_a_hypothesis_covers() -> None:
     assert covered.sum() > 100
     assert share == pytest.approx(covered.mean())
     assert np.isneginf(ew.logw[covered]).all() and np.isfinite(ew.logw[~covered]).all()
+
+
+def test_searches_stop_on_their_node_budget_not_the_clock(monkeypatch: pytest.MonkeyPatch) -> None:
+    # A run must give the same states on any machine and under any load: the work budget
+    # decides where a search stops, the time budget is only a safety net above it.
+    import omniloc.track.relocalize as relocalize
+
+    seen: list[tuple[int | None, float | None, bool]] = []
+    real = relocalize.localize
+
+    def spy(*args, **kwargs):  # type: ignore[no-untyped-def]
+        res = real(*args, **kwargs)
+        seen.append((kwargs.get("max_nodes"), kwargs.get("timeout_s"), res.complete))
+        return res
+
+    monkeypatch.setattr(relocalize, "localize", spy)
+    run, _ = _scenario()
+    tight = TrackerConfig(search_interval_s=2.0, search_max_nodes=60, search_timeout_s=60.0)
+    a = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=tight)
+    assert seen and all(n == 60 and t == 60.0 for n, t, _ in seen)
+    assert not all(done for _, _, done in seen)  # the node budget stopped some searches
+    b = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=tight)
+    assert [(e.state, e.pose) for e in a.estimates] == [(e.state, e.pose) for e in b.estimates]
+    with pytest.raises(InputError, match="search_max_nodes"):
+        TrackerConfig(search_max_nodes=0)

@@ -72,6 +72,7 @@ def search_window(
     min_bearings: int,
     max_bearings: int,
     max_spurious: int,
+    max_nodes: int,
     timeout_s: float,
     cov_inflation: float,
 ) -> Candidates:
@@ -93,8 +94,10 @@ def search_window(
         Use at most this many stacked bearings (the most often seen).
     max_spurious : int
         Bearings the search may leave unmatched (clutter), at most ``m - 3``.
+    max_nodes : int
+        The search's work budget (nodes; what makes runs reproducible).
     timeout_s : float
-        The search's time budget.
+        The search's time budget (a safety net above ``max_nodes``).
     cov_inflation : float
         Factor on the candidates' covariances (the search's covariance comes from the
         widened noise of a rotation-only move, not from the exact model).
@@ -127,6 +130,7 @@ def search_window(
             fov=sensor.fov,
             max_range=sensor.max_range,
             min_range=sensor.min_range,
+            max_nodes=max_nodes,
             timeout_s=timeout_s,
             exhaustive=True,  # every interpretation: the candidates are weighed later
         )

@@ -87,6 +87,7 @@ _INTS = {
     "search_min_bearings",
     "search_max_bearings",
     "search_max_spurious",
+    "search_max_nodes",
     "max_candidates",
     "max_reported",
     "elsewhere_samples",
@@ -156,8 +157,13 @@ class TrackerConfig:
         At most this many stacked bearings go into a search.
     search_max_spurious : int
         Bearings a search may leave unmatched.
+    search_max_nodes : int
+        Work budget of one search (nodes of the interpretation tree). It decides where a
+        search stops, so that a run gives the same states on any machine and under any load
+        (the largest search on the MRCLAM runs visits about 40,000 nodes).
     search_timeout_s : float
-        Time budget of one search.
+        Time budget of one search: a safety net above the node budget (at the usual 60,000
+        to 80,000 nodes per second, the node budget is reached first).
     near_range_m : float
         Range at which the travel over the search window is turned into bearing noise.
     candidate_cov_inflation : float
@@ -223,7 +229,8 @@ class TrackerConfig:
     search_min_bearings: int = 4
     search_max_bearings: int = 12
     search_max_spurious: int = 2
-    search_timeout_s: float = 0.5
+    search_max_nodes: int = 50_000
+    search_timeout_s: float = 2.0
     near_range_m: float = 1.5
     candidate_cov_inflation: float = 4.0
     candidate_min_sd_m: float = 0.05
@@ -758,6 +765,7 @@ class Tracker:
             min_bearings=c.search_min_bearings,
             max_bearings=c.search_max_bearings,
             max_spurious=c.search_max_spurious,
+            max_nodes=c.search_max_nodes,
             timeout_s=c.search_timeout_s,
             cov_inflation=c.candidate_cov_inflation,
         )
