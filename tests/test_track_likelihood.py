@@ -3,6 +3,7 @@ checked against the formulas written out by hand for one hypothesis."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -11,7 +12,14 @@ from hypothesis import strategies as st
 from scipy.stats import norm
 
 from omniloc.sensor import SensorModel
-from omniloc.track.likelihood import FrameModel, frame_update, log_ratios
+from omniloc.track.likelihood import (
+    FrameModel,
+    Objects,
+    frame_update,
+    frame_update_clutter,
+    log_ratios,
+    log_ratios_clutter,
+)
 
 SIGMA = np.deg2rad(1.0)
 
@@ -122,3 +130,65 @@ def test_hypotheses_are_updated_independently(
         g = norm.pdf(nu, scale=SIGMA)
         expected.append(np.log1p(-d).sum() + np.log1p((d / (1 - d) * g / kappa).sum(axis=1)).sum())
     np.testing.assert_allclose(log_ratios(mu, b, L, model), expected, rtol=1e-9, atol=1e-9)
+
+
+# ---- clutter with memory ---------------------------------------------------------------------
+
+
+def _memory_model(fresh: float, sd: float) -> FrameModel:
+    return dataclasses.replace(
+        _model(fov=np.deg2rad(90.0), max_range=6.0), fresh=fresh, object_var=sd**2
+    )
+
+
+def test_an_object_seen_again_by_hand() -> None:
+    # No landmark in view: the frame is clutter only. Density at z: kappa * fresh plus the
+    # object's expected count times a Gaussian around it; the objects' count is paid once and
+    # the new clutter's count is (1 - fresh) of the memoryless one's: the ratio is
+    #   (1 - fresh) kappa fov - w + ln((kappa fresh + w N(z; b, s^2)) / kappa).
+    model = _memory_model(fresh=0.2, sd=np.deg2rad(1.5))
+    L = np.array([[-3.0, 0.0]])  # behind
+    kappa = math.exp(model.log_kappa)
+    fov = np.deg2rad(90.0)
+    z, b, w = 0.1, 0.12, 0.6
+    objects = Objects(np.array([b]), np.array([[w]]))
+    lr, post = log_ratios_clutter(np.zeros((1, 3)), np.array([z]), L, model, objects)
+    dens = kappa * 0.2 + w * norm.pdf(z, b, np.deg2rad(1.5))
+    want = 0.8 * kappa * fov - w + math.log(dens / kappa)
+    assert math.isclose(lr[0], want, rel_tol=1e-9)
+    assert post[0, 0] == 1.0  # nothing else could have made it
+    # the same through the update, for a hypothesis with a covariance
+    P = np.diag([1e-4, 1e-4, 1e-6])[None]
+    _, _, lr2, explained, post2 = frame_update_clutter(
+        np.zeros((1, 3)), P, np.array([z]), L, model, objects
+    )
+    assert math.isclose(lr2[0], want, rel_tol=1e-9) and explained[0] == 0.0 and post2[0, 0] == 1.0
+
+
+def test_an_object_seen_again_weighs_less_for_a_landmark_and_more_for_clutter() -> None:
+    # Two poses: one explains the bearing with a landmark, one as clutter. A persistent
+    # object at that bearing narrows their gap: the windfall of calling a robot a landmark.
+    L = np.array([[3.0, 0.0]])
+    poses = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.5]])  # the landmark at 0 rad, or -0.5 rad
+    z = np.array([_bearing(poses[0], L[0])])
+    model = _memory_model(fresh=0.2, sd=np.deg2rad(1.0))
+    plain, _ = log_ratios_clutter(poses, z, L, model, None)
+    objects = Objects(z.copy(), np.array([[0.0], [0.8]]))  # the clutter pose remembers it
+    memory, post = log_ratios_clutter(poses, z, L, model, objects)
+    assert memory[1] - memory[0] > plain[1] - plain[0] + 2.0
+    assert post[0, 0] < 0.01 and post[1, 0] == 1.0
+
+
+def test_without_memory_the_update_is_the_plain_one() -> None:
+    rng = np.random.default_rng(2)
+    L = rng.uniform(-5, 5, (12, 2))
+    mu = rng.uniform(-1, 1, (6, 3))
+    P = np.repeat(np.diag([0.01, 0.01, 0.001])[None], 6, axis=0)
+    b = rng.uniform(-1, 1, 4)
+    model = _model(fov=np.deg2rad(120.0), max_range=8.0)
+    plain = frame_update(mu, P, b, L, model)
+    full = frame_update_clutter(mu, P, b, L, model, None)
+    for x, y in zip(plain, full[:4], strict=True):
+        np.testing.assert_array_equal(x, y)
+    assert ((full[4] >= 0.0) & (full[4] <= 1.0)).all()
+    np.testing.assert_allclose(full[3], (1.0 - full[4]).sum(axis=1), rtol=1e-12, atol=1e-12)

@@ -222,8 +222,10 @@ def test_frame_before_any_odometry_is_a_robot_standing_still(
     assert tr.frame(3.1, _frames()[0].bearings).t == 3.1
 
 
-def test_a_long_odometry_gap_drops_the_hypotheses() -> None:
-    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+@pytest.mark.parametrize("persistence", [0.0, 0.6])
+def test_a_long_odometry_gap_drops_the_hypotheses(persistence: float) -> None:
+    config = TrackerConfig(search_interval_s=2.0, clutter_persistence=persistence)
+    tr = Tracker(GRID, SENSOR, MOTION, config)
     for f in _frames(10):
         tr.odometry([f.t], [0.0], [0.0])
         tr.frame(f.t, f.bearings)
@@ -366,3 +368,27 @@ def test_searches_stop_on_their_node_budget_not_the_clock(monkeypatch: pytest.Mo
     assert [(e.state, e.pose) for e in a.estimates] == [(e.state, e.pose) for e in b.estimates]
     with pytest.raises(InputError, match="search_max_nodes"):
         TrackerConfig(search_max_nodes=0)
+
+
+def test_clutter_with_memory_still_localizes_and_is_never_confidently_wrong() -> None:
+    # The simulated clutter has no memory: a model that expects some (another robot staying
+    # at one bearing) must still localize on the landmarks, and its memory must follow the
+    # hypotheses through merges, prunes and new searches without a shape error.
+    run, plain = _scenario()
+    config = TrackerConfig(search_interval_s=2.0, clutter_persistence=0.5)
+    res = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=config)
+    d, h = _errors(run, res)
+    t = np.array([e.t for e in res.estimates])
+    loc = np.array([e.localized for e in res.estimates])
+    before = t < KIDNAP[0]
+    assert loc[before].any()
+    assert (d[loc & before] < 0.1).all() and (h[loc & before] < 1.0).all()
+    assert [e.t for e in res.estimates] == [e.t for e in plain.estimates]
+
+
+def test_clutter_persistence_is_checked() -> None:
+    for bad in (1.0, 1.5, -0.1, float("nan")):
+        with pytest.raises(InputError, match="clutter_persistence"):
+            TrackerConfig(clutter_persistence=bad)
+    with pytest.raises(InputError, match="clutter_persistence_sd"):
+        TrackerConfig(clutter_persistence=0.5, clutter_persistence_sd=0.0)

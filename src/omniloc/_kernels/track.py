@@ -136,19 +136,38 @@ def frame_update_kernel(
     min_q: float,
     min_reading: float,
     update: bool,
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    fresh: float,
+    obj_b: FloatArray,
+    obj_w: FloatArray,
+    obj_var: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """Take one frame of bearings into H Gaussian hypotheses ``(mu, P)`` (copies are
     returned): the log-likelihood ratio of the frame (H,), the expected number of its
-    bearings that are landmarks (H,), and each hypothesis updated by the mixture of each
-    bearing's readings, one bearing at a time (see :mod:`omniloc.track.likelihood`).
+    bearings that are landmarks (H,), each hypothesis updated by the mixture of each
+    bearing's readings, one bearing at a time (see :mod:`omniloc.track.likelihood`), and
+    each bearing's posterior probability of being clutter (H, k).
     ``update`` False: exactly known poses (particles, ``P`` zero), which no bearing moves --
-    the ratio only, from one prediction per pose."""
+    the ratio only, from one prediction per pose.
+
+    Clutter with memory: the clutter density at a bearing is ``kappa`` times ``fresh`` plus,
+    for each object ``o`` of the previous frame (its bearing ``obj_b[o]`` in this frame, its
+    expected count for hypothesis ``k`` ``obj_w[k, o]``), ``obj_w[k, o]`` times a Gaussian of
+    variance ``obj_var`` around it; the objects' expected count is paid once per frame.
+    ``fresh`` 1 and no objects: the memoryless model."""
     mu = mu.copy()
     P = P.copy()
     H = mu.shape[0]
     N = L.shape[0]
+    K = obj_b.shape[0]
     log_ratio = np.zeros(H)
     explained = np.zeros(H)
+    clutter_post = np.zeros((H, bearings.shape[0]))
+    obj_norm = 1.0 / (math.sqrt(2.0 * math.pi * obj_var) * kappa) if K else 0.0
+    fresh_cost = (
+        (1.0 - fresh) * kappa * 2.0 * math.pi
+        if half_fov < 0.0
+        else ((1.0 - fresh) * kappa * 2.0 * half_fov)
+    )
     h = np.empty(N)
     J = np.empty((N, 3))
     var = np.empty(N)
@@ -166,13 +185,21 @@ def frame_update_kernel(
         s = 0.0
         for n in range(N):
             s += math.log1p(-min(d[n], 1.0 - 1e-12))
-        log_ratio[k] = s
-        for z in bearings:
+        for o in range(K):
+            s -= obj_w[k, o]
+        log_ratio[k] = s + fresh_cost
+        for iz in range(bearings.shape[0]):
+            z = bearings[iz]
             if update:
                 _predict_one(
                     m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d
                 )
-            total = 1.0
+            base = fresh
+            for o in range(K):
+                if obj_w[k, o] > 0.0:
+                    e = wrap_angle(z - obj_b[o])
+                    base += obj_w[k, o] * math.exp(-0.5 * e * e / obj_var) * obj_norm
+            total = base
             for n in range(N):
                 if d[n] == 0.0:
                     a[n] = 0.0
@@ -183,7 +210,8 @@ def frame_update_kernel(
                 a[n] = rho * math.exp(-0.5 * nu[n] * nu[n] / S) / math.sqrt(S) * norm
                 total += a[n]
             log_ratio[k] += math.log(total)
-            explained[k] += 1.0 - 1.0 / total
+            explained[k] += 1.0 - base / total
+            clutter_post[k, iz] = base / total
             if not update:
                 continue
             mean[:] = 0.0
@@ -216,4 +244,4 @@ def frame_update_kernel(
             for i in range(3):
                 m[i] += mean[i]
             m[2] = wrap_angle(m[2])
-    return mu, P, log_ratio, explained
+    return mu, P, log_ratio, explained, clutter_post

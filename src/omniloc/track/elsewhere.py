@@ -60,6 +60,9 @@ class Elsewhere:
         self._rng = np.random.default_rng(seed)
         self.poses = self._uniform(self.n)
         self.logw = np.full(self.n, -math.log(self.n))
+        #: Clutter with memory: each particle's expected count of each object of the
+        #: tracker's last frame with bearings (see ``TrackerConfig.clutter_persistence``).
+        self.memory = np.zeros((self.n, 0))
 
     def _uniform(self, m: int) -> FloatArray:
         x0, x1, y0, y1 = self.region
@@ -72,6 +75,7 @@ class Elsewhere:
         """Spread the particles uniformly again."""
         self.poses = self._uniform(self.n)
         self.logw = np.full(self.n, -math.log(self.n))
+        self.memory = np.zeros((self.n, self.memory.shape[1]))
 
     def move(self, delta: FloatArray, Q: FloatArray) -> None:
         """Move every particle by ``delta`` plus a draw of the motion noise ``Q``."""
@@ -136,4 +140,5 @@ class Elsewhere:
         u = (self._rng.uniform() + np.arange(m_keep)) / m_keep
         idx = np.minimum(np.searchsorted(np.cumsum(w), u), self.n - 1)
         self.poses = np.concatenate([self.poses[idx], self._uniform(m_new)])
+        self.memory = np.concatenate([self.memory[idx], np.zeros((m_new, self.memory.shape[1]))])
         self.logw = np.full(self.n, -math.log(self.n))

@@ -42,7 +42,14 @@ from numpy.typing import NDArray
 from .._kernels.track import frame_update_kernel
 from ..sensor import SensorModel
 
-__all__ = ["FrameModel", "frame_update", "log_ratios"]
+__all__ = [
+    "FrameModel",
+    "Objects",
+    "frame_update",
+    "frame_update_clutter",
+    "log_ratios",
+    "log_ratios_clutter",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -70,6 +77,11 @@ class FrameModel:
         Probability that a landmark in view is reported.
     log_kappa : float
         ln of the clutter density, per radian.
+    fresh : float
+        Share of that density that is new clutter when the clutter has memory (1: none);
+        the rest comes from the objects of the previous frame (:class:`Objects`).
+    object_var : float
+        Variance (rad^2) of an object's bearing from one frame to the next.
     """
 
     sigma2: float
@@ -78,6 +90,8 @@ class FrameModel:
     min_range: float | None
     p_detect: float
     log_kappa: float
+    fresh: float = 1.0
+    object_var: float = 0.0
 
     @classmethod
     def of(cls, sensor: SensorModel, *, p_detect: float = 0.5, clutter: float = 0.5) -> FrameModel:
@@ -93,6 +107,26 @@ class FrameModel:
             p_detect=float(min(max(pd, 1e-9), 1.0 - 1e-9)),
             log_kappa=math.log(max(rate, 1e-12) / sensor.fov_width),
         )
+
+
+@dataclass(frozen=True)
+class Objects:
+    """Clutter with memory: the bearings of the previous frame that may be objects seen
+    again (another robot stays at one bearing for seconds).
+
+    Attributes
+    ----------
+    bearings : ndarray, shape (K,)
+        Where they are now, radians in the current robot frame (the previous frame's
+        bearings turned by the odometry since).
+    weights : ndarray, shape (H, K)
+        For each hypothesis, the expected number of times each is seen again in this frame
+        (its posterior probability of having been clutter there, times the chance that an
+        object persists and is seen again; 0 out of view).
+    """
+
+    bearings: FloatArray
+    weights: FloatArray
 
 
 def frame_update(
@@ -126,7 +160,40 @@ def frame_update(
     """
     if mu.shape[0] == 0:
         return mu.copy(), P.copy(), np.zeros(0), np.zeros(0)
-    return _kernel(mu, P, bearings, L, model, update=True)
+    return _kernel(mu, P, bearings, L, model, update=True)[:4]
+
+
+def frame_update_clutter(
+    mu: FloatArray,
+    P: FloatArray,
+    bearings: FloatArray,
+    L: FloatArray,
+    model: FrameModel,
+    objects: Objects | None,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """:func:`frame_update` with clutter that has memory (``objects``, None: none); also
+    returns each bearing's posterior probability of being clutter, shape (H, k)."""
+    if mu.shape[0] == 0:
+        k = np.asarray(bearings).size
+        return mu.copy(), P.copy(), np.zeros(0), np.zeros(0), np.zeros((0, k))
+    return _kernel(mu, P, bearings, L, model, update=True, objects=objects)
+
+
+def log_ratios_clutter(
+    poses: FloatArray,
+    bearings: FloatArray,
+    L: FloatArray,
+    model: FrameModel,
+    objects: Objects | None,
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`log_ratios` with clutter that has memory; also returns each bearing's
+    posterior probability of being clutter at each pose, shape (M, k)."""
+    if poses.shape[0] == 0:
+        return np.zeros(0), np.zeros((0, np.asarray(bearings).size))
+    out = _kernel(
+        poses, np.zeros((poses.shape[0], 3, 3)), bearings, L, model, update=False, objects=objects
+    )
+    return out[2], out[4]
 
 
 def _kernel(
@@ -137,8 +204,18 @@ def _kernel(
     model: FrameModel,
     *,
     update: bool,
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    objects: Objects | None = None,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """The compiled kernel on the model's numbers (:func:`frame_update_kernel`)."""
+    if objects is None or objects.bearings.size == 0 or model.object_var <= 0.0:
+        ob, ow = np.zeros(0), np.zeros((mu.shape[0], 0))
+    else:
+        ob = np.ascontiguousarray(objects.bearings, dtype=np.float64).reshape(-1)
+        ow = np.ascontiguousarray(objects.weights, dtype=np.float64)
+        if ow.shape != (mu.shape[0], ob.size):
+            raise ValueError(
+                f"object weights of shape {ow.shape} for {mu.shape[0]} poses and {ob.size} objects"
+            )
     return frame_update_kernel(
         np.ascontiguousarray(mu, dtype=np.float64),
         np.ascontiguousarray(P, dtype=np.float64),
@@ -153,6 +230,10 @@ def _kernel(
         MIN_RANGE_M**2,
         MIN_READING_PROBABILITY,
         update,
+        model.fresh,
+        ob,
+        ow,
+        model.object_var if ob.size else 1.0,
     )
 
 

@@ -55,7 +55,7 @@ from __future__ import annotations
 import logging
 import math
 from collections import deque
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -69,7 +69,7 @@ from ..pose import Pose
 from ..sensor import SensorModel
 from .data import _float_array
 from .elsewhere import Elsewhere
-from .likelihood import FrameModel, frame_update, log_ratios
+from .likelihood import FrameModel, Objects, frame_update_clutter, log_ratios_clutter
 from .motion import MotionModel, between, compose, integrate, inverse, move, twist_of
 from .records import Hypothesis, TrackEstimate, TrackState
 from .relocalize import search_window
@@ -176,6 +176,17 @@ class TrackerConfig:
         ``localized`` needs the best hypothesis to explain at least this share of the
         recent bearings (a wrong pose can hold the mass by explaining a few and calling the
         rest clutter when the rivals explain fewer).
+    clutter_persistence : float
+        Clutter with memory (0, the default: none). The chance that a bearing a place
+        explains as clutter -- another robot, say -- is seen again in the next frame with
+        bearings (within ``clutter_memory_s``), within ``clutter_persistence_sd`` of where the
+        odometry's turn puts it; the rest of the measured clutter rate (a share
+        ``1 - clutter_persistence``) is new clutter. Without it, a wrong place that explains
+        a persistent object as a landmark earns a few nats from it in every frame.
+    clutter_persistence_sd : float
+        Spread of such an object's bearing from one frame to the next, radians.
+    clutter_memory_s : float
+        An object not seen again within this many seconds is forgotten.
     search_miss : float or None
         None (the default): Bayes' rule -- elsewhere earns each frame's likelihood ratio
         averaged over its particles, like any hypothesis. A probability: the chance that a
@@ -237,6 +248,9 @@ class TrackerConfig:
     candidate_min_sd_heading: float = float(np.deg2rad(1.0))
     fit_window_s: float = 10.0
     fit_explained: float = 0.0
+    clutter_persistence: float = 0.0
+    clutter_persistence_sd: float = float(np.deg2rad(1.0))
+    clutter_memory_s: float = 2.0
     search_miss: float | None = None
     replay_s: float = 4.0
     max_candidates: int = 3000
@@ -301,6 +315,15 @@ class TrackerConfig:
         ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if not self.clutter_persistence < 1.0:
+            raise InputError(
+                f"clutter_persistence must lie in [0, 1), got {self.clutter_persistence!r}"
+            )
+        if self.clutter_persistence > 0 and not self.clutter_persistence_sd > 0:
+            raise InputError(
+                "clutter_persistence_sd must be > 0 with clutter_persistence, got "
+                f"{self.clutter_persistence_sd!r}"
+            )
         if self.search_min_bearings < 3:
             raise InputError(
                 f"search_min_bearings must be at least 3, got {self.search_min_bearings}"
@@ -389,6 +412,12 @@ class Tracker:
         c = self.config
         self._L = np.ascontiguousarray(self.landmarks.xy, dtype=np.float64)
         self._model = FrameModel.of(self.sensor)
+        if c.clutter_persistence > 0:
+            self._model = replace(
+                self._model,
+                fresh=1.0 - c.clutter_persistence,
+                object_var=c.clutter_persistence_sd**2,
+            )
         if c.region is not None:
             x0, x1, y0, y1 = c.region
         else:
@@ -422,6 +451,12 @@ class Tracker:
         self._conf_t = np.zeros(0)  # end of the last search window that did
         self._fit_m = np.zeros(0)  # bearings explained, forgetting over fit_window_s
         self._fit_n = np.zeros(0)  # bearings seen, the same
+        # Clutter with memory: the last frame with bearings (its bearings, the odometry's
+        # turn since, its time) and each hypothesis's expected count of each seen again.
+        self._mem_b = np.zeros(0)
+        self._mem_rot = 0.0
+        self._mem_t = -math.inf
+        self._mem_w = np.zeros((0, 0))
         self._log_out = 0.0
         self._norm = 0.0  # sum of the log normalisers so far
         self._next_id = 0
@@ -606,9 +641,13 @@ class Tracker:
         self._conf_t = self._conf_t[idx]
         self._fit_m = self._fit_m[idx]
         self._fit_n = self._fit_n[idx]
+        self._mem_w = self._mem_w[idx]
 
     def _drop_all(self) -> None:
         self._keep(np.zeros(0, dtype=np.int64))
+        self._mem_b = np.zeros(0)
+        self._mem_w = np.zeros((0, 0))
+        self._mem_t = -math.inf
         self._log_out = 0.0
         self._localized_id = None
         self._elsewhere.reset()
@@ -703,6 +742,7 @@ class Tracker:
             self._conf_t[i] = float(self._conf_t[grp].max())
             self._fit_m[i] = float(w @ self._fit_m[grp])
             self._fit_n[i] = float(w @ self._fit_n[grp])
+            self._mem_w[i] = w @ self._mem_w[grp]
             if self._localized_id is not None and np.isin(self._localized_id, self._ids[same]):
                 self._localized_id = int(self._ids[i])
             alive[same] = False
@@ -710,15 +750,33 @@ class Tracker:
         idx = idx[np.argsort(-self._logw[idx], kind="stable")][: c.max_hypotheses]
         self._keep(idx)
 
+    # ---- clutter with memory -------------------------------------------------------------
+    def _objects(
+        self, t: float, mem_b: FloatArray, rot: float, mem_t: float, weights: FloatArray
+    ) -> Objects | None:
+        """The objects of the last frame with bearings (``mem_b``, at ``mem_t``, turned by
+        ``rot`` since) as seen at ``t``, with their expected counts ``weights`` (rows: poses);
+        None without memory."""
+        c = self.config
+        if c.clutter_persistence <= 0 or mem_b.size == 0 or t - mem_t > c.clutter_memory_s:
+            return None
+        ob = np.asarray(wrap(mem_b - rot))
+        w = weights
+        if self.sensor.half_fov is not None:
+            w = w * (np.abs(ob) <= self.sensor.half_fov)
+        return Objects(ob, w)
+
     # ---- new hypotheses ------------------------------------------------------------------
     def _replay(
         self, poses: FloatArray, covs: FloatArray, frames: list[WindowFrame]
-    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         """Candidates at the last frame of ``frames``: moved back to the first frame by the
         odometry, then filtered forward through every frame with the exact model. Returns
         their poses and covariances at the last frame, the ln of their prior volume, their
-        log-likelihood ratios summed from each frame of the replay to its end (C, K), and
-        their counts of bearings explained and seen (with the recent-fit forgetting)."""
+        log-likelihood ratios summed from each frame of the replay to its end (C, K), their
+        counts of bearings explained and seen (with the recent-fit forgetting), and their
+        clutter memory (the expected counts of the tracker's memory objects, zero when the
+        replay does not reach the tracker's last frame with bearings)."""
         c = self.config
         rel = between(frames[0].odom, frames[-1].odom)
         mu = compose(poses, inverse(rel))
@@ -728,17 +786,26 @@ class Tracker:
         lrs = np.zeros((mu.shape[0], len(frames)))
         fit_m = np.zeros(mu.shape[0])
         fit_n = np.zeros(mu.shape[0])
+        mem_b, mem_w, mem_t, rot = np.zeros(0), np.zeros((mu.shape[0], 0)), -math.inf, 0.0
         for k, f in enumerate(frames):
             if k:
                 mu, P = move(mu, P, f.delta, f.Q)
+                rot += float(f.delta[2])
                 decay = math.exp(-(f.t - frames[k - 1].t) / c.fit_window_s)
                 fit_m, fit_n = fit_m * decay, fit_n * decay
-            mu, P, lr, explained = frame_update(mu, P, f.bearings, self._L, self._model)
+            objects = self._objects(f.t, mem_b, rot, mem_t, mem_w)
+            mu, P, lr, explained, post = frame_update_clutter(
+                mu, P, f.bearings, self._L, self._model, objects
+            )
+            if f.bearings.size:
+                mem_b, mem_w, mem_t, rot = f.bearings, c.clutter_persistence * post, f.t, 0.0
             lrs[:, k] = c.evidence_weight * lr
             fit_m = fit_m + explained
             fit_n = fit_n + f.bearings.size
         to_end = np.cumsum(lrs[:, ::-1], axis=1)[:, ::-1]
-        return mu, P, volume, to_end, fit_m, fit_n
+        if mem_t != self._mem_t or mem_w.shape[1] != self._mem_b.size:
+            mem_w = np.zeros((mu.shape[0], self._mem_b.size))
+        return mu, P, volume, to_end, fit_m, fit_n, mem_w
 
     def _search(self, t: float) -> int:
         """Search the recent frames for new hypotheses; returns how many were added."""
@@ -790,7 +857,7 @@ class Tracker:
         for f in rframes[1:]:
             Q = Q + f.Q
         covs = covs + Q
-        mu, P, volume, to_end, fit_m, fit_n = self._replay(poses, covs, rframes)
+        mu, P, volume, to_end, fit_m, fit_n, mem_w = self._replay(poses, covs, rframes)
         # A candidate is a part of elsewhere that has come to light: it may have left
         # elsewhere at any frame of the replay (elsewhere's mass then, which holds the chance
         # of a kidnapping, times its evidence from that frame on), not only at the first --
@@ -856,6 +923,7 @@ class Tracker:
             self._conf_t = np.concatenate([self._conf_t, np.full(k, t)])
             self._fit_m = np.concatenate([self._fit_m, fit_m[new]])
             self._fit_n = np.concatenate([self._fit_n, fit_n[new]])
+            self._mem_w = np.concatenate([self._mem_w.reshape(-1, mem_w.shape[1]), mem_w[new]])
             self._next_id += k
         # Search theory: the search would have found the true place with probability
         # 1 - search_miss; the places it did not find -- elsewhere, and the hypotheses it did
@@ -919,6 +987,7 @@ class Tracker:
             self._hold = np.zeros(3)
         dt = 0.0 if t_prev is None else tf - t_prev
         self._elsewhere.move(delta, Q)
+        self._mem_rot += float(delta[2])
         if self.n_hypotheses:
             self._mu, self._P = move(self._mu, self._P, delta, Q)
             good = np.isfinite(self._mu).all(axis=1) & np.isfinite(self._P).all(axis=(1, 2))
@@ -937,10 +1006,14 @@ class Tracker:
         while self._history and self._history[0][0] < self._window[0].t:
             self._history.popleft()
         # The frame's evidence.
+        mem = (tf, self._mem_b, self._mem_rot, self._mem_t)
+        persist = c.clutter_persistence
         if self.n_hypotheses:
-            self._mu, self._P, lr, explained = frame_update(
-                self._mu, self._P, b, self._L, self._model
+            self._mu, self._P, lr, explained, post = frame_update_clutter(
+                self._mu, self._P, b, self._L, self._model, self._objects(*mem, self._mem_w)
             )
+            if b.size:
+                self._mem_w = persist * post
             best_lr = float(lr.max())
             self._logw = self._logw + c.evidence_weight * lr
             decay = math.exp(-dt / c.fit_window_s)
@@ -951,7 +1024,18 @@ class Tracker:
                 self._keep(np.flatnonzero(inside))
         else:
             best_lr = -math.inf
-        lr_else = log_ratios(self._elsewhere.poses, b, self._L, self._model)
+            if b.size:
+                self._mem_w = np.zeros((0, b.size))
+        lr_else, post_else = log_ratios_clutter(
+            self._elsewhere.poses,
+            b,
+            self._L,
+            self._model,
+            self._objects(*mem, self._elsewhere.memory),
+        )
+        if b.size:
+            self._elsewhere.memory = persist * post_else
+            self._mem_b, self._mem_rot, self._mem_t = b, 0.0, tf
         # Elsewhere explains a frame as well as its particles do (Bayes' rule); with
         # search_miss, at least as well as any hypothesis: a robot that is truly elsewhere
         # would explain its bearings like a true pose does, and only searches can rule such a
