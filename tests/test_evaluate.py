@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import itertools
 import json
 import math
 from pathlib import Path
@@ -290,3 +291,43 @@ def test_mrclam_tracking_preset_takes_no_landmark_nearer_than_the_recordings_rep
     sensor = preset("mrclam")[0]
     assert sensor.min_range is not None
     assert 0.9 * nearest <= sensor.min_range <= nearest
+
+
+@needs_data
+def test_mrclam_tracking_preset_remembers_the_other_robots_as_the_recordings_show() -> None:
+    # Of the other robots' bearings that are still in view in the next frame with bearings
+    # (within 2 s; turned by the true heading change), the share seen again within 3 deg is
+    # the preset's clutter_persistence, and their RMS error its clutter_persistence_sd.
+    import csv
+
+    from omniloc.track import preset
+
+    half = np.deg2rad(67.0) / 2
+    seen, errors = 0, []
+    for r in range(1, 6):
+        frames = []
+        with open(DATA / "mrclam-ds6" / f"robot{r}_frames.csv", newline="") as f:
+            for row in csv.DictReader(f):
+                dets = {}
+                for it in filter(None, row["robot_detections"].split(";")):
+                    rid, b, _ = it.split(":")
+                    dets[int(rid)] = float(b)
+                frames.append((float(row["t"]), float(row["gt_theta"]), dets))
+        for (t0, h0, d0), (t1, h1, d1) in itertools.pairwise(frames):
+            if t1 - t0 > 2.0:
+                continue
+            for rid, b in d0.items():
+                where = np.angle(np.exp(1j * (b + h0 - h1)))
+                if abs(where) > half:
+                    continue
+                seen += 1
+                if rid in d1:
+                    e = abs(np.angle(np.exp(1j * (d1[rid] - where))))
+                    if e <= np.deg2rad(3.0):
+                        errors.append(e)
+    share = len(errors) / seen
+    rms = float(np.sqrt(np.mean(np.square(errors))))
+    config = preset("mrclam")[2]
+    assert seen > 3000
+    assert config.clutter_persistence == pytest.approx(share, abs=0.02)
+    assert config.clutter_persistence_sd == pytest.approx(rms, rel=0.05)
