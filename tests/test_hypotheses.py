@@ -281,6 +281,13 @@ def test_a_first_fit_that_finds_nothing_searches_exhaustively(
     res = localize(big_map, b, exhaustive=False, **kw)
     assert res.stats.exhaustive and res.stats.complete
     assert res.best is not None and res.best.pose.distance_to(pose)[0] < 0.2
+    # A caller's max_nodes bounds both searches together (each used to get all of it):
+    # enough for the first fit and a quarter of the exhaustive search after it.
+    again = localize(big_map, b, exhaustive=True, **kw).stats.nodes
+    fit = res.stats.nodes - again
+    cut = localize(big_map, b, exhaustive=False, max_nodes=fit + again // 4, **kw)
+    assert not cut.complete and cut.stats.stopped == "budget"
+    assert fit < cut.stats.nodes <= fit + 2 * (again // 4) + 1000
 
 
 def test_first_fit_counts_the_same_with_and_without_a_node_budget(

@@ -158,8 +158,17 @@ def run_hypotheses(
 
     Large maps are cut into chunks of first landmarks, run on two threads (the kernel
     releases the GIL); ``stop_first`` (a first fit) stops handing out chunks once one has an
-    answer.
+    answer. ``opt.budget.max_nodes`` counts the nodes of every run into ``out``: a run
+    spends what the earlier ones left (``out.complete`` is False when none is left).
     """
+    # A node budget bounds the whole search: what this run may spend is what earlier runs
+    # into ``out`` (a first fit, a second look, an exhaustive search after either) left.
+    max_nodes = 0
+    if opt.budget.max_nodes is not None:
+        max_nodes = opt.budget.max_nodes - out.counts.nodes
+        if max_nodes <= 0:
+            out.complete = False
+            return
     s = opt.sensor
     m = beta.shape[0]
     limits = seeding.pair_limits(beta, s.reach_max, s.reach_min, 2.0 * s.gate_width)
@@ -203,7 +212,6 @@ def run_hypotheses(
         0.0 if s.plain_min is None else s.plain_min**2,
     )
     scoring = _scoring(lm, opt, len(triples))
-    max_nodes = 0 if opt.budget.max_nodes is None else opt.budget.max_nodes
 
     def call(rows: slice, i0: int, i1: int, cap: tuple[int, int]) -> KernelResult:
         """One kernel run; ``cap`` = (nodes, work) it may spend, 0 for no limit."""
