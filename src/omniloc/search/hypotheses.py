@@ -155,14 +155,22 @@ def _scoring(lm: LandmarkMap, opt: SearchOptions, n_seeds: int) -> Scoring:
 
 
 def run_hypotheses(
-    lm: LandmarkMap, beta: FloatArray, opt: SearchOptions, out: Leaves, *, stop_first: bool
+    lm: LandmarkMap,
+    beta: FloatArray,
+    opt: SearchOptions,
+    out: Leaves,
+    *,
+    stop_first: bool,
+    max_work: int = 0,
 ) -> None:
     """Hypothesise and verify for bearings ``beta`` (observation order), into ``out``.
 
     Large maps are cut into chunks of first landmarks, run on two threads (the kernel
     releases the GIL); ``stop_first`` (a first fit) stops handing out chunks once one has an
     answer. ``opt.budget.max_nodes`` counts the nodes of every run into ``out``: a run
-    spends what the earlier ones left (``out.complete`` is False when none is left).
+    spends what the earlier ones left (``out.complete`` is False when none is left), and so
+    does ``max_work`` (units of work, see omniloc._kernels.hypotheses; 0: no limit), the
+    budget the search gives a second look by default.
     """
     # A node budget bounds the whole search: what this run may spend is what earlier runs
     # into ``out`` (a first fit, a second look, an exhaustive search after either) left.
@@ -170,6 +178,12 @@ def run_hypotheses(
     if opt.budget.max_nodes is not None:
         max_nodes = opt.budget.max_nodes - out.counts.nodes
         if max_nodes <= 0:
+            out.complete = False
+            return
+    work_cap = 0
+    if max_work > 0:
+        work_cap = max_work - out.counts.work
+        if work_cap <= 0:
             out.complete = False
             return
     s = opt.sensor
@@ -225,20 +239,20 @@ def run_hypotheses(
         return hypotheses(nb, i0, i1, bearings, seeds, gate, vis, scoring, budget)
 
     if lm.n <= 4 * CHUNK_ANCHORS and opt.budget.timeout_s is None:
-        results = [call(slice(None), 0, lm.n, (max_nodes, 0))]
+        results = [call(slice(None), 0, lm.n, (max_nodes, work_cap))]
     elif lm.n <= 4 * CHUNK_ANCHORS:
         # A time budget on a small map: a chunk per seed, so that the clock is read between
         # them (the work rate that stands in for it inside the kernel was fitted to narrow
         # gates; a wide one costs several times more per unit and overran 0.5 s by 3-7x).
         chunks = [(slice(r, r + 1), 0, lm.n) for r in range(len(triples))]
-        results = _run_chunks(call, chunks, max_nodes, out, opt, rate)
+        results = _run_chunks(call, chunks, (max_nodes, work_cap), out, opt, rate)
     else:
         chunks = [
             (slice(r, r + 1), i0, min(i0 + CHUNK_ANCHORS, lm.n))
             for r in range(len(triples))
             for i0 in range(0, lm.n, CHUNK_ANCHORS)
         ]
-        results = _run_chunks(call, chunks, max_nodes, out, opt, rate)
+        results = _run_chunks(call, chunks, (max_nodes, work_cap), out, opt, rate)
     if not results:
         # The time was up before the first chunk (a big map's neighbour lists took it).
         out.complete = False
@@ -255,7 +269,7 @@ def run_hypotheses(
         # rare and must not be a silent "no pose": search again, exhaustively.
         log.debug("localize: the first fit found nothing; searching exhaustively")
         out.exhaustive = True
-        run_hypotheses(lm, beta, opt, out, stop_first=False)
+        run_hypotheses(lm, beta, opt, out, stop_first=False, max_work=max_work)
 
 
 def _collect(
@@ -277,6 +291,7 @@ def _collect(
     c.gate += sum(k.pruned_gate for k in counts)
     c.visibility += sum(k.pruned_visibility for k in counts)
     c.bound += sum(k.pruned_bound for k in counts)
+    c.work += sum(k.work for k in counts)
     stopped = max(k.stopped for k in counts)
     if any(k.stopped == 1 for k in counts):
         out.complete = False
@@ -386,16 +401,18 @@ def _work_left(out: Leaves, opt: SearchOptions) -> int:
 def _run_chunks(
     call: Callable[[slice, int, int, tuple[int, int]], KernelResult],
     chunks: list[tuple[slice, int, int]],
-    max_nodes: int,
+    caps: tuple[int, int],
     out: Leaves,
     opt: SearchOptions,
     rate: float = 1.0,
 ) -> list[KernelResult]:
     """Run chunks on a small thread pool, in order; stop early on an answer (first fit),
-    when the node budget is spent (summed over chunks) or when the time is up (each chunk in
-    flight may use what is left of it: they run side by side)."""
+    when the budget of nodes or work (``caps``, 0 for no limit) is spent (summed over
+    chunks) or when the time is up (each chunk in flight may use what is left of it: they
+    run side by side)."""
     results: list[KernelResult] = []
-    spent = 0
+    max_nodes, max_work = caps
+    spent = spent_work = 0
     workers = max(1, min(THREADS, os.cpu_count() or 1))
     with ThreadPoolExecutor(max_workers=workers) as pool:
         pending: list[Future[KernelResult]] = []
@@ -413,6 +430,9 @@ def _run_chunks(
                     out.complete = False
                     done = True
                     break
+                if max_work:
+                    rest = max(1, max_work - spent_work)
+                    work = rest if work == 0 else min(work, rest)
                 left = 0 if max_nodes == 0 else max(1, max_nodes - spent)
                 pending.append(pool.submit(call, nxt[0], nxt[1], nxt[2], (left, work)))
             if not pending:
@@ -420,6 +440,11 @@ def _run_chunks(
             r = pending.pop(0).result()
             results.append(r)
             spent += r[3].nodes
-            if r[3].stopped or (max_nodes and spent >= max_nodes):
+            spent_work += r[3].work
+            if (
+                r[3].stopped
+                or (max_nodes and spent >= max_nodes)
+                or (max_work and spent_work >= max_work)
+            ):
                 done = True
     return results
