@@ -12,7 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from omniloc import InputError, LandmarkMap, localize
+from omniloc import InputError, LandmarkMap, localize, search
 from omniloc._kernels import geometry as geo
 from omniloc._kernels import hypotheses as hk
 from omniloc.pose import Pose
@@ -281,6 +281,13 @@ def test_a_first_fit_that_finds_nothing_searches_exhaustively(
     res = localize(big_map, b, exhaustive=False, **kw)
     assert res.stats.exhaustive and res.stats.complete
     assert res.best is not None and res.best.pose.distance_to(pose)[0] < 0.2
+    # A caller's max_nodes bounds both searches together (each used to get all of it):
+    # enough for the first fit and a quarter of the exhaustive search after it.
+    again = localize(big_map, b, exhaustive=True, **kw).stats.nodes
+    fit = res.stats.nodes - again
+    cut = localize(big_map, b, exhaustive=False, max_nodes=fit + again // 4, **kw)
+    assert not cut.complete and cut.stats.stopped == "budget"
+    assert fit < cut.stats.nodes <= fit + 2 * (again // 4) + 1000
 
 
 def test_first_fit_counts_the_same_with_and_without_a_node_budget(
@@ -613,10 +620,11 @@ def test_cheap_test_only_removes_poorly_fitting_interpretations(
     assert work["on"] < 0.5 * work["off"]
 
 
-def test_auto_first_fit_looks_again_when_a_real_bearing_is_out_of_its_gate() -> None:
-    # A 2,500-landmark map: the default is a first fit. One real bearing 8 sigma off puts the
-    # truth out of reach with max_spurious equal to the clutter (1); nothing else convinces,
-    # so the search looks again with one more bearing allowed unmatched.
+@pytest.fixture(scope="module")
+def out_of_gate() -> tuple[LandmarkMap, np.ndarray, Pose, int, dict[str, Any]]:
+    """A 2,500-landmark map (the default is a first fit) and bearings whose first real one is
+    8 sigma off: with max_spurious equal to the clutter (1) the truth is out of the first
+    fit's reach, and nothing else convinces."""
     lm = random_map(2500, density=0.01, min_separation=1.0, rng=21)
     sigma = np.deg2rad(0.3)
     for seed in range(30):
@@ -632,9 +640,88 @@ def test_auto_first_fit_looks_again_when_a_real_bearing_is_out_of_its_gate() -> 
         pytest.fail("no interior pose seeing 8 landmarks")
     z = sc.bearings.copy()
     z[real[0]] += 8 * sigma
-    kw = {"sigma": sigma, "max_spurious": 1, "max_range": 20.0}
+    return lm, z, truth, real[0], {"sigma": sigma, "max_spurious": 1, "max_range": 20.0}
+
+
+def test_auto_first_fit_looks_again_when_a_real_bearing_is_out_of_its_gate(
+    out_of_gate: tuple[LandmarkMap, np.ndarray, Pose, int, dict[str, Any]],
+) -> None:
+    # Nothing convinces, so the search looks again with one more bearing allowed unmatched.
+    lm, z, truth, off, kw = out_of_gate
     strict = localize(lm, z, exhaustive=True, **kw)
     assert not strict or strict.best.pose.distance_to(truth)[0] > 0.5
     res = localize(lm, z, **kw)
     assert res.best is not None and res.best.pose.distance_to(truth)[0] < 0.1
-    assert res.best.assignment[real[0]] is None
+    assert res.best.assignment[off] is None
+    # The second look ran under its default budget and finished within it.
+    assert res.stats.complete and "second look" in res.stats.default_budget
+    assert "within its default budget" in res.stats.default_budget
+
+
+def _spy_on_runs(monkeypatch: pytest.MonkeyPatch) -> list[dict[str, int]]:
+    """Record the work and nodes of each search run localize starts (the first fit, the
+    second look; each with the exhaustive search it may start)."""
+    runs: list[dict[str, int]] = []
+    real = search.run_hypotheses
+
+    def spy(lm: LandmarkMap, beta: np.ndarray, opt: Any, out: Leaves, **kw: Any) -> None:
+        work, nodes = out.counts.work, out.counts.nodes
+        real(lm, beta, opt, out, **kw)
+        runs.append({"wild": opt.max_wild, "work": out.counts.work - work})
+        runs[-1]["nodes"] = out.counts.nodes - nodes
+
+    monkeypatch.setattr(search, "run_hypotheses", spy)
+    return runs
+
+
+def test_the_second_look_is_bounded_by_the_first_fits_work(
+    out_of_gate: tuple[LandmarkMap, np.ndarray, Pose, int, dict[str, Any]],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Without a budget the second look (and the exhaustive search after it, should its first
+    # fit find nothing) may search the whole map: minutes on 10,000 landmarks. By default it
+    # may spend SECOND_LOOK_FACTOR times the first fit's work (at least SECOND_LOOK_FLOOR);
+    # made small here, the bound stops it, and the result says so.
+    lm, z, _, _, kw = out_of_gate
+    runs = _spy_on_runs(monkeypatch)
+    free = localize(lm, z, max_nodes=10**12, **kw)  # a budget of the caller's: no default
+    assert free.stats.complete and free.stats.default_budget == ""
+    assert [r["wild"] for r in runs] == [1, 2]
+    allowance = runs[1]["work"] // 8
+    runs.clear()
+    monkeypatch.setattr(search, "SECOND_LOOK_FACTOR", 0)
+    monkeypatch.setattr(search, "SECOND_LOOK_FLOOR", allowance)
+    res = localize(lm, z, **kw)
+    # Counted in work, not time: the second look spent no more than its allowance (two
+    # chunks of the map in flight may each take what is left of it, and finish the
+    # hypothesis they are verifying).
+    assert [r["wild"] for r in runs] == [1, 2]
+    assert 0 < runs[1]["work"] <= 2 * allowance + 100_000
+    assert res.stats.nodes < free.stats.nodes
+    assert not res.complete and res.stats.stopped == "budget"
+    note = res.stats.default_budget
+    assert note.startswith("second look (one more unmatched bearing) stopped after")
+    assert "pass max_nodes or timeout_s" in note
+    # An incomplete search is never decisive.
+    assert res.ambiguous
+
+
+def test_a_callers_budget_replaces_the_second_looks_default(
+    out_of_gate: tuple[LandmarkMap, np.ndarray, Pose, int, dict[str, Any]],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    lm, z, truth, _, kw = out_of_gate
+    first = localize(lm, z, exhaustive=False, **kw).stats.nodes
+    monkeypatch.setattr(search, "SECOND_LOOK_FACTOR", 0)
+    monkeypatch.setattr(search, "SECOND_LOOK_FLOOR", 1)
+    # The caller allowed more than the default: the second look may spend all of it.
+    res = localize(lm, z, max_nodes=10**12, **kw)
+    assert res.complete and res.stats.default_budget == ""
+    assert res.best is not None and res.best.pose.distance_to(truth)[0] < 0.1
+    # The caller's node budget counts the whole call, first fit and second look together.
+    # (Two chunks of the map in flight may each take what is left, and finish the
+    # hypothesis they are verifying.)
+    cut = localize(lm, z, max_nodes=first + 100_000, **kw)
+    assert first < cut.stats.nodes <= first + 2 * 100_000 + 1000
+    assert not cut.complete and cut.stats.stopped == "budget" and cut.ambiguous
+    assert cut.stats.default_budget == ""

@@ -67,6 +67,37 @@ AUTO_FIRST_FIT = 2000
 DEFAULT_TIMEOUT_S = 10.0
 
 
+#: The second look (one more wildcard, after a first fit with nothing convincing) may spend
+#: SECOND_LOOK_FACTOR times the work of the first fit and of the exhaustive search after it
+#: if it found nothing (the hypotheses kernel's units, which track time where nodes do not:
+#: a complete path costs more than a node), and at least SECOND_LOOK_FLOOR (~0.3 s), when
+#: the caller gave no budget; with one, it spends what the caller's budget leaves.
+#: Unbounded it took 43-199 s on scene c; where it found the truth it needed at most 0.97
+#: of the first fit's work (docs/status.md, issue 16).
+SECOND_LOOK_FACTOR = 2
+SECOND_LOOK_FLOOR = 50_000_000
+
+
+def second_look_allowance(first_work: int) -> int:
+    """Units of work the second look may spend by default after a first fit of
+    ``first_work``."""
+    return max(SECOND_LOOK_FLOOR, SECOND_LOOK_FACTOR * first_work)
+
+
+def second_look_note(spent: int, first_work: int, complete: bool) -> str:
+    """What ``stats.default_budget`` says of a second look under its default budget."""
+    bound = (
+        f"{second_look_allowance(first_work):.2g} units of work, {SECOND_LOOK_FACTOR} x the "
+        f"first fit's {first_work:.2g} (at least {SECOND_LOOK_FLOOR:.2g})"
+    )
+    if complete:
+        return f"second look (one more unmatched bearing) within its default budget of {bound}"
+    return (
+        f"second look (one more unmatched bearing) stopped after {spent:.2g} units of work by "
+        f"its default budget of {bound}: pass max_nodes or timeout_s to search further"
+    )
+
+
 def unbounded(lm: LandmarkMap, opt: SearchOptions) -> str:
     """Why nothing bounds a search ("" when its budget, range or gate does)."""
     if opt.budget.bounded:
@@ -197,7 +228,10 @@ def localize(
         maps of more than AUTO_FIRST_FIT landmarks searched with a range, else True; when
         that first fit ends with nothing convincing (a real bearing outside its gate puts the
         truth out of reach when ``max_spurious`` equals the clutter), it looks once more,
-        allowing one more unmatched bearing. Needs the hypotheses strategy.
+        allowing one more unmatched bearing; without a budget of the caller's, that second
+        look may spend SECOND_LOOK_FACTOR times the first fit's work (reported in
+        ``stats.default_budget``; ``complete`` is False if it stopped it), with one, what
+        that budget leaves. Needs the hypotheses strategy.
     decisive : float, default 0.95
         The answer is ``ambiguous`` unless the best solution holds at least this share of
         the posterior (see :mod:`omniloc.search.scoring`).
@@ -226,7 +260,9 @@ def localize(
     max_nodes, timeout_s : optional
         The budget (see ``budget``). A search that nothing bounds -- a gate wider than 10
         degrees (``allow_wide``) or more than LARGE_MAP landmarks without ``max_range`` --
-        gets ``timeout_s=DEFAULT_TIMEOUT_S``, reported in ``stats.default_budget``.
+        gets ``timeout_s=DEFAULT_TIMEOUT_S``, reported in ``stats.default_budget``. A budget
+        counts the whole call: a second look (see ``exhaustive``) and the exhaustive search
+        after a first fit that finds nothing spend what is left of it.
 
     Returns
     -------
@@ -318,9 +354,21 @@ def localize(
             # equals the clutter. Look once more with one more bearing allowed unmatched
             # (c-grid, default options: 12 of 1,000 trials had the truth out of reach).
             log.debug("localize: nothing convincing; searching with one more wildcard")
+            first = leaves.counts.work
+            cap = 0
+            if not opt.budget.bounded:
+                # With one more wildcard, a first fit that does not stop goes through the
+                # whole map again, and one that finds nothing searches it exhaustively (1e8
+                # triples, minutes, on scene c): bounded by default.
+                cap = first + second_look_allowance(first)
             wider = dataclasses.replace(opt, max_wild=opt.max_wild + 1)
-            run_hypotheses(lm, b, wider, leaves, stop_first=True)
+            run_hypotheses(lm, b, wider, leaves, stop_first=True, max_work=cap)
             scored = finish(lm, b, leaves, opt)
+            if cap:
+                spent = leaves.counts.work - first
+                default_budget = second_look_note(spent, first, leaves.complete)
+                if not leaves.complete:
+                    log.warning("localize: %s", default_budget)
     c = leaves.counts
     stats = SearchStats(
         total_paths=math.perm(lm.n, m) if m <= lm.n else 0,

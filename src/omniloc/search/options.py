@@ -256,6 +256,7 @@ class Counters:
     ordering: int = 0
     visibility: int = 0
     bound: int = 0
+    work: int = 0  #: the hypotheses kernel's units of work (a complete path costs more)
 
 
 @dataclass

@@ -84,8 +84,9 @@ class SearchStats:
     default_budget : str
         Why the search ran under a default budget the caller did not give ("" when it did
         not): nothing else bounded it (a gate wider than 10 degrees, a large map without
-        ``max_range``), and the note says what to pass. ``complete`` tells whether the
-        budget stopped it.
+        ``max_range``), or a first fit's second look (``exhaustive=None``) ran, bounded by
+        a multiple of the first fit's work; the note says what to pass. ``complete`` tells
+        whether the budget stopped it.
     """
 
     total_paths: int
