@@ -757,9 +757,10 @@ def main(argv: list[str] | None = None) -> int:
             )
             return 1
         meta.update({k: v for k, v in old_meta.items() if k not in ("when", "command", "omniloc")})
-        meta["baselines_measured"] = old_meta.get("when")
+        # The baselines' rows keep the date they were measured (an earlier --tracker-only
+        # run passes it on); the time reported is this run's.
+        meta["baselines_measured"] = old_meta.get("baselines_measured") or old_meta.get("when")
         results.update(earlier.get("results", {}))
-        t_start -= float(old_meta.get("wall_s", 0.0))
         print(save({"tracker": run_tracker([*runs, *kid, *plain], print)}, final=True))
         return 0
     save({"tracker": run_tracker([*runs, *kid, *plain], print)})

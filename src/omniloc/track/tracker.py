@@ -22,7 +22,10 @@ when the tracker wakes up.
   Bayes' rule: nothing is forgotten, nothing is tempered unless ``evidence_weight`` says so.
   (With ``search_miss`` set, elsewhere instead explains each frame at least as well as the
   best hypothesis, and only searches take mass from it: for sensors and maps where the
-  searches often miss the true pose; see :class:`TrackerConfig`.)
+  searches often miss the true pose; see :class:`TrackerConfig`.) With
+  ``clutter_persistence`` set the clutter has memory: what a place called clutter in the
+  last frame with bearings it expects again near the same bearing (another robot stays put
+  for seconds), each hypothesis and each of elsewhere's particles with its own memory.
 * **New hypotheses.** While not localized, at most every ``search_interval_s``, the bearings
   of the shortest run of recent frames (at most ``search_window_s`` seconds) that holds
   ``search_min_bearings`` of them, stacked into the current frame by the odometry, go
@@ -786,6 +789,9 @@ class Tracker:
         lrs = np.zeros((mu.shape[0], len(frames)))
         fit_m = np.zeros(mu.shape[0])
         fit_n = np.zeros(mu.shape[0])
+        # The clutter's memory starts empty at the first frame of the replay (what a
+        # candidate called clutter before it is not known): its first frame pays for its
+        # clutter as new clutter, a small handicap against the places already tracked.
         mem_b, mem_w, mem_t, rot = np.zeros(0), np.zeros((mu.shape[0], 0)), -math.inf, 0.0
         for k, f in enumerate(frames):
             if k:
