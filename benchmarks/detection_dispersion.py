@@ -19,6 +19,7 @@ import json
 import math
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
@@ -42,7 +43,8 @@ def counts_in_view(streams: Sequence[Stream], sensor: SensorModel) -> dict[int, 
     """For each number of landmarks in view of the true pose, the number of them reported in
     each such frame (frames without ground truth are skipped)."""
     out: dict[int, list[int]] = {}
-    half = math.pi if sensor.half_fov is None else sensor.half_fov
+    if sensor.fov is not None:
+        sensor = replace(sensor, fov=sensor.fov - 2.0 * EDGE)
     for st in streams:
         ts = np.array([f.t for f in st.frames])
         truth, gaps = st.truth_at(ts)
@@ -50,14 +52,7 @@ def counts_in_view(streams: Sequence[Stream], sensor: SensorModel) -> dict[int, 
         for f, x, gap in zip(st.frames, truth, gaps, strict=True):
             if not (gap <= MAX_GAP_S and np.isfinite(x).all()):
                 continue
-            d = L - x[:2]
-            r = np.hypot(d[:, 0], d[:, 1])
-            b = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - x[2])))
-            vis = np.abs(b) <= half - EDGE
-            if sensor.max_range is not None:
-                vis &= r <= sensor.max_range
-            if sensor.min_range is not None:
-                vis &= r >= sensor.min_range
+            vis = sensor.visible(L, x)
             seen = {t for t in (f.truth or ()) if t is not None and vis[t]}
             out.setdefault(int(vis.sum()), []).append(len(seen))
     return out

@@ -46,6 +46,7 @@ from numpy.typing import ArrayLike, NDArray
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
+from omniloc import predict_bearings  # noqa: E402
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams, run_stream  # noqa: E402
 from omniloc.sensor import SensorModel  # noqa: E402
 from omniloc.track import MotionModel, Tracker, TrackerConfig, TrackState, preset  # noqa: E402
@@ -105,16 +106,8 @@ def split_frame(
     (-1.386, 0.0)
     """
     is_landmark = np.asarray(is_landmark, dtype=bool)
-    d = L - pose[:2]
-    rng = np.hypot(d[:, 0], d[:, 1])
-    pred = np.arctan2(d[:, 1], d[:, 0]) - pose[2]
-    pred = (pred + math.pi) % (2 * math.pi) - math.pi
-    in_view = np.abs(pred) <= 0.5 * sensor.fov
-    if sensor.max_range is not None:
-        in_view &= rng <= sensor.max_range
-    if sensor.min_range is not None:
-        in_view &= rng >= sensor.min_range
-    dj = sensor.p_detect * in_view
+    pred = np.asarray(predict_bearings(L, pose))
+    dj = sensor.p_detect * sensor.visible(L, pose)
     rho = dj / (1.0 - dj)
     kappa = sensor.clutter / sensor.fov
     terms = np.zeros(bearings.size)

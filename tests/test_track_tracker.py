@@ -392,3 +392,46 @@ def test_clutter_persistence_is_checked() -> None:
             TrackerConfig(clutter_persistence=bad)
     with pytest.raises(InputError, match="clutter_persistence_sd"):
         TrackerConfig(clutter_persistence=0.5, clutter_persistence_sd=0.0)
+
+
+def test_the_clutter_memory_reaches_the_frame_model(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Frames with the same bearings: at the last, every hypothesis and every particle
+    # of elsewhere brings its own expected counts of the first frame's bearings -- positive
+    # where it called one clutter -- and none without persistence.
+    import omniloc.track.tracker as tracker_module
+
+    seen: list[tuple[str, object]] = []
+    real_update = tracker_module.frame_update_clutter
+    real_ratios = tracker_module.log_ratios_clutter
+
+    def update(mu, P, b, L, model, objects):  # type: ignore[no-untyped-def]
+        seen.append(("hypotheses", objects))
+        return real_update(mu, P, b, L, model, objects)
+
+    def ratios(poses, b, L, model, objects):  # type: ignore[no-untyped-def]
+        seen.append(("elsewhere", objects))
+        return real_ratios(poses, b, L, model, objects)
+
+    monkeypatch.setattr(tracker_module, "frame_update_clutter", update)
+    monkeypatch.setattr(tracker_module, "log_ratios_clutter", ratios)
+    frames = _frames(3)
+    for persistence in (0.0, 0.6):
+        seen.clear()
+        # One search (at the first frame): the third frame's hypotheses carry what the
+        # second frame's update, not a search's replay, left them.
+        config = TrackerConfig(clutter_persistence=persistence, search_interval_s=100.0)
+        tr = Tracker(GRID, SENSOR, MOTION, config)
+        tr.odometry([0.0], [0.0], [0.0])
+        for f in frames:
+            tr.frame(f.t, f.bearings)
+        later = [obj for who, obj in seen[-2:]]
+        if persistence == 0.0:
+            assert later == [None, None]
+            continue
+        assert [who for who, _ in seen[-2:]] == ["hypotheses", "elsewhere"]
+        for obj in later:
+            assert obj is not None
+            np.testing.assert_allclose(obj.bearings, frames[1].bearings)  # no turn
+            assert obj.weights.shape[1] == frames[1].bearings.size
+            assert (obj.weights >= 0).all() and obj.weights.max() > 0
+            assert obj.weights.max() <= persistence + 1e-12

@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import math
 import sys
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -52,11 +52,18 @@ def fmt_value(v: Any) -> str:
 
 
 def write_records_csv(path: Path, records: Sequence[Any]) -> None:
+    """One CSV row per record: dataclasses (their fields) or mappings (their keys, in the
+    first record's order)."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as fh:
         if not records:
             return
         w = csv.writer(fh)
+        if isinstance(records[0], Mapping):
+            names = list(records[0])
+            w.writerow(names)
+            w.writerows([r[n] for n in names] for r in records)
+            return
         names = [f.name for f in fields(records[0])]
         w.writerow(names)
         for r in records:

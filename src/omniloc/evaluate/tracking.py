@@ -33,7 +33,6 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
 
 from __future__ import annotations
 
-import csv
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -50,7 +49,14 @@ from ..maps import LandmarkMap
 from ..pose import Pose
 from ..track.data import Frame, GroundTruth, Odometry
 from ..track.records import TrackEstimate, TrackState
-from .common import NAN, calibration_of_bins, confidence_bins, jsonable, progress_bar
+from .common import (
+    NAN,
+    calibration_of_bins,
+    confidence_bins,
+    jsonable,
+    progress_bar,
+    write_records_csv,
+)
 
 __all__ = [
     "LocalizerOverTime",
@@ -347,14 +353,7 @@ class RunScore:
 
 def _write_runs_csv(path: str | Path, runs: Sequence[RunScore]) -> None:
     """One row per run (:meth:`RunScore.csv_row`)."""
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    rows = [r.csv_row() for r in runs]
-    with out.open("w", newline="") as fh:
-        if rows:
-            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-            w.writeheader()
-            w.writerows(rows)
+    write_records_csv(Path(path), [r.csv_row() for r in runs])
 
 
 def score_run(
