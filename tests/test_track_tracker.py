@@ -435,3 +435,55 @@ def test_the_clutter_memory_reaches_the_frame_model(monkeypatch: pytest.MonkeyPa
             assert obj.weights.shape[1] == frames[1].bearings.size
             assert (obj.weights >= 0).all() and obj.weights.max() > 0
             assert obj.weights.max() <= persistence + 1e-12
+
+
+def _one_hypothesis(config: TrackerConfig, pose: np.ndarray, P: np.ndarray) -> Tracker:
+    """A tracker holding one hypothesis (set by hand: white-box) and no searches."""
+    L = np.array([[4.0, 0.0], [0.0, 4.0], [-4.0, 0.0]])  # one ahead, none near its bearing
+    sensor = SensorModel(sigma=np.deg2rad(0.5), max_range=5.0, p_detect=0.5, clutter=2.0)
+    tr = Tracker(LandmarkMap(L), sensor, MOTION, config)
+    tr._mu, tr._P = pose[None].copy(), P[None].copy()
+    tr._logw = np.zeros(1)
+    tr._log_out = -30.0
+    tr._ids = np.zeros(1, dtype=np.int64)
+    tr._born, tr._conf, tr._conf_t = np.zeros(1), np.ones(1, dtype=np.int64), np.zeros(1)
+    tr._fit_m, tr._fit_n, tr._mem_w = np.zeros(1), np.zeros(1), np.zeros((1, 0))
+    tr.odometry([0.0], [0.0], [0.0])
+    return tr
+
+
+def test_a_frame_that_may_be_all_clutter_splits_the_hypothesis() -> None:
+    # A vague heading (9 deg) and one bearing 12 deg off the landmark ahead: a landmark seen
+    # (the pose turns towards it) or clutter (the pose stays). With split_clutter the
+    # tracker keeps both, with the masses of the two readings; without, one collapsed pose.
+    from omniloc.track.likelihood import frame_update_clutter
+
+    pose = np.array([0.0, 0.0, 0.0])
+    P = np.diag([0.01, 0.01, np.deg2rad(9.0) ** 2])
+    z = np.array([np.deg2rad(12.0)])
+    base = dict(search_min_bearings=100, region=(-10.0, 10.0, -10.0, 10.0))
+    plain = _one_hypothesis(TrackerConfig(**base), pose, P)
+    plain.frame(0.1, z)
+    assert plain.n_hypotheses == 1
+    tr = _one_hypothesis(TrackerConfig(split_clutter=0.01, **base), pose, P)
+    est = tr.frame(0.1, z)
+    mu, _, _, _, post = frame_update_clutter(pose[None], P[None], z, tr._L, tr._model, None)
+    null = float(post[0, 0])
+    assert 0.01 < null < 0.99
+    assert tr.n_hypotheses == 2
+    moved = int(np.argmax(np.abs(tr._mu[:, 2])))
+    np.testing.assert_allclose(tr._mu[moved], mu[0])
+    np.testing.assert_allclose(tr._mu[1 - moved], pose)  # the clutter branch did not move
+    np.testing.assert_allclose(tr._P[1 - moved], P)
+    w = np.exp(tr._logw)
+    assert w[1 - moved] / w[moved] == pytest.approx(null / (1.0 - null), rel=1e-9)
+    # Both are the one lineage: the same place id, and both reported.
+    assert tr._ids[0] == tr._ids[1] and len(est.hypotheses) == 2
+    # The collapsed pose of the plain tracker is the turned branch.
+    np.testing.assert_allclose(plain._mu[0], mu[0])
+
+
+def test_split_clutter_is_checked() -> None:
+    for bad in (0.5, 0.7, -0.1, float("nan")):
+        with pytest.raises(InputError, match="split_clutter"):
+            TrackerConfig(split_clutter=bad)

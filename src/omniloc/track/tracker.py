@@ -190,6 +190,14 @@ class TrackerConfig:
         Spread of such an object's bearing from one frame to the next, radians.
     clutter_memory_s : float
         An object not seen again within this many seconds is forgotten.
+    split_clutter : float
+        0 (the default): each hypothesis takes a frame as one mixture of its readings
+        (probabilistic data association, collapsed to one Gaussian). Above 0: when the
+        posterior probability that every bearing of the frame is clutter lies between this
+        and 1 minus this, the hypothesis splits in two -- one that took the bearings as
+        landmarks, one that took them all as clutter and did not move -- each with its share
+        of the mass (a vague heading otherwise lets another robot's bearing pull the pose to
+        the tube beside it, and the collapsed hypothesis cannot come back).
     search_miss : float or None
         None (the default): Bayes' rule -- elsewhere earns each frame's likelihood ratio
         averaged over its particles, like any hypothesis. A probability: the chance that a
@@ -254,6 +262,7 @@ class TrackerConfig:
     clutter_persistence: float = 0.0
     clutter_persistence_sd: float = float(np.deg2rad(1.0))
     clutter_memory_s: float = 2.0
+    split_clutter: float = 0.0
     search_miss: float | None = None
     replay_s: float = 4.0
     max_candidates: int = 3000
@@ -326,6 +335,11 @@ class TrackerConfig:
             raise InputError(
                 "clutter_persistence_sd must be > 0 with clutter_persistence, got "
                 f"{self.clutter_persistence_sd!r}"
+            )
+        if not self.split_clutter < 0.5:
+            raise InputError(
+                f"split_clutter must lie in [0, 0.5) (the split happens between it and 1 minus "
+                f"it), got {self.split_clutter!r}"
             )
         if self.search_min_bearings < 3:
             raise InputError(
@@ -645,6 +659,38 @@ class Tracker:
         self._fit_m = self._fit_m[idx]
         self._fit_n = self._fit_n[idx]
         self._mem_w = self._mem_w[idx]
+
+    def _split(
+        self, mu0: FloatArray, P0: FloatArray, post: FloatArray, fit_m0: FloatArray, persist: float
+    ) -> None:
+        """Split the hypotheses for which "every bearing of the frame was clutter" is neither
+        negligible nor nearly certain (``split_clutter``): the updated one keeps the chance
+        that some bearing was a landmark, a copy of it as it was before the frame (``mu0``,
+        ``P0``, ``fit_m0``) takes the chance that none was. Both keep the lineage (id, age,
+        confirmations): the place a localized state stands on is the heavier of them."""
+        c = self.config
+        # Each bearing's probability of being clutter, given the ones before it: their
+        # product is the chance that all were (the frame's readings taken in sequence).
+        null = np.exp(np.log(np.clip(post, 1e-300, 1.0)).sum(axis=1))
+        split = np.flatnonzero((null >= c.split_clutter) & (null <= 1.0 - c.split_clutter))
+        if split.size == 0:
+            return
+        ew = c.evidence_weight
+        self._logw = self._logw.copy()
+        base = self._logw[split].copy()
+        self._logw[split] = base + ew * np.log1p(-null[split])
+        self._mu = np.concatenate([self._mu, mu0[split]])
+        self._P = np.concatenate([self._P, P0[split]])
+        self._logw = np.concatenate([self._logw, base + ew * np.log(null[split])])
+        self._ids = np.concatenate([self._ids, self._ids[split]])
+        self._born = np.concatenate([self._born, self._born[split]])
+        self._conf = np.concatenate([self._conf, self._conf[split]])
+        self._conf_t = np.concatenate([self._conf_t, self._conf_t[split]])
+        self._fit_m = np.concatenate([self._fit_m, fit_m0[split]])
+        self._fit_n = np.concatenate([self._fit_n, self._fit_n[split]])
+        self._mem_w = np.concatenate(
+            [self._mem_w, np.full((split.size, self._mem_w.shape[1]), persist)]
+        )
 
     def _drop_all(self) -> None:
         self._keep(np.zeros(0, dtype=np.int64))
@@ -1015,6 +1061,7 @@ class Tracker:
         mem = (tf, self._mem_b, self._mem_rot, self._mem_t)
         persist = c.clutter_persistence
         if self.n_hypotheses:
+            mu0, P0 = self._mu, self._P
             self._mu, self._P, lr, explained, post = frame_update_clutter(
                 self._mu, self._P, b, self._L, self._model, self._objects(*mem, self._mem_w)
             )
@@ -1023,8 +1070,11 @@ class Tracker:
             best_lr = float(lr.max())
             self._logw = self._logw + c.evidence_weight * lr
             decay = math.exp(-dt / c.fit_window_s)
-            self._fit_m = self._fit_m * decay + explained
+            fit_m0 = self._fit_m * decay
+            self._fit_m = fit_m0 + explained
             self._fit_n = self._fit_n * decay + b.size
+            if c.split_clutter > 0.0 and b.size:
+                self._split(mu0, P0, post, fit_m0, persist)
             inside = self._inside(self._mu)
             if not inside.all():
                 self._keep(np.flatnonzero(inside))
