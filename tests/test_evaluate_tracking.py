@@ -68,3 +68,22 @@ def test_runs_csv_has_the_weight_calibration_as_plain_columns(tmp_path: Path) ->
     assert "weight_bins" not in row
     assert int(row["best_weight_frames"]) == 4
     assert math.isclose(float(row["best_weight_ece"]), 0.05)
+
+
+def test_the_summary_says_never_for_a_run_never_localized() -> None:
+    from omniloc.evaluate.tracking import tracking_summary
+
+    stream = _stream(4)
+    right = [
+        TrackEstimate(float(k), TrackState.LOCALIZED, pose=TRUE, covariance=np.eye(3) * 1e-4)
+        for k in range(4)
+    ]
+    never = [_ambiguous(float(k), TRUE, 0.5) for k in range(4)]
+    text = tracking_summary(
+        TrackingResult("tracker", [score_run(stream, right), score_run(stream, never)])
+    )
+    assert "nan" not in text
+    rows = text.splitlines()[2:4]
+    assert "never" in rows[1] and "never" not in rows[0]
+    assert len(rows[0]) == len(rows[1])  # the columns stay aligned
+    assert "never on 1 of 2 runs" in text

@@ -696,8 +696,13 @@ def evaluate_mrclam_tracking(
     return TrackingReport(whole, kid), est
 
 
-def _fmt(v: float, spec: str = ".2f") -> str:
-    return "nan" if not math.isfinite(v) else format(v, spec)
+def _fmt(v: float, spec: str = ".2f", none: str = "-") -> str:
+    """``v`` formatted by ``spec``, or ``none`` (padded to the spec's width) when it is not
+    a finite number: a run never localized has no time to localize and no RMSE."""
+    if math.isfinite(v):
+        return format(v, spec)
+    width = spec.split(".")[0]
+    return none.rjust(int(width)) if width.isdigit() else none
 
 
 def tracking_summary(report: TrackingReport | TrackingResult) -> str:
@@ -712,16 +717,23 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
     ]
     for r in w.runs:
         lines.append(
-            f"{r.name:<10} {_fmt(r.time_to_localize_s, '13.1f')} s  "
+            f"{r.name:<10} {_fmt(r.time_to_localize_s, '13.1f', 'never')}"
+            f"{' s' if math.isfinite(r.time_to_localize_s) else '  '}  "
             f"{_fmt(100 * r.correct_after_rate, '11.1f')} %"
             f"  {r.n_localized:5d}/{r.n_scored:<5d} {r.n_confidently_wrong:8d}"
             f"  {_fmt(r.pos_rmse_m, '6.3f')} m {_fmt(r.heading_rmse_deg, '6.2f')} deg"
             f"  {_fmt(r.realtime_factor, '8.0f')}x"
         )
     tot = w.totals()
+    never = int(tot["never_localized"])
+    worst = (
+        f"max {_fmt(tot['time_to_localize_max_s'], '.1f')} s"
+        if not never
+        else f"never on {never} of {len(w.runs)} run{'s' if len(w.runs) != 1 else ''}"
+    )
     lines.append(
         f"all runs: time to localize median {_fmt(tot['time_to_localize_median_s'], '.1f')} s, "
-        f"max {_fmt(tot['time_to_localize_max_s'], '.1f')} s; correct after "
+        f"{worst}; correct after "
         f"{_fmt(100 * tot['correct_after_rate'], '.1f')} %; confidently wrong "
         f"{_fmt(100 * tot['confidently_wrong_rate'], '.2f')} % of frames; position RMSE "
         f"{_fmt(tot['pos_rmse_m'], '.3f')} m, heading RMSE {_fmt(tot['heading_rmse_deg'])} deg; "
