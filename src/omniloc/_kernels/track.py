@@ -115,6 +115,11 @@ def _predict_one(
         var[n] = max(v, 0.0)
         if half_fov < 0.0:
             vis = 1.0
+        elif var[n] == 0.0:
+            # An exactly known pose: the edge of the view is sharp (what the erfc below
+            # gives with its 1e-9 floor, without computing it).
+            e = half_fov - abs(h[n])
+            vis = 1.0 if e > 0.0 else (0.5 if e == 0.0 else 0.0)
         else:
             sd = math.sqrt(var[n]) + 1e-9
             vis = 0.5 * math.erfc(-((half_fov - abs(h[n])) / sd) / math.sqrt(2.0))
@@ -184,7 +189,8 @@ def frame_update_kernel(
         _predict_one(m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d)
         s = 0.0
         for n in range(N):
-            s += math.log1p(-min(d[n], 1.0 - 1e-12))
+            if d[n] > 0.0:
+                s += math.log1p(-min(d[n], 1.0 - 1e-12))
         for o in range(K):
             s -= obj_w[k, o]
         log_ratio[k] = s + fresh_cost
