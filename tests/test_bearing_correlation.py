@@ -1,0 +1,47 @@
+"""benchmarks/bearing_correlation.py: how the bearing errors of one tube repeat over time."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+from bearing_correlation import lag_correlations, sightings
+from omniloc import LandmarkMap
+from omniloc.evaluate.tracking import Segment, Stream
+from omniloc.track import Frame, GroundTruth, Odometry
+
+
+def test_an_ar1_error_has_its_correlation_at_each_lag() -> None:
+    # Errors of an AR(1) process sampled every 0.25 s with correlation 0.6 per step: 0.6 at
+    # 0.25 s, 0.36 at 0.5 s; a second tube's errors are independent of the first's.
+    rng = np.random.default_rng(1)
+    rows = []
+    for tube in (0, 1):
+        e = 0.0
+        for i in range(40_000):
+            e = 0.6 * e + math.sqrt(1 - 0.36) * rng.normal()
+            rows.append((0, tube, 0.25 * i, 0.01 * e))
+    out = lag_correlations(rows, (0.3, 0.6))
+    assert out[0]["correlation"] == pytest.approx(0.6, abs=0.02)
+    assert out[1]["correlation"] == pytest.approx(0.36, abs=0.02)
+    assert out[0]["pairs"] == 2 * (40_000 - 1)
+
+
+def test_sightings_are_the_known_tubes_errors_against_the_truth() -> None:
+    # Robot at the origin facing +x; tube 0 straight ahead seen 1 deg to the left, tube 1
+    # seen 8 deg off (left out: the tail), a clutter bearing (no id: left out).
+    lm = LandmarkMap(np.array([[3.0, 0.0], [0.0, 3.0], [-3.0, 0.0]]))
+    t = np.array([0.0, 1.0])
+    truth = GroundTruth(t, np.zeros(2), np.zeros(2), np.zeros(2))
+    z = np.array([math.radians(1.0), math.radians(98.0), 0.3])
+    frame = Frame(0.5, z, truth=(0, 1, None))
+    odo = Odometry(t, np.zeros(2), np.zeros(2))
+    stream = Stream("s", lm, odo, [frame], (Segment(0.0, 2.0, 0.0, truth, "test"),))
+    (row,) = sightings([stream])
+    assert row[:3] == (0, 0, 0.5) and row[3] == pytest.approx(math.radians(1.0))
