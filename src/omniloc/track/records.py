@@ -56,7 +56,7 @@ class Hypothesis:
         ``TrackerConfig.max_reported``) sum to 1 less elsewhere's share and any not reported.
         It is the model's probability, as good as the sensor model: on MRCLAM, where the
         camera's errors and detections are correlated, it is overconfident (the strongest
-        hypothesis at 0.9 or more is right in 56 % of the frames; docs/tracking.md), and
+        hypothesis at 0.9 or more is right in 58 % of the frames; docs/tracking.md), and
         every tracking evaluation reports its calibration (``best_weight_ece``).
     """
 
