@@ -15,19 +15,17 @@ between them. Writes ``results_bearing_correlation.json`` beside this file; docs
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from collections.abc import Sequence
-from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
+from _results import run_meta, write_results  # noqa: E402
 from omniloc import predict_bearings  # noqa: E402
 from omniloc.angles import wrap  # noqa: E402
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
@@ -110,17 +108,13 @@ def main(argv: list[str] | None = None) -> int:
             f"{r['lag_from_s']:.2f}-{r['lag_to_s']:.2f} s apart ({r['pairs']} pairs): "
             f"correlation {r['correlation']:.2f}"
         )
-    out: dict[str, Any] = {
-        "meta": {
-            "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "command": "python benchmarks/bearing_correlation.py " + " ".join(argv or []),
-        },
-        "sightings": int(err.size),
-        "error_sd_deg": math.degrees(float(err.std())),
-        "lags": lags,
-    }
-    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
-    print(f"wrote {args.out}")
+    write_results(
+        args.out,
+        run_meta("bearing_correlation.py", argv),
+        sightings=int(err.size),
+        error_sd_deg=math.degrees(float(err.std())),
+        lags=lags,
+    )
     return 0
 
 

@@ -15,12 +15,10 @@ docs/tracking.md ("What would be tried next") for what it found.
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from collections.abc import Sequence
 from dataclasses import replace
-from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +28,7 @@ from scipy.stats import binom
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
+from _results import run_meta, write_results  # noqa: E402
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
 from omniloc.sensor import SensorModel  # noqa: E402
 from omniloc.track import preset  # noqa: E402
@@ -103,15 +102,7 @@ def main(argv: list[str] | None = None) -> int:
             f"all but one or more {100 * d['all_but_one_or_more']:.1f} % "
             f"({100 * d['binomial_all_but_one_or_more']:.1f} %)"
         )
-    out = {
-        "meta": {
-            "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "command": "python benchmarks/detection_dispersion.py " + " ".join(argv or []),
-        },
-        "rows": rows,
-    }
-    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
-    print(f"wrote {args.out}")
+    write_results(args.out, run_meta("detection_dispersion.py", argv), rows=rows)
     return 0
 
 

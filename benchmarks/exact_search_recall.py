@@ -32,12 +32,9 @@ from __future__ import annotations
 
 import argparse
 import itertools
-import json
 import math
-import platform
 import sys
 import time
-from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +46,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 import omniloc.track.tracker as tracker_module  # noqa: E402
+from _results import run_meta, write_results  # noqa: E402
 from omniloc._kernels.geometry import det3, inv3, wrap_angle  # noqa: E402
 from omniloc.angles import wrap  # noqa: E402
 from omniloc.evaluate.tracking import mrclam_streams, run_stream, segment_of  # noqa: E402
@@ -323,15 +321,13 @@ def main(argv: list[str] | None = None) -> int:
         "exact_seconds_median": float(np.median([r["exact_s"] for r in rows])),
         "exact_seconds_max": float(max(r["exact_s"] for r in rows)),
     }
-    meta = {
-        "when": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-        "machine": platform.machine(),
-        "python": platform.python_version(),
-        "command": "python benchmarks/exact_search_recall.py " + " ".join(argv or sys.argv[1:]),
-        "args": {k: str(v) for k, v in vars(args).items()},
-        "wall_s": round(time.time() - t_start, 1),
-    }
-    args.out.write_text(json.dumps({"meta": meta, "summary": summary, "searches": rows}, indent=1))
+    meta = run_meta(
+        "exact_search_recall.py",
+        argv,
+        args={k: str(v) for k, v in vars(args).items()},
+        wall_s=round(time.time() - t_start, 1),
+    )
+    write_results(args.out, meta, summary=summary, searches=rows)
     print(
         f"robot {args.robot}, first {args.seconds:g} s, {n} searches: the truth among the "
         f"stacked search's candidates in {100 * summary['stacked_truth_rate']:.1f} %, among "

@@ -30,13 +30,10 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import math
-import platform
 import sys
 import time
 from dataclasses import dataclass
-from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
@@ -46,6 +43,7 @@ from numpy.typing import ArrayLike, NDArray
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
+from _results import run_meta, write_results  # noqa: E402
 from omniloc import predict_bearings  # noqa: E402
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams, run_stream  # noqa: E402
 from omniloc.sensor import SensorModel  # noqa: E402
@@ -286,19 +284,8 @@ def main(argv: list[str] | None = None) -> int:
         key = f"{s:g}"
         total[key] = summary([x for r in runs for x in r["spans"][key]["rows"]])
         print("all " + _line(key, total[key]))
-    out = {
-        "meta": {
-            "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
-            "machine": f"{platform.machine()}, Python {platform.python_version()}",
-            "command": "python benchmarks/track_evidence.py " + " ".join(argv or sys.argv[1:]),
-            "bayes": args.bayes,
-            "wall_s": round(time.time() - t0, 1),
-        },
-        "total": total,
-        "runs": runs,
-    }
-    Path(args.out).write_text(json.dumps(out, indent=1) + "\n")
-    print(f"wrote {args.out}")
+    meta = run_meta("track_evidence.py", argv, bayes=args.bayes, wall_s=round(time.time() - t0, 1))
+    write_results(args.out, meta, total=total, runs=runs)
     return 0
 
 

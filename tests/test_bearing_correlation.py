@@ -45,3 +45,16 @@ def test_sightings_are_the_known_tubes_errors_against_the_truth() -> None:
     stream = Stream("s", lm, odo, [frame], (Segment(0.0, 2.0, 0.0, truth, "test"),))
     (row,) = sightings([stream])
     assert row[:3] == (0, 0, 0.5) and row[3] == pytest.approx(math.radians(1.0))
+
+
+def test_results_files_say_when_where_and_how(tmp_path: Path) -> None:
+    import json
+
+    from _results import run_meta, write_results
+
+    meta = run_meta("bearing_correlation.py", ["--out", "x.json"], wall_s=2.0)
+    write_results(tmp_path / "r.json", meta, lags=[1, 2])
+    out = json.loads((tmp_path / "r.json").read_text())
+    assert out["lags"] == [1, 2] and out["meta"]["wall_s"] == 2.0
+    assert out["meta"]["command"] == "python benchmarks/bearing_correlation.py --out x.json"
+    assert out["meta"]["date"].endswith("+00:00") and "Python" in out["meta"]["machine"]

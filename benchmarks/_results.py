@@ -1,0 +1,39 @@
+"""What the diagnosis scripts of ``benchmarks/`` write beside their figures: when, on what
+machine, by which command -- one implementation, so every results file says it the same way."""
+
+from __future__ import annotations
+
+import json
+import platform
+import sys
+from collections.abc import Sequence
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+__all__ = ["run_meta", "write_results"]
+
+
+def run_meta(script: str, argv: Sequence[str] | None, **extra: Any) -> dict[str, Any]:
+    """The ``meta`` block of a results file: the date (UTC), the machine, the command that
+    wrote it (``argv``: the script's arguments, None for the command line's) and ``extra``.
+
+    Examples
+    --------
+    >>> m = run_meta("x.py", ["--fast"], wall_s=1.5)
+    >>> m["command"], m["wall_s"]
+    ('python benchmarks/x.py --fast', 1.5)
+    """
+    args = list(argv) if argv is not None else sys.argv[1:]
+    return {
+        "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "machine": f"{platform.machine()}, Python {platform.python_version()}",
+        "command": " ".join(["python", f"benchmarks/{script}", *args]),
+        **extra,
+    }
+
+
+def write_results(path: str | Path, meta: dict[str, Any], **payload: Any) -> None:
+    """Write ``{"meta": meta, **payload}`` as indented JSON to ``path`` and say so."""
+    Path(path).write_text(json.dumps({"meta": meta, **payload}, indent=1) + "\n")
+    print(f"wrote {path}")
