@@ -109,13 +109,16 @@ class Elsewhere:
         lam = np.linalg.eigvalsh(0.5 * (P[:, :2, :2] + np.swapaxes(P[:, :2, :2], 1, 2)))[:, -1]
         radius = np.sqrt(COVERED_CHI2 * np.maximum(lam, 0.0)) * (1.0 + 1e-9) + 1e-12
         near = cKDTree(self.poses[:, :2]).query_ball_point(mu[:, :2], radius)
-        for k, rows in enumerate(near):
-            if not rows:
-                continue
-            idx = np.asarray(rows, dtype=np.int64)
-            d = self.poses[idx] - mu[k]
+        counts = np.fromiter((len(rows) for rows in near), dtype=np.int64, count=len(near))
+        if counts.sum():
+            # Every (particle, hypothesis) pair the tree found, tested at once.
+            idx = np.fromiter(
+                (i for rows in near for i in rows), dtype=np.int64, count=int(counts.sum())
+            )
+            hyp = np.repeat(np.arange(len(near)), counts)
+            d = self.poses[idx] - mu[hyp]
             d[:, 2] = np.asarray(wrap(d[:, 2]))
-            m2 = np.einsum("ni,ij,nj->n", d, Pinv[k], d)
+            m2 = np.einsum("ni,nij,nj->n", d, Pinv[hyp], d)
             covered[idx[m2 <= COVERED_CHI2]] = True
         if not covered.any():
             return 0.0
