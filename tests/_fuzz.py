@@ -1400,6 +1400,55 @@ def _track_targets() -> list[Target]:
     ]
 
 
+def _tracker_targets() -> list[Target]:
+    """The tracker's configuration and motion model, each value tried on a tracker that takes
+    odometry and a few frames of the demo room (a value accepted must not blow up later)."""
+    import dataclasses
+
+    from omniloc.track import MotionModel, Tracker, TrackerConfig
+    from omniloc.track.tracker import _INTS, _PROBABILITIES, _SHARES
+
+    def run(config: dict[str, Any] | None = None, motion: dict[str, Any] | None = None) -> Any:
+        tr = Tracker(
+            room(),
+            omniloc.SensorModel(sigma=math.radians(0.5)),
+            MotionModel(**(motion or {})),
+            TrackerConfig(**{"search_interval_s": 0.0, **(config or {})}),
+        )
+        z = omniloc.predict_bearings(room().xy, ROOM_POSE)
+        tr.odometry([0.0, 0.25, 0.5], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        return [tr.frame(0.25 * k, z) for k in range(3)]
+
+    def check(kw: dict[str, Any], v: Any) -> None:
+        for est in v:
+            if est.pose is not None:
+                _finite(est.pose.as_array(), "pose")
+
+    regions: Pool = (
+        ("reversed", (1.0, 0.0, 0.0, 1.0)),
+        ("nan", (0.0, float("nan"), 0.0, 1.0)),
+        ("three", (0.0, 1.0, 0.0)),
+        ("string", "region"),
+        ("1e300", (-1e300, 1e300, -1e300, 1e300)),
+    )
+    cfg: dict[str, Arg] = {}
+    for f in dataclasses.fields(TrackerConfig):
+        if f.name == "region":
+            pool = regions
+        elif f.name in _INTS:
+            pool = COUNTS
+        elif f.name in _PROBABILITIES or f.name in _SHARES or f.name == "search_miss":
+            pool = PROBABILITIES
+        else:
+            pool = NUMBERS
+        cfg[f.name] = Arg((f.name,), pool)
+    motion = {f.name: Arg((f.name,), NUMBERS) for f in dataclasses.fields(MotionModel)}
+    return [
+        Target("TrackerConfig", lambda kw: run(config=kw), dict, cfg, check=check, limit_s=20.0),
+        Target("MotionModel", lambda kw: run(motion=kw), dict, motion, check=check, limit_s=20.0),
+    ]
+
+
 def _plot_targets() -> list[Target]:
     from omniloc.plot import plot_localization
 
@@ -1514,6 +1563,7 @@ def all_targets() -> dict[str, Target]:
         + _vision_targets()
         + _simulate_targets()
         + _track_targets()
+        + _tracker_targets()
         + _plot_targets()
         + _scenario_targets()
     ):

@@ -28,7 +28,6 @@ How the MRCLAM values were estimated from odometry against ground truth is in
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -37,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from .._kernels import track as _kernels
 from ..angles import wrap
 from ..errors import InputError
+from ..io import finite_number
 
 __all__ = [
     "MotionModel",
@@ -50,6 +50,21 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+
+
+#: Largest accepted magnitude of each motion-model value: noise variances (m^2 per metre,
+#: rad^2 per radian, per second ...) far beyond any wheel, a latency of a minute, a scale
+#: factor of 100. Beyond them the filter's products overflow.
+MOTION_MAX = {
+    "along_per_m": 1e3,
+    "across_per_m": 1e3,
+    "turn_per_rad": 1e3,
+    "turn_per_m": 1e3,
+    "turn_per_s": 1e3,
+    "along_per_s": 1e3,
+    "delay_s": 60.0,
+    "v_scale": 100.0,
+}
 
 
 @dataclass(frozen=True)
@@ -102,12 +117,13 @@ class MotionModel:
             v = getattr(self, f.name)
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise InputError(f"{f.name} must be a number, got {v!r}")
-            v = float(v)
-            if (
-                not math.isfinite(v)
-                or (f.name != "delay_s" and v < 0)
-                or (f.name == "v_scale" and v <= 0)
-            ):
+            v = finite_number(v, f.name)
+            if abs(v) > MOTION_MAX[f.name]:
+                raise InputError(
+                    f"{f.name}={v:.3g} is implausibly large (at most {MOTION_MAX[f.name]:g} in "
+                    "magnitude; noises are variances per metre, radian or second)"
+                )
+            if (f.name != "delay_s" and v < 0) or (f.name == "v_scale" and v <= 0):
                 what = {"delay_s": "finite", "v_scale": "finite and > 0"}.get(
                     f.name, "finite and >= 0"
                 )

@@ -67,6 +67,7 @@ from scipy.special import erf
 
 from ..angles import wrap
 from ..errors import InputError
+from ..io import finite_number, shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
@@ -103,6 +104,13 @@ _PROBABILITIES = {
     "elsewhere_inject",
 }
 _SHARES = {"fit_explained"}
+#: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
+#: it products and squares in the filter would overflow long before anything useful happens.
+VALUE_MAX = 1e6
+#: Largest accepted count, and tighter bounds where a count is an allocation made up front
+#: or every frame (elsewhere's particles are all weighed at every frame).
+INT_MAX = 10**9
+_INT_MAX = {"elsewhere_samples": 100_000, "max_hypotheses": 10_000, "max_candidates": 1_000_000}
 
 #: Below this many pairs of poses, all pairs are compared directly (building two k-d trees
 #: costs more).
@@ -112,7 +120,10 @@ _BRUTE_PAIRS = 4096
 @dataclass(frozen=True)
 class TrackerConfig:
     """How the tracker decides (every value has a unit; :func:`~omniloc.track.preset` gives
-    tuned sets).
+    tuned sets). Every value is checked when the configuration is made: real values finite,
+    >= 0 and at most :data:`VALUE_MAX`, counts whole and at most :data:`INT_MAX`
+    (``elsewhere_samples`` at most 100,000, ``max_hypotheses`` 10,000, ``max_candidates``
+    1,000,000); an ``InputError`` names the field.
 
     Parameters
     ----------
@@ -283,16 +294,17 @@ class TrackerConfig:
                     continue
                 if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
                     raise InputError(f"search_miss must be None or a number, got {v!r}")
-                if not 0.0 < float(v) < 1.0:
+                miss = finite_number(v, "search_miss")
+                if not 0.0 < miss < 1.0:
                     raise InputError(f"search_miss must lie strictly between 0 and 1, got {v!r}")
-                object.__setattr__(self, f.name, float(v))
+                object.__setattr__(self, f.name, miss)
                 continue
             if f.name == "region":
                 if v is None:
                     continue
                 try:
                     r = tuple(float(x) for x in v)
-                except (TypeError, ValueError) as exc:
+                except (TypeError, ValueError, OverflowError) as exc:
                     raise InputError(f"region must be (xmin, xmax, ymin, ymax), got {v!r}") from exc
                 if len(r) != 4 or not all(map(math.isfinite, r)) or r[0] >= r[1] or r[2] >= r[3]:
                     raise InputError(
@@ -304,13 +316,24 @@ class TrackerConfig:
             if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
                 raise InputError(f"{f.name} must be a number, got {v!r}")
             if f.name in _INTS:
-                if int(v) != v or v < 1:
-                    raise InputError(f"{f.name} must be a positive integer, got {v!r}")
+                top = _INT_MAX.get(f.name, INT_MAX)
+                whole = isinstance(v, (int, np.integer)) or (
+                    math.isfinite(v) and float(v).is_integer()
+                )
+                if not (whole and 1 <= v <= top):
+                    raise InputError(
+                        f"{f.name} must be a positive integer of at most {top:,}, got {shorten(v)}"
+                    )
                 object.__setattr__(self, f.name, int(v))
                 continue
-            v = float(v)
-            if not math.isfinite(v) or v < 0:
+            v = finite_number(v, f.name)
+            if v < 0:
                 raise InputError(f"{f.name} must be finite and >= 0, got {getattr(self, f.name)!r}")
+            if v > VALUE_MAX:
+                raise InputError(
+                    f"{f.name}={v:.3g} is implausibly large (at most {VALUE_MAX:.0e}: seconds, "
+                    "metres, radians and rates of a robot)"
+                )
             if f.name in _SHARES and v > 1.0:
                 raise InputError(f"{f.name} must lie between 0 and 1, got {v!r}")
             if f.name in _PROBABILITIES and not 0.0 < v < 1.0:
@@ -1047,7 +1070,7 @@ class Tracker:
             if not good.all():
                 self._keep(np.flatnonzero(good))
             # The prior chance of being carried off since the last frame.
-            f = -math.expm1(-c.kidnap_rate * dt)
+            f = min(-math.expm1(-c.kidnap_rate * dt), 1.0 - 1e-12)
             if f > 0 and self.n_hypotheses:
                 moved = math.log(f) + _logsumexp(self._logw)
                 self._log_out = float(np.logaddexp(self._log_out, moved))
