@@ -1728,4 +1728,28 @@ def cli_targets() -> dict[str, CliTarget]:
         },
         limit_s=30.0,
     )
-    return {t.name: t for t in (localize, bearings, demo, evaluate)}
+    z = omniloc.predict_bearings(room().xy, ROOM_POSE)
+    frames_csv = "t,bearing\n" + "".join(f"{t},{b!r}\n" for t in (0.5, 1.0, 1.5) for b in z)
+    track = CliTarget(
+        "track",
+        (
+            ("--map", file_with("room.csv", ROOM_CSV)),
+            ("--odometry", file_with("odo.csv", "t,v,w\n0,0,0\n1,0,0\n2,0,0\n")),
+            ("--frames", file_with("frames.csv", frames_csv)),
+        ),
+        {
+            "--map": MAP_FILES,
+            "--odometry": ODOMETRY_FILES,
+            "--frames": FRAME_FILES,
+            "--groundtruth": GROUNDTRUTH_FILES,
+            "--out": (
+                ("a directory", Lazy(lambda f: f, needs_dir=True)),
+                ("under a file", Lazy(lambda f: _a_file(f) / "traj.tum", needs_dir=True)),
+                ("empty", ""),
+            ),
+            "--plot": CLI_PLOTS,
+            "--preset": (("unknown", "fast"), ("empty", "")),
+            **{k: CLI_NUMBERS for k in ("--sigma", "--fov", "--max-range")},
+        },
+    )
+    return {t.name: t for t in (localize, bearings, demo, evaluate, track)}
