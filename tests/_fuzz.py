@@ -1443,9 +1443,45 @@ def _tracker_targets() -> list[Target]:
             pool = NUMBERS
         cfg[f.name] = Arg((f.name,), pool)
     motion = {f.name: Arg((f.name,), NUMBERS) for f in dataclasses.fields(MotionModel)}
+    arrays: Pool = (
+        ("nan", [0.1, float("nan")]),
+        ("inf", [0.1, float("inf")]),
+        ("strings", ["a", "b"]),
+        ("2-D", [[0.1, 0.2]]),
+        ("None", None),
+        ("complex", [1j, 2j]),
+        ("1e300", [1e300, -1e300]),
+        ("400-digit int", [10**400]),
+        ("a million", np.zeros(1_000_000)),
+    )
+
+    def frame(kw: dict[str, Any]) -> Any:
+        tr = Tracker(room(), omniloc.SensorModel(sigma=math.radians(0.5)))
+        tr.odometry([0.0, 1.0, 2.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        return [tr.frame(kw["t"], kw["bearings"])]
+
+    def odometry(kw: dict[str, Any]) -> Any:
+        tr = Tracker(room(), omniloc.SensorModel(sigma=math.radians(0.5)))
+        tr.odometry(kw["t"], kw["v"], kw["w"])
+        return [tr.frame(3.0, omniloc.predict_bearings(room().xy, ROOM_POSE))]
+
     return [
         Target("TrackerConfig", lambda kw: run(config=kw), dict, cfg, check=check, limit_s=20.0),
         Target("MotionModel", lambda kw: run(motion=kw), dict, motion, check=check, limit_s=20.0),
+        Target(
+            "Tracker.frame",
+            frame,
+            lambda: {"t": 1.0, "bearings": [0.1, 0.2, 0.3]},
+            {"t": Arg(("frame time", "time"), NUMBERS), "bearings": Arg(("bearings",), arrays)},
+            check=check,
+        ),
+        Target(
+            "Tracker.odometry",
+            odometry,
+            lambda: {"t": [0.0, 1.0], "v": [0.0, 0.1], "w": [0.0, 0.0]},
+            {k: Arg(("odometry",), arrays) for k in ("t", "v", "w")},
+            check=check,
+        ),
     ]
 
 

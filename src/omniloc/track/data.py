@@ -48,7 +48,7 @@ def _float_array(name: str, values: object, *, scalar: bool = False) -> FloatArr
     bad entry; with ``scalar`` a single number is taken as one row."""
     try:
         a = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise InputError(f"{name} must be an array of real numbers: {exc}") from exc
     if scalar:
         a = np.atleast_1d(a)

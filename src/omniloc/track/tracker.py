@@ -107,6 +107,9 @@ _SHARES = {"fit_explained"}
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
 VALUE_MAX = 1e6
+#: Most bearings the tracker takes in one frame (elsewhere's particles keep a clutter memory
+#: of every bearing: 3,000 particles x 1,000 bearings is 24 MB; a million bearings, 24 GB).
+MAX_FRAME_BEARINGS = 1000
 #: Largest accepted count, and tighter bounds where a count is an allocation made up front
 #: or every frame (elsewhere's particles are all weighed at every frame).
 INT_MAX = 10**9
@@ -1029,17 +1032,23 @@ class Tracker:
         ------
         InputError
             ``t`` not finite or before the previous frame, bearings not a 1-D array of
-            finite numbers. Nothing is changed then.
+            finite numbers or more than :data:`MAX_FRAME_BEARINGS` of them. Nothing is
+            changed then.
         """
         try:
             tf = float(t)
-        except (TypeError, ValueError) as exc:
-            raise InputError(f"frame time must be a number, got {t!r}") from exc
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise InputError(f"frame time must be a number, got {shorten(t)}") from exc
         if not math.isfinite(tf):
             raise InputError(f"frame time must be finite, got {t!r}")
         if self._t is not None and tf < self._t:
             raise InputError(f"frames out of time order: t={tf!r} after a frame at t={self._t!r}")
         b = _float_array("frame bearings", bearings, scalar=True)
+        if b.size > MAX_FRAME_BEARINGS:
+            raise InputError(
+                f"frame bearings: {b.size:,} in one frame, at most {MAX_FRAME_BEARINGS:,} (every "
+                "hypothesis and each of elsewhere's particles weighs every bearing)"
+            )
         b = np.asarray(wrap(b))
         if self._input_kind is None and not self._warned_no_odometry:
             log.warning("frame at t=%s before any odometry: the robot is taken to stand still", tf)
