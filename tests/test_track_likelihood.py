@@ -192,3 +192,13 @@ def test_without_memory_the_update_is_the_plain_one() -> None:
         np.testing.assert_array_equal(x, y)
     assert ((full[4] >= 0.0) & (full[4] <= 1.0)).all()
     np.testing.assert_allclose(full[3], (1.0 - full[4]).sum(axis=1), rtol=1e-12, atol=1e-12)
+
+
+def test_at_an_exact_pose_the_field_of_view_has_a_sharp_edge() -> None:
+    # Particles of elsewhere: a landmark 1 deg inside the view counts as fully in view, one
+    # 1 deg outside not at all (no covariance blurs the edge).
+    model = _model(fov=np.deg2rad(90.0))
+    inside, outside = np.deg2rad(44.0), np.deg2rad(46.0)
+    L = 3.0 * np.array([[np.cos(inside), np.sin(inside)], [np.cos(outside), np.sin(outside)]])
+    lr = log_ratios(np.zeros((1, 3)), np.zeros(0), L, model)
+    assert math.isclose(lr[0], math.log(1.0 - 0.6), rel_tol=1e-12)

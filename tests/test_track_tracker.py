@@ -487,3 +487,14 @@ def test_split_clutter_is_checked() -> None:
     for bad in (0.5, 0.7, -0.1, float("nan")):
         with pytest.raises(InputError, match="split_clutter"):
             TrackerConfig(split_clutter=bad)
+
+
+def test_a_frame_of_too_many_bearings_is_refused_and_changes_nothing() -> None:
+    from omniloc.track.tracker import MAX_FRAME_BEARINGS
+
+    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    tr.odometry([0.0, 1.0], [0.0, 0.0], [0.0, 0.0])
+    with pytest.raises(InputError, match="frame bearings"):
+        tr.frame(0.5, np.zeros(MAX_FRAME_BEARINGS + 1))
+    assert tr._t is None
+    tr.frame(0.5, np.linspace(-3.0, 3.0, MAX_FRAME_BEARINGS))  # the limit itself is taken
