@@ -11,7 +11,7 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
-from bearing_correlation import lag_correlations, sightings
+from bearing_correlation import geometry, lag_correlations, sightings, systematic
 from omniloc import LandmarkMap
 from omniloc.evaluate.tracking import Segment, Stream
 from omniloc.track import Frame, GroundTruth, Odometry
@@ -45,6 +45,50 @@ def test_sightings_are_the_known_tubes_errors_against_the_truth() -> None:
     stream = Stream("s", lm, odo, [frame], (Segment(0.0, 2.0, 0.0, truth, "test"),))
     (row,) = sightings([stream])
     assert row[:3] == (0, 0, 0.5) and row[3] == pytest.approx(math.radians(1.0))
+
+
+def test_the_calibration_fit_finds_each_runs_camera_and_the_clock_and_helps_held_out() -> None:
+    # Two runs, each with its own camera yaw and offset on the robot, one clock offset, and
+    # noise: the fit finds them, and fitted on the first halves it cuts the second halves'
+    # error to the noise.
+    rng = np.random.default_rng(3)
+    n = 6000
+    run = np.repeat([0, 1], n // 2)
+    geo = np.c_[rng.uniform(-0.6, 0.6, n), rng.uniform(1, 7, n), rng.normal(0, 0.2, n)]
+    yaw = np.array([math.radians(0.3), math.radians(-0.7)])[run]
+    fwd = np.array([-0.03, 0.09])[run]
+    left = np.array([0.01, 0.03])[run]
+    b, r, w = geo.T
+    noise = rng.normal(0, math.radians(0.3), n)
+    e = -yaw + (fwd * np.sin(b) - left * np.cos(b)) / r + 0.04 * w + noise
+    rows = [
+        (int(k), 0, float(i % (n // 2)), float(v))
+        for i, (k, v) in enumerate(zip(run, e, strict=True))
+    ]
+    out = systematic(rows, geo, 2)
+    runs = out["runs"]
+    assert runs[0]["camera_yaw_deg"] == pytest.approx(0.3, abs=0.05)
+    assert runs[1]["camera_yaw_deg"] == pytest.approx(-0.7, abs=0.05)
+    assert runs[1]["camera_forward_m"] == pytest.approx(0.09, abs=0.01)
+    assert runs[1]["camera_left_m"] == pytest.approx(0.03, abs=0.01)
+    assert out["clock_offset_s"] == pytest.approx(0.04, abs=0.003)
+    assert out["held_out_rms_after_deg"] == pytest.approx(0.3, abs=0.02)
+    assert out["held_out_rms_deg"] > 0.5
+    assert np.std(out["residual"]) == pytest.approx(math.radians(0.3), rel=0.05)
+
+
+def test_geometry_is_the_bearing_range_and_turn_rate_at_the_truth() -> None:
+    # The robot at the origin turning at 0.2 rad/s (heading 0 at t = 0.5 s); a tube 3 m to
+    # its left.
+    lm = LandmarkMap(np.array([[0.0, 3.0], [5.0, 5.0], [-3.0, 0.0]]))
+    t = np.linspace(0.0, 1.0, 11)
+    truth = GroundTruth(t, np.zeros(11), np.zeros(11), 0.2 * (t - 0.5))
+    frame = Frame(0.5, np.array([math.pi / 2]), truth=(0,))
+    odo = Odometry(t, np.zeros(11), np.zeros(11))
+    stream = Stream("s", lm, odo, [frame], (Segment(0.0, 1.0, 0.0, truth, "test"),))
+    rows = sightings([stream])
+    (g,) = geometry([stream], rows)
+    assert g == pytest.approx([math.pi / 2, 3.0, 0.2])
 
 
 def test_results_files_say_when_where_and_how(tmp_path: Path) -> None:
