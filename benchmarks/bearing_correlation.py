@@ -27,6 +27,7 @@ sequence), against independent Gaussian errors.
 from __future__ import annotations
 
 import argparse
+import itertools
 import math
 import sys
 from collections.abc import Sequence
@@ -219,6 +220,51 @@ def drifting_bias_fit(rows: Sequence[tuple[int, int, float, float]]) -> dict[str
     }
 
 
+#: Turn-rate bins (rad/s) of :func:`turn_noise_fit`.
+TURN_BINS = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.6)
+
+
+def turn_noise_fit(errors: FloatArray, turn_rate: FloatArray) -> dict[str, object]:
+    """How the bearing noise grows with the robot's turn rate: per bin of ``|turn_rate|``
+    (:data:`TURN_BINS`, rad/s) the robust sd of the errors (1.4826 times the median absolute
+    deviation), and the least-squares fit of ``var = sd0^2 + (turn_noise_s * w)^2`` to those
+    variances at the bins' median turn rates (weighted by the bins' counts).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> w = rng.uniform(-0.6, 0.6, 40000)
+    >>> e = rng.normal(0, np.hypot(0.007, 0.05 * w))
+    >>> fit = turn_noise_fit(e, w)
+    >>> abs(fit["sd0"] - 0.007) < 0.0005, abs(fit["turn_noise_s"] - 0.05) < 0.003
+    (True, True)
+    """
+    e = np.asarray(errors, dtype=float)
+    w = np.abs(np.asarray(turn_rate, dtype=float))
+    ok = np.isfinite(e) & np.isfinite(w)
+    e, w = e[ok], w[ok]
+    bins = []
+    for lo, hi in itertools.pairwise(TURN_BINS):
+        m = (w >= lo) & (w < hi)
+        if m.sum() < 20:
+            continue
+        x = e[m]
+        sd = 1.4826 * float(np.median(np.abs(x - np.median(x))))
+        bins.append(
+            {"from": lo, "to": hi, "n": int(m.sum()), "w": float(np.median(w[m])), "sd": sd}
+        )
+    W = np.array([b["w"] for b in bins])
+    V = np.array([b["sd"] for b in bins]) ** 2
+    n = np.array([b["n"] for b in bins], dtype=float)
+    A = np.c_[np.ones_like(W), W**2] * np.sqrt(n)[:, None]
+    (a, c), *_ = np.linalg.lstsq(A, V * np.sqrt(n), rcond=None)
+    return {
+        "sd0": math.sqrt(max(float(a), 0.0)),
+        "turn_noise_s": math.sqrt(max(float(c), 0.0)),
+        "bins": bins,
+    }
+
+
 def lag_correlations(
     rows: Sequence[tuple[int, int, float, float]], lags: Sequence[float] = LAGS
 ) -> list[dict[str, float]]:
@@ -288,6 +334,17 @@ def main(argv: list[str] | None = None) -> int:
         f"{fit['held_out_rms_deg']:.2f} -> {fit['held_out_rms_after_deg']:.2f} deg "
         "(fitted on the first halves)"
     )
+    geo = geometry(streams, rows)
+    turn = turn_noise_fit(err, geo[:, 2])
+    for b in turn["bins"]:  # type: ignore[attr-defined]
+        print(
+            f"turning at {b['from']:.2f}-{b['to']:.2f} rad/s ({b['n']} sightings): robust sd "
+            f"{math.degrees(b['sd']):.2f} deg"
+        )
+    print(
+        f"bearing noise: sd {math.degrees(float(turn['sd0'])):.2f} deg standing still, plus "  # type: ignore[arg-type]
+        f"{float(turn['turn_noise_s']):.3f} s times the turn rate"  # type: ignore[arg-type]
+    )
     ou = drifting_bias_fit(rows)
     print(
         f"drifting bias: sd {math.degrees(ou['bias_sd']):.2f} deg, correlation time "
@@ -303,6 +360,7 @@ def main(argv: list[str] | None = None) -> int:
         calibration=fit,
         lags_after_calibration=after,
         drifting_bias=ou,
+        turn_noise=turn,
     )
     return 0
 

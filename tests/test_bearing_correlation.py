@@ -17,6 +17,7 @@ from bearing_correlation import (
     lag_correlations,
     sightings,
     systematic,
+    turn_noise_fit,
 )
 from omniloc import LandmarkMap
 from omniloc.evaluate.tracking import Segment, Stream
@@ -117,6 +118,23 @@ def test_a_drifting_bias_is_fitted_and_independent_errors_gain_nothing() -> None
     assert fit["gain_per_sighting"] > 0.3
     flat = [(0, 0, 0.25 * i, float(sw * rng.normal())) for i in range(3000)]
     assert drifting_bias_fit(flat)["gain_per_sighting"] < 0.01
+
+
+def test_the_noise_that_grows_with_the_turn_rate_is_fitted() -> None:
+    # Errors of sd 0.4 deg standing still and 0.056 s times the turn rate on top (the
+    # values measured on MRCLAM), with a few gross outliers the robust spread ignores.
+    rng = np.random.default_rng(6)
+    w = rng.uniform(-0.6, 0.6, 60000)
+    e = rng.normal(0.0, np.hypot(np.deg2rad(0.4), 0.056 * w))
+    e[::200] = rng.uniform(-0.1, 0.1, e[::200].size)
+    fit = turn_noise_fit(e, w)
+    assert fit["sd0"] == pytest.approx(np.deg2rad(0.4), rel=0.05)
+    assert fit["turn_noise_s"] == pytest.approx(0.056, rel=0.05)
+    sds = [b["sd"] for b in fit["bins"]]
+    assert sds == sorted(sds)  # growing with the turn rate
+    # No dependence: no turn noise.
+    flat = turn_noise_fit(rng.normal(0.0, 0.01, 60000), w)
+    assert flat["turn_noise_s"] < 0.01
 
 
 def test_results_files_say_when_where_and_how(tmp_path: Path) -> None:

@@ -483,6 +483,36 @@ def test_a_frame_that_may_be_all_clutter_splits_the_hypothesis() -> None:
     np.testing.assert_allclose(plain._mu[0], mu[0])
 
 
+def test_a_frame_taken_while_turning_is_noisier() -> None:
+    # The same frame (the landmark ahead seen 2 deg off) after standing still or after
+    # turning (0.2 rad in 0.5 s): with turn_noise_s the turn widens the bearing noise to
+    # sigma^2 + (0.4 * turn_noise_s)^2, so the bearing moves the hypothesis less.
+    P = np.diag([1e-4, 1e-4, np.deg2rad(0.3) ** 2])
+    z = np.array([np.deg2rad(2.0)])
+    base = dict(search_min_bearings=100, region=(-10.0, 10.0, -10.0, 10.0))
+    sd_t = 0.06
+
+    def after(turn: float, noise: float) -> Tracker:
+        # Heading such that, after turning for 0.5 s, the landmark is straight ahead.
+        tr = _one_hypothesis(
+            TrackerConfig(turn_noise_s=noise, **base), np.array([0.0, 0.0, -0.4 * turn]), P
+        )
+        tr.frame(0.0, np.zeros(0))  # the first frame: no motion before it
+        tr.odometry([0.1], [0.0], [turn])
+        tr.frame(0.5, z)
+        return tr
+
+    still, turning = after(0.0, sd_t), after(0.5, sd_t)
+    model = turning._frame_model(0.5)
+    assert model.sigma2 == pytest.approx(np.deg2rad(0.5) ** 2 + (0.5 * sd_t) ** 2)
+    assert still._frame_model(0.0) is still._model
+    # The bearing pulls the heading towards it (negative: the landmark appears left); after
+    # the turn, less with the turn's noise than without; standing still, the same.
+    plain_still, plain_turning = after(0.0, 0.0), after(0.5, 0.0)
+    assert plain_turning._mu[0, 2] < turning._mu[0, 2] < 0.0
+    assert plain_still._mu[0, 2] == still._mu[0, 2] < 0.0
+
+
 def test_split_clutter_is_checked() -> None:
     for bad in (0.5, 0.7, -0.1, float("nan")):
         with pytest.raises(InputError, match="split_clutter"):

@@ -212,6 +212,12 @@ class TrackerConfig:
         landmarks, one that took them all as clutter and did not move -- each with its share
         of the mass (a vague heading otherwise lets another robot's bearing pull the pose to
         the tube beside it, and the collapsed hypothesis cannot come back).
+    turn_noise_s : float
+        Bearing noise that grows with the turn rate: a frame taken while the robot turns at
+        ``w`` rad/s has a bearing variance of ``sigma^2 + (w * turn_noise_s)^2`` (the
+        image's exposure and time stamp are not one instant). MRCLAM: bearing errors with a
+        robust sd of 0.41 deg standing still, 1.3 deg turning at 0.3-0.6 rad/s. 0 (default):
+        off.
     search_miss : float or None
         None (the default): Bayes' rule -- elsewhere earns each frame's likelihood ratio
         averaged over its particles, like any hypothesis. A probability: the chance that a
@@ -277,6 +283,7 @@ class TrackerConfig:
     clutter_persistence_sd: float = float(np.deg2rad(1.0))
     clutter_memory_s: float = 2.0
     split_clutter: float = 0.0
+    turn_noise_s: float = 0.0
     search_miss: float | None = None
     replay_s: float = 4.0
     max_candidates: int = 3000
@@ -873,7 +880,7 @@ class Tracker:
                 fit_m, fit_n = fit_m * decay, fit_n * decay
             objects = self._objects(f.t, mem_b, rot, mem_t, mem_w)
             mu, P, lr, explained, post = frame_update_clutter(
-                mu, P, f.bearings, self._L, self._model, objects
+                mu, P, f.bearings, self._L, self._frame_model(f.turn_rate), objects
             )
             if f.bearings.size:
                 mem_b, mem_w, mem_t, rot = f.bearings, c.clutter_persistence * post, f.t, 0.0
@@ -884,6 +891,14 @@ class Tracker:
         if mem_t != self._mem_t or mem_w.shape[1] != self._mem_b.size:
             mem_w = np.zeros((mu.shape[0], self._mem_b.size))
         return mu, P, volume, to_end, fit_m, fit_n, mem_w
+
+    def _frame_model(self, turn_rate: float) -> FrameModel:
+        """The frame model of a frame taken while turning at ``turn_rate`` (rad/s): the
+        bearing variance grows by ``(turn_rate * turn_noise_s)^2``."""
+        extra = (turn_rate * self.config.turn_noise_s) ** 2
+        if extra == 0.0:
+            return self._model
+        return replace(self._model, sigma2=self._model.sigma2 + extra)
 
     def _search(self, t: float) -> int:
         """Search the recent frames for new hypotheses; returns how many were added."""
@@ -1086,7 +1101,9 @@ class Tracker:
                 self._logw = self._logw + math.log1p(-f)
         self._normalise()
         self._history.append((tf, self._log_out, self._norm))
-        self._window.append(tf, b, delta, Q)
+        turn = float(delta[2]) / dt if dt > 0 else 0.0
+        self._window.append(tf, b, delta, Q, turn)
+        model = self._frame_model(turn)
         while self._history and self._history[0][0] < self._window[0].t:
             self._history.popleft()
         # The frame's evidence.
@@ -1095,7 +1112,7 @@ class Tracker:
         if self.n_hypotheses:
             mu0, P0 = self._mu, self._P
             self._mu, self._P, lr, explained, post = frame_update_clutter(
-                self._mu, self._P, b, self._L, self._model, self._objects(*mem, self._mem_w)
+                self._mu, self._P, b, self._L, model, self._objects(*mem, self._mem_w)
             )
             if b.size:
                 self._mem_w = persist * post
@@ -1118,7 +1135,7 @@ class Tracker:
             self._elsewhere.poses,
             b,
             self._L,
-            self._model,
+            model,
             self._objects(*mem, self._elsewhere.memory),
         )
         if b.size:

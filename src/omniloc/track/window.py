@@ -46,6 +46,9 @@ class WindowFrame:
         the first.
     Q : ndarray, shape (3, 3)
         Covariance of ``delta``.
+    turn_rate : float
+        The odometry's turn rate on the way to this frame (rad/s; 0 for the first frame of
+        the tracker or after a gap).
     """
 
     t: float
@@ -53,6 +56,7 @@ class WindowFrame:
     odom: FloatArray = field(repr=False)
     delta: FloatArray = field(repr=False)
     Q: FloatArray = field(repr=False)
+    turn_rate: float = 0.0
 
 
 class Window:
@@ -81,15 +85,23 @@ class Window:
         """Forget everything (the odometry that joins the frames was lost)."""
         self._frames.clear()
 
-    def append(self, t: float, bearings: FloatArray, delta: FloatArray, Q: FloatArray) -> None:
-        """Add a frame reached from the previous one by ``delta`` (covariance ``Q``)."""
+    def append(
+        self,
+        t: float,
+        bearings: FloatArray,
+        delta: FloatArray,
+        Q: FloatArray,
+        turn_rate: float = 0.0,
+    ) -> None:
+        """Add a frame reached from the previous one by ``delta`` (covariance ``Q``), the
+        robot turning at ``turn_rate`` (rad/s) on the way."""
         if self._frames:
             odom = compose(self._frames[-1].odom, delta)
         else:
             odom = np.zeros(3)
             delta = np.zeros(3)
             Q = np.zeros((3, 3))
-        self._frames.append(WindowFrame(float(t), bearings, odom, delta, Q))
+        self._frames.append(WindowFrame(float(t), bearings, odom, delta, Q, float(turn_rate)))
         while self._frames and self._frames[0].t < t - self.span_s:
             self._frames.popleft()
 
