@@ -147,6 +147,62 @@ def test_missing_frames_file_is_one_line_and_status_1(
     assert err.count("\n") == 0 and "nope.csv" in err
 
 
+def _first_localized_after(out: str) -> float:
+    """Seconds from the first frame to the first localized one, from the summary."""
+    line = next(x for x in out.splitlines() if x.startswith("first localized"))
+    return float(line.split("(")[1].split(" s after")[0])
+
+
+def test_settings_from_a_file_and_the_command_line_change_the_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # min_age_s: a place must be tracked that long before it is called localized. The file
+    # sets 6 s, --set (applied after the file) 8 s.
+    lm, odo, fr = _write_inputs(tmp_path)
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
+    assert main(argv) == 0
+    plain = _first_localized_after(capsys.readouterr().out)
+    settings = tmp_path / "settings.json"
+    settings.write_text('{"min_age_s": 6.0, "split_clutter": 0.02}')
+    assert main([*argv, "--config", str(settings)]) == 0
+    from_file = _first_localized_after(capsys.readouterr().out)
+    assert main([*argv, "--config", str(settings), "--set", "min_age_s=8"]) == 0
+    both = _first_localized_after(capsys.readouterr().out)
+    assert plain < 6.0 <= from_file < both and both >= 8.0
+
+
+@pytest.mark.parametrize(
+    ("extra", "settings_text", "message"),
+    [
+        (["--set", "min_agee_s=3"], None, "did you mean 'min_age_s'"),
+        (["--set", "min_age_s=-3"], None, "min_age_s must be finite and >= 0"),
+        (["--set", "min_age_s"], None, "expected NAME=VALUE"),
+        (["--set", "min_age_s=three"], None, "the value must be JSON"),
+        (["--set", "region=[1,2]"], None, "region must be"),
+        (["--set", "sigma=1e400"], None, "sigma"),
+        ([], "[1, 2]", "one JSON object"),
+        ([], "{min_age_s: 3}", "not JSON"),
+        ([], '{"kidnap_share": 2}', "kidnap_share must lie strictly between 0 and 1"),
+    ],
+)
+def test_bad_settings_are_one_line_and_status_1(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    extra: list[str],
+    settings_text: str | None,
+    message: str,
+) -> None:
+    lm, odo, fr = _write_inputs(tmp_path)
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
+    if settings_text is not None:
+        settings = tmp_path / "settings.json"
+        settings.write_text(settings_text)
+        extra = [*extra, "--config", str(settings)]
+    assert main([*argv, *extra]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and message in err
+
+
 MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
 
 

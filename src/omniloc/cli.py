@@ -259,6 +259,22 @@ def _add_track_parser(sub: Any) -> None:
         default=Preset.GENERIC.value,
         help="sensor, motion and tracker parameters (default generic)",
     )
+    t.add_argument(
+        "--config",
+        type=Path,
+        metavar="SETTINGS.json",
+        help="a JSON object of settings (name: value, the library's units: rad, m, s) applied "
+        "to the preset",
+    )
+    t.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="one setting of the sensor, motion or tracker model (a field of SensorModel, "
+        "MotionModel or TrackerConfig; the value in JSON, the library's units), after "
+        "--config; repeatable, e.g. --set min_age_s=10 --set region=[-1,5.5,-6,6.5]",
+    )
     t.add_argument("--sigma", type=_positive, help="bearing noise std, deg (overrides the preset)")
     t.add_argument("--fov", type=_fov_deg, help="full field of view, deg (overrides the preset)")
     t.add_argument("--max-range", type=_positive, help="sensor range, m (overrides the preset)")
@@ -617,10 +633,35 @@ def _cmd_evaluate_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _setting(item: str) -> dict[str, Any]:
+    """``NAME=VALUE`` of ``--set``, the value read as JSON."""
+    import json
+
+    name, sep, text = item.partition("=")
+    if not sep or not name.strip():
+        raise InputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set min_age_s=10")
+    try:
+        value = json.loads(text)
+    except (json.JSONDecodeError, RecursionError, ValueError) as exc:
+        raise InputError(
+            f"--set {item!r}: the value must be JSON (a number, true/false, null or a list), "
+            f"got {text!r}"
+        ) from exc
+    return {name.strip(): value}
+
+
 def _cmd_track(args: argparse.Namespace) -> int:
     from .evaluate.common import progress_bar
     from .maps import LandmarkMap
-    from .track import load_frames, load_groundtruth, load_odometry, preset, track
+    from .track import (
+        load_frames,
+        load_groundtruth,
+        load_odometry,
+        load_settings,
+        preset,
+        track,
+        with_settings,
+    )
     from .track.io import write_json_lines, write_tum
 
     lm = LandmarkMap.load(args.map)
@@ -630,6 +671,13 @@ def _cmd_track(args: argparse.Namespace) -> int:
         raise InputError(f"{args.frames}: no frames")
     truth = load_groundtruth(args.groundtruth) if args.groundtruth is not None else None
     sensor, motion, config = preset(args.preset)
+    settings: dict[str, Any] = {}
+    if args.config is not None:
+        settings.update(load_settings(args.config))
+    for item in args.set:
+        settings.update(_setting(item))
+    if settings:
+        sensor, motion, config = with_settings(sensor, motion, config, settings)
     changes: dict[str, Any] = {}
     if args.sigma is not None:
         changes["sigma"] = float(np.deg2rad(args.sigma))

@@ -8,7 +8,8 @@
   hypotheses, and how it moves them;
 * :mod:`.window`, :mod:`.relocalize` -- the recent frames, and new hypotheses from the
   interpretation tree;
-* :mod:`.presets` -- tuned parameters (``generic``, ``mrclam``);
+* :mod:`.presets` -- tuned parameters (``generic``, ``mrclam``), and single values changed by
+  name (:func:`with_settings`);
 * :mod:`.data` -- odometry, frames of bearings and ground-truth tracks, and their files;
   :mod:`.io` -- TUM trajectories and JSON lines; :mod:`.records` -- what a localizer over
   time reports; :mod:`.simulate` -- simulated recordings.
@@ -26,7 +27,7 @@ from .data import Frame, GroundTruth, Odometry, load_frames, load_groundtruth, l
 from .io import read_tum, write_json_lines, write_tum
 from .motion import MotionModel
 from .offline import TrackRun, track
-from .presets import Preset, preset
+from .presets import Preset, load_settings, preset, settings_names, with_settings
 from .records import Hypothesis, TrackEstimate, TrackState
 from .simulate import SimulatedRun, simulate_run
 from .tracker import Tracker, TrackerConfig
@@ -47,10 +48,13 @@ __all__ = [
     "load_frames",
     "load_groundtruth",
     "load_odometry",
+    "load_settings",
     "preset",
     "read_tum",
+    "settings_names",
     "simulate_run",
     "track",
+    "with_settings",
     "write_json_lines",
     "write_tum",
 ]

@@ -7,11 +7,20 @@
     The UTIAS MRCLAM robots (set 6): a monocular camera with a 67 degree field of view and
     barcoded tubes up to ~8 m, other robots as clutter, odometry that leads the motion by
     0.2 s. How each value was estimated from the recording is in ``docs/tracking.md``.
+
+:func:`with_settings` changes single values of a preset by name (the CLI's ``--set`` and
+``--config``; :func:`load_settings` reads them from a JSON file).
 """
 
 from __future__ import annotations
 
+import dataclasses
+import difflib
 import enum
+import json
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -20,7 +29,7 @@ from ..sensor import SensorModel
 from .motion import MotionModel
 from .tracker import TrackerConfig
 
-__all__ = ["Preset", "preset"]
+__all__ = ["Preset", "load_settings", "preset", "settings_names", "with_settings"]
 
 
 class Preset(str, enum.Enum):
@@ -96,3 +105,107 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         )
         return sensor, MotionModel.mrclam(), config
     return SensorModel(sigma=float(np.deg2rad(0.5))), MotionModel(), TrackerConfig()
+
+
+def settings_names() -> dict[str, str]:
+    """Every setting :func:`with_settings` knows, and whose it is (``"sensor"``, ``"motion"``
+    or ``"tracker"``): the fields of :class:`~omniloc.sensor.SensorModel`,
+    :class:`~omniloc.track.MotionModel` and :class:`~omniloc.track.TrackerConfig` (no name
+    is a field of two of them)."""
+    out: dict[str, str] = {}
+    for owner, cls in (
+        ("sensor", SensorModel),
+        ("motion", MotionModel),
+        ("tracker", TrackerConfig),
+    ):
+        for f in dataclasses.fields(cls):
+            out[f.name] = owner
+    return out
+
+
+def with_settings(
+    sensor: SensorModel,
+    motion: MotionModel,
+    config: TrackerConfig,
+    settings: Mapping[str, Any],
+) -> tuple[SensorModel, MotionModel, TrackerConfig]:
+    """Copies of a sensor model, motion model and tracker configuration with some values
+    changed by name, in the library's units (radians, metres, seconds); each is validated
+    again as when it is made.
+
+    Parameters
+    ----------
+    sensor, motion, config
+        What to start from (e.g. a :func:`preset`).
+    settings : mapping of str to value
+        Field name to new value (see :func:`settings_names`).
+
+    Returns
+    -------
+    sensor, motion, config
+
+    Raises
+    ------
+    InputError
+        A name that is no field of the three (the message suggests the closest), or a value
+        the field refuses (the message names the field).
+
+    Examples
+    --------
+    >>> s, m, c = with_settings(*preset("mrclam"), {"min_age_s": 10.0, "sigma": 0.02})
+    >>> c.min_age_s, s.sigma
+    (10.0, 0.02)
+    """
+    if not isinstance(settings, Mapping):
+        raise InputError(
+            f"settings must be a mapping of name to value, got {type(settings).__name__}"
+        )
+    names = settings_names()
+    parts: dict[str, dict[str, Any]] = {"sensor": {}, "motion": {}, "tracker": {}}
+    for name, value in settings.items():
+        if not isinstance(name, str) or name not in names:
+            near = difflib.get_close_matches(str(name), list(names), n=3)
+            hint = f" (did you mean {' or '.join(map(repr, near))}?)" if near else ""
+            raise InputError(
+                f"unknown setting {name!r}{hint}: not a field of SensorModel, MotionModel or "
+                "TrackerConfig"
+            )
+        parts[names[name]][name] = value
+    try:
+        if parts["sensor"]:
+            sensor = sensor.replace(**parts["sensor"])
+        if parts["motion"]:
+            motion = dataclasses.replace(motion, **parts["motion"])
+        if parts["tracker"]:
+            config = dataclasses.replace(config, **parts["tracker"])
+    except InputError:
+        raise
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"settings {dict(settings)!r}: {exc}") from exc
+    return sensor, motion, config
+
+
+def load_settings(path: str | Path) -> dict[str, Any]:
+    """Settings for :func:`with_settings` from a JSON file holding one object of name to
+    value (e.g. ``{"min_age_s": 10, "split_clutter": 0.02}``).
+
+    Raises
+    ------
+    InputError
+        The file cannot be read, is not JSON, or does not hold one object with string keys.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{p}: cannot read the settings file ({exc})") from exc
+    try:
+        data = json.loads(text)
+    except (json.JSONDecodeError, RecursionError, ValueError) as exc:
+        raise InputError(f"{p}: not JSON ({exc})") from exc
+    if not isinstance(data, dict):
+        raise InputError(
+            f"{p}: the settings file must hold one JSON object of name to value, got "
+            f"{type(data).__name__}"
+        )
+    return data
