@@ -1761,6 +1761,12 @@ def cli_targets() -> dict[str, CliTarget]:
             "--min-landmarks": CLI_NUMBERS,
             "--seed": CLI_NUMBERS,
             "--preset": (("unknown", "fast"),),
+            # the tracker's settings, given to a single-frame dataset
+            "--set": (("valid", "min_age_s=3"), ("unknown", "nope=1"), ("no value", "x")),
+            "--config": (
+                ("missing", in_dir("nothing/s.json")),
+                ("valid", file_with("s.json", "{}")),
+            ),
         },
         limit_s=30.0,
     )

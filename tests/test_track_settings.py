@@ -85,3 +85,30 @@ def test_a_settings_file(tmp_path: Path) -> None:
         load_settings(f)
     with pytest.raises(InputError, match="cannot read"):
         load_settings(tmp_path / "missing.json")
+
+
+def test_the_evaluation_builds_its_trackers_with_the_settings() -> None:
+    from omniloc import demo_room
+    from omniloc.evaluate.tracking import tracker_factory
+
+    make = tracker_factory("mrclam", {"min_age_s": 7.0, "p_detect": 0.4, "delay_s": 0.1})
+    tr = make(demo_room(), None)
+    assert tr.config.min_age_s == 7.0 and tr.sensor.p_detect == 0.4 and tr.motion.delay_s == 0.1
+    assert tracker_factory("mrclam")(demo_room(), None).config == preset("mrclam")[2]
+
+
+def test_evaluate_refuses_bad_settings_before_reading_the_data(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omniloc.cli import main
+
+    argv = ["-q", "evaluate", "--out", str(tmp_path / "out")]
+    missing = str(tmp_path / "no-such-folder")
+    assert main([*argv, "--dataset", "mrclam-track", missing, "--set", "min_agee_s=3"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "did you mean 'min_age_s'" in err
+    # settings are the tracker's: a sweep or a single-frame dataset refuses them
+    assert main([*argv, "--preset", "quick", "--set", "min_age_s=3"]) == 1
+    err = capsys.readouterr().err.strip()
+    assert "apply to --dataset mrclam-track only" in err
+    assert not (tmp_path / "out").exists()

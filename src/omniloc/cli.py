@@ -226,6 +226,7 @@ def _build_parser() -> argparse.ArgumentParser:
         default=100,
         help="mrclam-track: kidnapped streams (and as many without a jump), default 100",
     )
+    _add_settings_options(e, "mrclam-track: ")
     e.add_argument("--max-samples", type=int, help="use at most this many dataset samples")
     e.add_argument(
         "--min-landmarks",
@@ -238,6 +239,38 @@ def _build_parser() -> argparse.ArgumentParser:
     e.add_argument("--out", type=_out_path, default=Path("evaluation"), help="folder for results")
     _add_track_parser(sub)
     return parser
+
+
+def _add_settings_options(p: argparse.ArgumentParser, scope: str = "") -> None:
+    """``--config`` and ``--set``: values of the tracker's preset changed by name."""
+    p.add_argument(
+        "--config",
+        type=Path,
+        metavar="SETTINGS.json",
+        help=f"{scope}a JSON object of settings (name: value, the library's units: rad, m, s) "
+        "applied to the tracker's preset",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help=f"{scope}one setting of the sensor, motion or tracker model (a field of "
+        "SensorModel, MotionModel or TrackerConfig; the value in JSON, the library's units), "
+        "after --config; repeatable, e.g. --set min_age_s=10 --set region=[-1,5.5,-6,6.5]",
+    )
+
+
+def _settings(args: argparse.Namespace) -> dict[str, Any]:
+    """The settings of ``--config`` then ``--set``."""
+    from .track import load_settings
+
+    settings: dict[str, Any] = {}
+    if args.config is not None:
+        settings.update(load_settings(args.config))
+    for item in args.set:
+        settings.update(_setting(item))
+    return settings
 
 
 def _add_track_parser(sub: Any) -> None:
@@ -259,22 +292,7 @@ def _add_track_parser(sub: Any) -> None:
         default=Preset.GENERIC.value,
         help="sensor, motion and tracker parameters (default generic)",
     )
-    t.add_argument(
-        "--config",
-        type=Path,
-        metavar="SETTINGS.json",
-        help="a JSON object of settings (name: value, the library's units: rad, m, s) applied "
-        "to the preset",
-    )
-    t.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="one setting of the sensor, motion or tracker model (a field of SensorModel, "
-        "MotionModel or TrackerConfig; the value in JSON, the library's units), after "
-        "--config; repeatable, e.g. --set min_age_s=10 --set region=[-1,5.5,-6,6.5]",
-    )
+    _add_settings_options(t)
     t.add_argument("--sigma", type=_positive, help="bearing noise std, deg (overrides the preset)")
     t.add_argument("--fov", type=_fov_deg, help="full field of view, deg (overrides the preset)")
     t.add_argument("--max-range", type=_positive, help="sensor range, m (overrides the preset)")
@@ -573,9 +591,22 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from . import evaluate as ev
 
     progress = not args.quiet
+    if (args.config is not None or args.set) and (
+        args.dataset is None or args.dataset[0] != "mrclam-track"
+    ):
+        raise InputError(
+            "--config and --set change the tracker's settings: they apply to --dataset "
+            "mrclam-track only"
+        )
+    track_settings: dict[str, Any] = {}
+    if args.dataset is not None and args.dataset[0] == "mrclam-track":
+        from .track import preset, with_settings
+
+        track_settings = _settings(args)
+        with_settings(*preset("mrclam"), track_settings)  # refused before anything is made
     make_folder(args.out, "--out")  # before the run, not after it
     if args.dataset is not None and args.dataset[0] == "mrclam-track":
-        return _cmd_evaluate_track(args)
+        return _cmd_evaluate_track(args, track_settings)
     if args.dataset is not None:
         kind, path = args.dataset
         if args.min_landmarks < 3:
@@ -617,13 +648,17 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_evaluate_track(args: argparse.Namespace) -> int:
+def _cmd_evaluate_track(args: argparse.Namespace, settings: dict[str, Any]) -> int:
     from .evaluate.tracking import evaluate_mrclam_tracking, tracking_summary
 
     if args.kidnap < 0:
         raise InputError(f"--kidnap must be >= 0, got {args.kidnap}")
     res, _ = evaluate_mrclam_tracking(
-        args.dataset[1], kidnapped=args.kidnap, rng=args.seed, progress=not args.quiet
+        args.dataset[1],
+        kidnapped=args.kidnap,
+        rng=args.seed,
+        settings=settings,
+        progress=not args.quiet,
     )
     print(tracking_summary(res))
     out: Path = args.out  # made by _cmd_evaluate before the run
@@ -657,7 +692,6 @@ def _cmd_track(args: argparse.Namespace) -> int:
         load_frames,
         load_groundtruth,
         load_odometry,
-        load_settings,
         preset,
         track,
         with_settings,
@@ -671,11 +705,7 @@ def _cmd_track(args: argparse.Namespace) -> int:
         raise InputError(f"{args.frames}: no frames")
     truth = load_groundtruth(args.groundtruth) if args.groundtruth is not None else None
     sensor, motion, config = preset(args.preset)
-    settings: dict[str, Any] = {}
-    if args.config is not None:
-        settings.update(load_settings(args.config))
-    for item in args.set:
-        settings.update(_setting(item))
+    settings = _settings(args)
     if settings:
         sensor, motion, config = with_settings(sensor, motion, config, settings)
     changes: dict[str, Any] = {}

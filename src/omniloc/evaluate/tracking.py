@@ -35,10 +35,10 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -633,14 +633,18 @@ def errors_against(
 
 def tracker_factory(
     preset_name: str = "mrclam",
+    settings: Mapping[str, Any] | None = None,
 ) -> Callable[[LandmarkMap, Pose | None], LocalizerOverTime]:
     """``make_localizer`` for :func:`evaluate_tracking`: a fresh
-    :class:`~omniloc.track.Tracker` with a named preset's parameters (the start pose, even
-    when given, is not used: the tracker localizes globally)."""
-    from ..track.presets import preset
+    :class:`~omniloc.track.Tracker` with a named preset's parameters, changed by
+    ``settings`` (:func:`~omniloc.track.with_settings`; the start pose, even when given, is
+    not used: the tracker localizes globally)."""
+    from ..track.presets import preset, with_settings
     from ..track.tracker import Tracker
 
     sensor, motion, config = preset(preset_name)
+    if settings:
+        sensor, motion, config = with_settings(sensor, motion, config, settings)
 
     def make(landmarks: LandmarkMap, start: Pose | None) -> LocalizerOverTime:
         return Tracker(landmarks, sensor, motion, config)
@@ -676,15 +680,18 @@ def evaluate_mrclam_tracking(
     rng: RngLike = 0,
     robots: Sequence[int] = (1, 2, 3, 4, 5),
     preset_name: str = "mrclam",
+    settings: Mapping[str, Any] | None = None,
     progress: bool = True,
 ) -> tuple[TrackingReport, list[list[TrackEstimate]]]:
     """Run the :class:`~omniloc.track.Tracker` on MRCLAM: each robot's whole run, and
     ``kidnapped`` kidnapped streams with as many without a jump (:func:`kidnap_streams`,
-    seeded by ``rng``). Returns the report and every estimate (whole runs first)."""
+    seeded by ``rng``), with a preset's parameters changed by ``settings`` (names of
+    :func:`~omniloc.track.with_settings`). Returns the report and every estimate (whole
+    runs first)."""
     if isinstance(kidnapped, bool) or not isinstance(kidnapped, (int, np.integer)) or kidnapped < 0:
         raise InputError(f"kidnapped must be an integer >= 0, got {kidnapped!r}")
+    make = tracker_factory(preset_name, settings)  # bad settings: refused before the data
     runs = mrclam_streams(path, robots)
-    make = tracker_factory(preset_name)
     whole, est = evaluate_tracking(runs, make, name="tracker: whole runs", progress=progress)
     kid = None
     if kidnapped:
