@@ -3,7 +3,8 @@
 * :class:`Tracker` (:mod:`.tracker`) -- the online localizer: feed it odometry and frames of
   bearings, it reports ``lost``, ``ambiguous`` or ``localized`` after every frame;
 * :func:`track` (:mod:`.offline`) -- the same over a whole recording;
-* :mod:`.motion` -- the odometry's motion and noise (:class:`MotionModel`);
+* :mod:`.motion` -- the odometry's motion and noise (:class:`MotionModel`); :mod:`.calibrate`
+  -- that model fitted to odometry and a ground-truth track (:func:`estimate_motion`);
 * :mod:`.likelihood` -- what a frame of bearings says about a set of Gaussian pose
   hypotheses, and how it moves them;
 * :mod:`.window`, :mod:`.relocalize` -- the recent frames, and new hypotheses from the
@@ -23,6 +24,7 @@ import sys
 import types
 from typing import Any
 
+from .calibrate import MotionFit, estimate_motion
 from .data import Frame, GroundTruth, Odometry, load_frames, load_groundtruth, load_odometry
 from .io import read_tum, write_json_lines, write_tum
 from .motion import MotionModel
@@ -36,6 +38,7 @@ __all__ = [
     "Frame",
     "GroundTruth",
     "Hypothesis",
+    "MotionFit",
     "MotionModel",
     "Odometry",
     "Preset",
@@ -45,6 +48,7 @@ __all__ = [
     "TrackState",
     "Tracker",
     "TrackerConfig",
+    "estimate_motion",
     "load_frames",
     "load_groundtruth",
     "load_odometry",

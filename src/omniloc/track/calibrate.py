@@ -1,0 +1,278 @@
+"""Fit the motion model to a recording with ground truth: how late the odometry is, how far
+off its scale, and how much noise it gathers per metre, per radian and per second.
+
+A user with a robot of their own has odometry and, for a while, a ground-truth track (a
+motion-capture system, a survey): :func:`estimate_motion` turns them into the
+:class:`~omniloc.track.MotionModel` that the tracker needs, the way the ``mrclam`` preset's
+values were found. Three steps:
+
+1. **Latency** (``delay_s``): over stretches of ``delay_stretch_s`` seconds all along the
+   recording, the relative motion the odometry predicts (its rows shifted by each delay of
+   the grid) against the truth's; the delay with the smallest squared error (metres and
+   radians alike) wins.
+2. **Scale** (``v_scale``): at that delay, the least-squares factor between the odometry's
+   displacements over the same stretches and the truth's (projected on the odometry's). The
+   delay is then found again at that scale.
+3. **Noise**: over non-overlapping stretches of each length in ``stretch_s``, the error of
+   the predicted relative motion against the truth's; the six noise values are the maximum
+   of the Gaussian likelihood of those errors under the covariance the model propagates
+   (:func:`~omniloc.track.motion.integrate`: linear in the six values), a small floor
+   standing for the truth's own noise. A second pass leaves out the stretches whose error is
+   beyond the 99.9 % chi-square bound (the truth's glitches, a wheel that slipped once).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import minimize
+from scipy.stats import chi2
+
+from ..angles import wrap
+from ..errors import InputError
+from .data import GroundTruth, Odometry
+from .motion import MotionModel, between, integrate
+
+__all__ = ["MotionFit", "estimate_motion"]
+
+FloatArray = NDArray[np.float64]
+
+#: The noise values in the order of :attr:`MotionModel.noise`.
+NOISE_FIELDS = (
+    "along_per_m",
+    "across_per_m",
+    "turn_per_rad",
+    "turn_per_m",
+    "turn_per_s",
+    "along_per_s",
+)
+#: Variance (m^2, m^2, rad^2) the ground truth's own error adds to a relative motion.
+TRUTH_FLOOR = (1e-6, 1e-6, 1e-6)
+#: Fewest stretches the noise fit needs.
+MIN_STRETCHES = 20
+
+
+@dataclass(frozen=True)
+class MotionFit:
+    """What :func:`estimate_motion` found.
+
+    Attributes
+    ----------
+    model : MotionModel
+        The fitted model.
+    delays : ndarray, shape (D,)
+        The latencies tried (s) ...
+    delay_cost : ndarray, shape (D,)
+        ... and the mean squared error of the relative motions at each (at the fitted scale).
+    stretches : int
+        Stretches the noise was fitted on (after the second pass).
+    left_out : int
+        Stretches the second pass left out.
+    """
+
+    model: MotionModel
+    delays: FloatArray
+    delay_cost: FloatArray
+    stretches: int
+    left_out: int
+
+
+def _stretches(t0: float, t1: float, length: float, step: float) -> FloatArray:
+    """Starts of stretches ``[a, a + length]`` inside ``[t0, t1]``, ``step`` apart."""
+    if t1 - t0 < length:
+        return np.zeros(0)
+    return np.arange(t0, t1 - length + 1e-9, step)
+
+
+def _true_motion(truth: GroundTruth, a: FloatArray, b: FloatArray, max_gap_s: float) -> FloatArray:
+    """The truth's relative motion over each ``[a, b]`` (NaN where the track has a gap)."""
+    pa, ga = truth.at(a)
+    pb, gb = truth.at(b)
+    rel = between(pa, pb)
+    bad = ~(np.isfinite(pa).all(axis=1) & np.isfinite(pb).all(axis=1))
+    bad |= (ga > max_gap_s) | (gb > max_gap_s)
+    rel[bad] = np.nan
+    return np.asarray(rel)
+
+
+def _predicted(
+    odometry: Odometry, a: FloatArray, b: FloatArray, model: MotionModel
+) -> tuple[FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
+    """The odometry's relative motion over each ``[a, b]`` (its rows describe the motion
+    from ``t + delay_s``), and the pieces of each."""
+    out = np.empty((a.size, 3))
+    pieces = []
+    for k, (s, e) in enumerate(zip(a, b, strict=True)):
+        dt, v, w = odometry.between(s - model.delay_s, e - model.delay_s)
+        out[k] = integrate(dt, v, w, model)[0]
+        pieces.append((dt, v, w))
+    return out, pieces
+
+
+def _errors(true: FloatArray, pred: FloatArray) -> FloatArray:
+    """Truth minus prediction, the heading wrapped."""
+    r = true - pred
+    r[:, 2] = np.asarray(wrap(r[:, 2]))
+    return np.asarray(r)
+
+
+def _delay_costs(
+    odometry: Odometry,
+    truth: GroundTruth,
+    a: FloatArray,
+    length: float,
+    delays: FloatArray,
+    model: MotionModel,
+    max_gap_s: float,
+) -> FloatArray:
+    true = _true_motion(truth, a, a + length, max_gap_s)
+    ok = np.isfinite(true).all(axis=1)
+    cost = np.empty(delays.size)
+    for i, d in enumerate(delays):
+        pred, _ = _predicted(odometry, a[ok], a[ok] + length, replace(model, delay_s=float(d)))
+        cost[i] = float(np.mean(np.sum(_errors(true[ok], pred) ** 2, axis=1)))
+    return cost
+
+
+def estimate_motion(
+    odometry: Odometry,
+    truth: GroundTruth,
+    *,
+    stretch_s: ArrayLike = (0.5, 1.0, 2.0, 5.0, 10.0),
+    delays: ArrayLike | None = None,
+    delay_stretch_s: float = 2.0,
+    max_gap_s: float = 0.5,
+) -> MotionFit:
+    """Fit a :class:`~omniloc.track.MotionModel` to odometry and a ground-truth track of the
+    same run (see the module's documentation for the method).
+
+    Parameters
+    ----------
+    odometry : Odometry
+    truth : GroundTruth
+        The true track over (part of) the same time.
+    stretch_s : array_like of float
+        Lengths (s) of the stretches the noise is fitted on (each length's stretches do not
+        overlap); several lengths tell noise per second from noise per metre.
+    delays : array_like of float, optional
+        Latencies to try (s); default -0.5 to 0.5 s in steps of 0.05 s, then steps of
+        0.01 s within 0.05 s of the best.
+    delay_stretch_s : float
+        Length (s) of the stretches the latency and scale are fitted on (half overlapping).
+    max_gap_s : float
+        Stretches whose ends fall where the truth has a gap longer than this are left out.
+
+    Returns
+    -------
+    MotionFit
+
+    Raises
+    ------
+    InputError
+        The odometry and the truth overlap too little for the fit (fewer than
+        MIN_STRETCHES stretches), or an argument out of range.
+    """
+    if not isinstance(odometry, Odometry) or not isinstance(truth, GroundTruth):
+        raise InputError("estimate_motion needs an Odometry and a GroundTruth")
+    lengths = np.atleast_1d(np.asarray(stretch_s, dtype=np.float64))
+    if lengths.ndim != 1 or lengths.size == 0 or not (np.isfinite(lengths) & (lengths > 0)).all():
+        raise InputError(f"stretch_s must be positive lengths in seconds, got {stretch_s!r}")
+    refine = delays is None
+    grid = (
+        np.round(np.arange(-0.5, 0.5001, 0.05), 10)
+        if delays is None
+        else np.atleast_1d(np.asarray(delays, dtype=np.float64))
+    )
+    if grid.ndim != 1 or grid.size == 0 or not np.isfinite(grid).all():
+        raise InputError(f"delays must be finite latencies in seconds, got {delays!r}")
+    for name, val in (("delay_stretch_s", delay_stretch_s), ("max_gap_s", max_gap_s)):
+        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
+            raise InputError(f"{name} must be a positive number of seconds, got {val!r}")
+    # The span both cover, leaving room for any delay of the grid.
+    lo = max(float(odometry.t[0]), float(truth.t[0])) + float(np.abs(grid).max())
+    hi = min(float(odometry.t[-1]), float(truth.t[-1])) - float(np.abs(grid).max())
+    a = _stretches(lo, hi, delay_stretch_s, 0.5 * delay_stretch_s)
+    if a.size < MIN_STRETCHES:
+        raise InputError(
+            f"the odometry and the truth overlap for {max(hi - lo, 0.0):.1f} s: too little to "
+            f"fit a motion model (at least {MIN_STRETCHES} stretches of {delay_stretch_s} s)"
+        )
+    model = MotionModel()
+
+    def best_delay(model: MotionModel) -> tuple[FloatArray, FloatArray]:
+        cost = _delay_costs(odometry, truth, a, delay_stretch_s, grid, model, max_gap_s)
+        if not refine:
+            return grid, cost
+        near = float(grid[int(np.argmin(cost))])
+        fine = np.round(np.arange(near - 0.04, near + 0.0401, 0.01), 10)
+        fine = fine[~np.isin(fine, grid)]
+        both = np.concatenate([grid, fine])
+        cost = np.concatenate(
+            [cost, _delay_costs(odometry, truth, a, delay_stretch_s, fine, model, max_gap_s)]
+        )
+        order = np.argsort(both)
+        return both[order], cost[order]
+
+    tried, cost = best_delay(model)
+    model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
+    # Scale: distances travelled, truth against the odometry's (at scale 1).
+    true = _true_motion(truth, a, a + delay_stretch_s, max_gap_s)
+    ok = np.isfinite(true).all(axis=1)
+    pred, _ = _predicted(odometry, a[ok], a[ok] + delay_stretch_s, model)
+    # The true displacement along the predicted one (its length would be biased upwards
+    # by the noise across it).
+    along = float(np.sum(true[ok, :2] * pred[:, :2]))
+    squared = float(np.sum(pred[:, :2] ** 2))
+    if not squared > 0:
+        raise InputError("the odometry never moves in the span it shares with the truth")
+    model = replace(model, v_scale=along / squared)
+    tried, cost = best_delay(model)
+    model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
+    # Noise: errors over stretches of each length, and the covariance of each noise value.
+    errs, parts = [], []
+    for length in lengths:
+        s = _stretches(lo, hi, float(length), float(length))
+        true = _true_motion(truth, s, s + length, max_gap_s)
+        ok = np.isfinite(true).all(axis=1)
+        pred, pieces = _predicted(odometry, s[ok], s[ok] + length, model)
+        errs.append(_errors(true[ok], pred))
+        unit = []
+        for j in range(len(NOISE_FIELDS)):
+            m = replace(model, **{f: float(i == j) for i, f in enumerate(NOISE_FIELDS)})
+            unit.append(np.stack([integrate(dt, v, w, m)[1] for dt, v, w in pieces]))
+        parts.append(np.stack(unit, axis=1))  # (n, 6, 3, 3)
+    r = np.concatenate(errs)
+    Qp = np.concatenate(parts)
+    if r.shape[0] < MIN_STRETCHES:
+        raise InputError(
+            f"only {r.shape[0]} stretches without a gap in the truth: too few to fit the noise"
+        )
+    floor = np.diag(TRUTH_FLOOR)
+
+    def nll(logp: FloatArray, use: NDArray[np.bool_]) -> float:
+        S = np.einsum("p,npij->nij", np.exp(logp), Qp[use]) + floor
+        sign, logdet = np.linalg.slogdet(S)
+        if not (sign > 0).all():
+            return math.inf
+        q = np.einsum("ni,ni->n", r[use], np.linalg.solve(S, r[use][:, :, None])[:, :, 0])
+        return float(0.5 * np.sum(q + logdet))
+
+    def fit(use: NDArray[np.bool_], start: FloatArray) -> FloatArray:
+        res = minimize(nll, start, args=(use,), method="Nelder-Mead",
+                       options={"maxiter": 4000, "xatol": 1e-3, "fatol": 1e-3})  # fmt: skip
+        return np.asarray(res.x)
+
+    use = np.ones(r.shape[0], dtype=bool)
+    logp = fit(use, np.log(np.full(len(NOISE_FIELDS), 1e-3)))
+    S = np.einsum("p,npij->nij", np.exp(logp), Qp) + floor
+    q = np.einsum("ni,ni->n", r, np.linalg.solve(S, r[:, :, None])[:, :, 0])
+    use = q <= chi2.ppf(0.999, 3)
+    logp = fit(use, logp)
+    noise = {f: float(v) for f, v in zip(NOISE_FIELDS, np.exp(logp), strict=True)}
+    # Values the likelihood cannot tell from zero come out as tiny ones: call them zero.
+    noise = {f: (v if v > 1e-9 else 0.0) for f, v in noise.items()}
+    model = replace(model, **noise)
+    return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()))

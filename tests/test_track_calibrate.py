@@ -1,0 +1,91 @@
+"""omniloc.track.estimate_motion: the motion model fitted to odometry and a ground-truth
+track -- checked on a run simulated from a known model, and on MRCLAM against the preset."""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from omniloc.errors import InputError
+from omniloc.track import GroundTruth, MotionModel, Odometry, estimate_motion
+from omniloc.track.motion import compose, integrate
+
+TRUE = MotionModel(
+    along_per_m=0.004,
+    across_per_m=0.0005,
+    turn_per_rad=0.005,
+    turn_per_m=0.001,
+    turn_per_s=8e-4,
+    along_per_s=1e-5,
+    delay_s=0.2,
+    v_scale=0.9,
+)
+
+
+@cache
+def _recording(seconds: float = 900.0, seed: int = 3) -> tuple[Odometry, GroundTruth]:
+    """Odometry rows at 10 Hz (stamped ``delay_s`` early, velocities 1 / ``v_scale`` too
+    large) and the true track, which gathers the model's noise piece by piece."""
+    rng = np.random.default_rng(seed)
+    dt = 0.1
+    n = int(seconds / dt)
+    t = np.arange(n) * dt
+    v = np.repeat(rng.uniform(0.0, 0.4, n // 20 + 1), 20)[:n]
+    w = np.repeat(rng.uniform(-0.5, 0.5, n // 20 + 1), 20)[:n]
+    poses = np.zeros((n + 1, 3))
+    for k in range(n):
+        d, _ = integrate([dt], [v[k]], [w[k]], TRUE)
+        dist, turn = float(np.hypot(d[0], d[1])), abs(float(d[2]))
+        var = [
+            TRUE.along_per_m * dist + TRUE.along_per_s * dt,
+            TRUE.across_per_m * dist,
+            TRUE.turn_per_rad * turn + TRUE.turn_per_m * dist + TRUE.turn_per_s * dt,
+        ]
+        poses[k + 1] = compose(poses[k], d + rng.normal(0.0, np.sqrt(var)))
+    odometry = Odometry(t, v, w)
+    tt = np.concatenate([t, [n * dt]]) + TRUE.delay_s
+    return odometry, GroundTruth(tt, poses[:, 0], poses[:, 1], poses[:, 2])
+
+
+def test_a_simulated_run_gives_back_its_model() -> None:
+    fit = estimate_motion(*_recording())
+    m = fit.model
+    assert m.delay_s == pytest.approx(TRUE.delay_s, abs=0.011)
+    assert m.v_scale == pytest.approx(TRUE.v_scale, rel=0.01)
+    # The noise values the run's motion exercises most, within a third.
+    for name in ("along_per_m", "turn_per_rad", "turn_per_s"):
+        assert getattr(m, name) == pytest.approx(getattr(TRUE, name), rel=0.35), name
+    assert fit.stretches > 1000 and fit.left_out < 0.02 * fit.stretches
+    assert fit.delays[np.argmin(fit.delay_cost)] == m.delay_s
+
+
+def test_too_little_overlap_is_refused() -> None:
+    odometry, truth = _recording()
+    short = GroundTruth(truth.t[:50], truth.x[:50], truth.y[:50], truth.theta[:50])
+    with pytest.raises(InputError, match="too little"):
+        estimate_motion(odometry, short)
+    with pytest.raises(InputError, match="stretch_s"):
+        estimate_motion(odometry, truth, stretch_s=[1.0, -2.0])
+    with pytest.raises(InputError, match="delays"):
+        estimate_motion(odometry, truth, delays=[float("nan")])
+    with pytest.raises(InputError, match="Odometry and a GroundTruth"):
+        estimate_motion(truth, odometry)  # type: ignore[arg-type]
+
+
+MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
+
+
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_on_mrclam_the_fit_agrees_with_the_preset() -> None:
+    from omniloc.track import load_groundtruth, load_odometry
+
+    fit = estimate_motion(
+        load_odometry(MRCLAM / "robot3_odometry.csv"),
+        load_groundtruth(MRCLAM / "robot3_groundtruth_10hz.csv"),
+    )
+    preset = MotionModel.mrclam()
+    assert fit.model.delay_s == pytest.approx(preset.delay_s, abs=0.05)
+    assert fit.model.v_scale == pytest.approx(preset.v_scale, abs=0.02)
