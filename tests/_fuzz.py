@@ -1400,6 +1400,75 @@ def _track_targets() -> list[Target]:
     ]
 
 
+def _settings_targets() -> list[Target]:
+    """Settings by name, their file, and the motion model fitted to a recording."""
+    from omniloc.track import GroundTruth, Odometry, estimate_motion, load_settings, preset
+    from omniloc.track import with_settings as ws
+
+    fields = ("setting", "settings", "must", "sigma", "min_age_s", "region", "v_scale", "fov")
+    t = np.arange(0.0, 60.0, 0.1)
+    odo = Odometry(t, np.full(t.size, 0.2), np.full(t.size, 0.1))
+    th = 0.1 * t
+    good = GroundTruth(t, 2.0 * np.sin(th), 2.0 - 2.0 * np.cos(th), th)
+    return [
+        Target(
+            "with_settings",
+            lambda kw: ws(*preset("generic"), kw["settings"]),
+            lambda: {"settings": {}},
+            {
+                "settings": Arg(
+                    fields,
+                    (
+                        ("a list", [("min_age_s", 1.0)]),
+                        ("unknown", {"nope": 1}),
+                        ("None key", {None: 1}),
+                        ("string value", {"sigma": "x"}),
+                        ("nan", {"min_age_s": float("nan")}),
+                        ("1e999", {"v_scale": 1e999}),
+                        ("huge count", {"elsewhere_samples": 10**400}),
+                        ("nested", {"region": [[1, 2], [3, 4]]}),
+                        ("None", {"fov": None, "sigma": None}),
+                    ),
+                )
+            },
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "load_settings",
+            lambda kw: load_settings(**kw),
+            lambda: {"path": file_with("s.json", "{}")},
+            {"path": Arg(("settings", "file", "path", "JSON", ".json", ".csv"), TEXT_FILES)},
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "estimate_motion",
+            lambda kw: estimate_motion(**kw),
+            lambda: {"odometry": odo, "truth": good},
+            {
+                "odometry": Arg(("Odometry",), (("None", None), ("list", [1, 2]))),
+                "truth": Arg(
+                    ("GroundTruth", "overlap", "truth"),
+                    (
+                        ("None", None),
+                        ("short", GroundTruth(t[:20], t[:20], t[:20], t[:20])),
+                        ("far away in time", GroundTruth(t + 1e6, t, t, t)),
+                    ),
+                ),
+                "stretch_s": Arg(
+                    ("stretch_s",), (("nan", [float("nan")]), ("empty", []), ("words", "ab"))
+                ),
+                "delays": Arg(("delays",), (("inf", [float("inf")]), ("2-D", [[0.1]]))),
+                "max_gap_s": Arg(("max_gap_s",), (("zero", 0.0), ("nan", float("nan")))),
+                "delay_stretch_s": Arg(
+                    ("delay_stretch_s", "overlap"), (("huge", 1e300), ("negative", -1.0))
+                ),
+            },
+            check=lambda kw, v: _finite(np.array([v.model.delay_s, v.model.v_scale]), "model"),
+            limit_s=60.0,
+        ),
+    ]
+
+
 def _tracker_targets() -> list[Target]:
     """The tracker's configuration and motion model, each value tried on a tracker that takes
     odometry and a few frames of the demo room (a value accepted must not blow up later)."""
@@ -1600,6 +1669,7 @@ def all_targets() -> dict[str, Target]:
         + _simulate_targets()
         + _track_targets()
         + _tracker_targets()
+        + _settings_targets()
         + _plot_targets()
         + _scenario_targets()
     ):

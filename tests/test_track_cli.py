@@ -181,7 +181,7 @@ def test_settings_from_a_file_and_the_command_line_change_the_run(
         (["--set", "region=[1,2]"], None, "region must be"),
         (["--set", "sigma=1e400"], None, "sigma"),
         ([], "[1, 2]", "one JSON object"),
-        ([], "{min_age_s: 3}", "not JSON"),
+        ([], "{min_age_s: 3}", "invalid JSON"),
         ([], '{"kidnap_share": 2}', "kidnap_share must lie strictly between 0 and 1"),
     ],
 )

@@ -74,17 +74,19 @@ def test_a_settings_file(tmp_path: Path) -> None:
     assert c.min_age_s == 10.0 and c.region == (-1.0, 5.5, -6.0, 6.5)
     for text, message in (
         ("[1, 2]", "one JSON object"),
-        ("{not json", "not JSON"),
+        ("{not json", "invalid JSON"),
         ('"min_age_s"', "one JSON object"),
     ):
         f.write_text(text)
         with pytest.raises(InputError, match=message):
             load_settings(f)
     f.write_bytes(b"\xff\xfe{}")
-    with pytest.raises(InputError, match="cannot read"):
+    with pytest.raises(InputError, match="not a UTF-8 text file"):
         load_settings(f)
-    with pytest.raises(InputError, match="cannot read"):
+    with pytest.raises(InputError, match="file not found"):
         load_settings(tmp_path / "missing.json")
+    with pytest.raises(InputError, match="settings file must be a file name"):
+        load_settings(3)  # type: ignore[arg-type]
 
 
 def test_the_evaluation_builds_its_trackers_with_the_settings() -> None:

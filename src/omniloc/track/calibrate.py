@@ -33,6 +33,7 @@ from scipy.stats import chi2
 
 from ..angles import wrap
 from ..errors import InputError
+from ..io import shorten
 from .data import GroundTruth, Odometry
 from .motion import MotionModel, between, integrate
 
@@ -53,6 +54,9 @@ NOISE_FIELDS = (
 TRUTH_FLOOR = (1e-6, 1e-6, 1e-6)
 #: Fewest stretches the noise fit needs.
 MIN_STRETCHES = 20
+#: Largest latency (s) and stretch length (s) accepted: beyond, nothing a robot records.
+MAX_DELAY_S = 60.0
+MAX_STRETCH_S = 3600.0
 
 
 @dataclass(frozen=True)
@@ -78,6 +82,17 @@ class MotionFit:
     delay_cost: FloatArray
     stretches: int
     left_out: int
+
+
+def _seconds(values: ArrayLike, name: str, what: str) -> FloatArray:
+    """A non-empty 1-D array of finite numbers of seconds, or an InputError naming ``name``."""
+    try:
+        a = np.atleast_1d(np.asarray(values, dtype=np.float64))
+    except (TypeError, ValueError, OverflowError):
+        a = np.zeros((0, 0))
+    if a.ndim != 1 or a.size == 0 or not np.isfinite(a).all():
+        raise InputError(f"{name} must be {what} in seconds, got {shorten(values)}")
+    return a
 
 
 def _stretches(t0: float, t1: float, length: float, step: float) -> FloatArray:
@@ -177,20 +192,30 @@ def estimate_motion(
     """
     if not isinstance(odometry, Odometry) or not isinstance(truth, GroundTruth):
         raise InputError("estimate_motion needs an Odometry and a GroundTruth")
-    lengths = np.atleast_1d(np.asarray(stretch_s, dtype=np.float64))
-    if lengths.ndim != 1 or lengths.size == 0 or not (np.isfinite(lengths) & (lengths > 0)).all():
-        raise InputError(f"stretch_s must be positive lengths in seconds, got {stretch_s!r}")
+    lengths = _seconds(stretch_s, "stretch_s", "positive lengths")
+    if not (lengths > 0).all():
+        raise InputError(f"stretch_s must be positive lengths in seconds, got {shorten(stretch_s)}")
     refine = delays is None
     grid = (
         np.round(np.arange(-0.5, 0.5001, 0.05), 10)
         if delays is None
-        else np.atleast_1d(np.asarray(delays, dtype=np.float64))
+        else _seconds(delays, "delays", "finite latencies")
     )
-    if grid.ndim != 1 or grid.size == 0 or not np.isfinite(grid).all():
-        raise InputError(f"delays must be finite latencies in seconds, got {delays!r}")
+    if float(np.abs(grid).max()) > MAX_DELAY_S:
+        raise InputError(f"delays must lie within {MAX_DELAY_S} s, got {shorten(delays)}")
     for name, val in (("delay_stretch_s", delay_stretch_s), ("max_gap_s", max_gap_s)):
-        if not (isinstance(val, (int, float)) and math.isfinite(val) and val > 0):
-            raise InputError(f"{name} must be a positive number of seconds, got {val!r}")
+        if not (
+            isinstance(val, (int, float))
+            and not isinstance(val, bool)
+            and math.isfinite(val)
+            and 0 < val <= MAX_STRETCH_S
+        ):
+            raise InputError(
+                f"{name} must be a positive number of seconds (at most {MAX_STRETCH_S:g}), "
+                f"got {shorten(val)}"
+            )
+    if float(lengths.max()) > MAX_STRETCH_S:
+        raise InputError(f"stretch_s must be at most {MAX_STRETCH_S:g} s, got {shorten(stretch_s)}")
     # The span both cover, leaving room for any delay of the grid.
     lo = max(float(odometry.t[0]), float(truth.t[0])) + float(np.abs(grid).max())
     hi = min(float(odometry.t[-1]), float(truth.t[-1])) - float(np.abs(grid).max())

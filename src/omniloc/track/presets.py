@@ -17,7 +17,6 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import enum
-import json
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -192,20 +191,15 @@ def load_settings(path: str | Path) -> dict[str, Any]:
     Raises
     ------
     InputError
-        The file cannot be read, is not JSON, or does not hold one object with string keys.
+        The file cannot be read, is not JSON, or does not hold one object.
     """
-    p = Path(path)
-    try:
-        text = p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{p}: cannot read the settings file ({exc})") from exc
-    try:
-        data = json.loads(text)
-    except (json.JSONDecodeError, RecursionError, ValueError) as exc:
-        raise InputError(f"{p}: not JSON ({exc})") from exc
+    from ..io import as_path, parse_json, read_text
+
+    src = str(as_path(path, "settings file"))
+    data = parse_json(read_text(path, InputError), src, InputError)
     if not isinstance(data, dict):
         raise InputError(
-            f"{p}: the settings file must hold one JSON object of name to value, got "
+            f"{src}: the settings file must hold one JSON object of name to value, got "
             f"{type(data).__name__}"
         )
     return data
