@@ -1892,4 +1892,26 @@ def cli_targets() -> dict[str, CliTarget]:
             ),
         },
     )
-    return {t.name: t for t in (localize, bearings, demo, evaluate, track)}
+    tt = [0.1 * k for k in range(400)]
+    fit_odo = "t,v,w\n" + "".join(f"{t!r},0.2,0.1\n" for t in tt)
+    fit_gt = "t,x,y,theta\n" + "".join(
+        f"{t!r},{2 * math.sin(0.1 * t)!r},{2 - 2 * math.cos(0.1 * t)!r},{0.1 * t!r}\n" for t in tt
+    )
+    fit_motion = CliTarget(
+        "fit-motion",
+        (
+            ("--odometry", file_with("odo.csv", fit_odo)),
+            ("--groundtruth", file_with("gt.csv", fit_gt)),
+        ),
+        {
+            "--odometry": ODOMETRY_FILES,
+            "--groundtruth": GROUNDTRUTH_FILES,
+            "--out": (
+                ("a directory", Lazy(lambda f: f, needs_dir=True)),
+                ("under a file", Lazy(lambda f: _a_file(f) / "s.json", needs_dir=True)),
+                ("empty", ""),
+            ),
+        },
+        limit_s=60.0,
+    )
+    return {t.name: t for t in (localize, bearings, demo, evaluate, track, fit_motion)}

@@ -89,3 +89,53 @@ def test_on_mrclam_the_fit_agrees_with_the_preset() -> None:
     preset = MotionModel.mrclam()
     assert fit.model.delay_s == pytest.approx(preset.delay_s, abs=0.05)
     assert fit.model.v_scale == pytest.approx(preset.v_scale, abs=0.02)
+
+
+def test_fit_motion_on_the_command_line_writes_settings_for_track(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from omniloc.cli import main
+    from omniloc.track import load_settings, preset, with_settings
+
+    odometry, truth = _recording(300.0, seed=4)
+    odo = tmp_path / "odo.csv"
+    odo.write_text(
+        "t,v,w\n"
+        + "".join(
+            f"{a!r},{b!r},{c!r}\n"
+            for a, b, c in zip(
+                odometry.t.tolist(), odometry.v.tolist(), odometry.w.tolist(), strict=True
+            )
+        )
+    )
+    gt = tmp_path / "gt.csv"
+    gt.write_text(
+        "t,x,y,theta\n"
+        + "".join(
+            f"{a!r},{b!r},{c!r},{d!r}\n"
+            for a, b, c, d in zip(
+                truth.t.tolist(),
+                truth.x.tolist(),
+                truth.y.tolist(),
+                truth.theta.tolist(),
+                strict=True,
+            )
+        )
+    )
+    out = tmp_path / "motion.json"
+    argv = ["fit-motion", "--odometry", str(odo), "--groundtruth", str(gt), "--out", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "s after their time stamps" in text and str(out) in text
+    settings = load_settings(out)
+    assert settings["delay_s"] == pytest.approx(TRUE.delay_s, abs=0.03)
+    assert json.loads(out.read_text()) == settings
+    _, motion, _ = with_settings(*preset("generic"), settings)
+    assert motion.v_scale == pytest.approx(TRUE.v_scale, rel=0.02)
+    # A truth that does not overlap the odometry: one line, status 1.
+    gt.write_text("t,x,y,theta\n1e6,0,0,0\n1000001,0,0,0\n")
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "too little" in err

@@ -238,6 +238,20 @@ def _build_parser() -> argparse.ArgumentParser:
     e.add_argument("--workers", type=int, default=1, help="processes for a sweep (default 1)")
     e.add_argument("--out", type=_out_path, default=Path("evaluation"), help="folder for results")
     _add_track_parser(sub)
+    f = sub.add_parser(
+        "fit-motion",
+        help="fit the motion model to odometry and a ground-truth track (settings for track)",
+    )
+    f.add_argument("--odometry", required=True, type=Path, help="odometry CSV: t,v,w")
+    f.add_argument(
+        "--groundtruth", required=True, type=Path, help="true track of the same run: t,x,y,theta"
+    )
+    f.add_argument(
+        "--out",
+        type=_out_path,
+        metavar="SETTINGS.json",
+        help="write the fitted values as settings (omniloc track --config SETTINGS.json)",
+    )
     return parser
 
 
@@ -776,12 +790,35 @@ def _cmd_track(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_fit_motion(args: argparse.Namespace) -> int:
+    import dataclasses
+
+    from .io import write_text
+    from .track import estimate_motion, load_groundtruth, load_odometry
+
+    fit = estimate_motion(load_odometry(args.odometry), load_groundtruth(args.groundtruth))
+    values = {f.name: getattr(fit.model, f.name) for f in dataclasses.fields(fit.model)}
+    print(
+        f"fitted on {fit.stretches} stretches ({fit.left_out} left out as outliers): "
+        f"the odometry's rows describe the motion {values['delay_s']:+.2f} s after their time "
+        f"stamps, its velocities x {values['v_scale']:.3f}"
+    )
+    for name, v in values.items():
+        if name not in ("delay_s", "v_scale"):
+            print(f"  {name:<13} {v:.3g}")
+    if args.out is not None:
+        write_text(args.out, json.dumps(values, indent=1) + "\n", InputError)
+        print(f"written: {args.out} (omniloc track --config {args.out})")
+    return 0
+
+
 _COMMANDS = {
     "localize": _cmd_localize,
     "bearings": _cmd_bearings,
     "demo": _cmd_demo,
     "evaluate": _cmd_evaluate,
     "track": _cmd_track,
+    "fit-motion": _cmd_fit_motion,
 }
 
 
