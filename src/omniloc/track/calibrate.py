@@ -3,8 +3,8 @@ off its scale, and how much noise it gathers per metre, per radian and per secon
 
 A user with a robot of their own has odometry and, for a while, a ground-truth track (a
 motion-capture system, a survey): :func:`estimate_motion` turns them into the
-:class:`~omniloc.track.MotionModel` that the tracker needs, the way the ``mrclam`` preset's
-values were found. Three steps:
+:class:`~omniloc.track.MotionModel` that the tracker needs (the ``mrclam`` preset's values
+were fitted by hand before this existed; ``docs/tracking.md`` compares the two). Three steps:
 
 1. **Latency** (``delay_s``): over stretches of ``delay_stretch_s`` seconds all along the
    recording, the relative motion the odometry predicts (its rows shifted by each delay of
@@ -243,7 +243,7 @@ def estimate_motion(
 
     tried, cost = best_delay(model)
     model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
-    # Scale: distances travelled, truth against the odometry's (at scale 1).
+    # Scale: the truth's displacements against the odometry's (at scale 1).
     true = _true_motion(truth, a, a + delay_stretch_s, max_gap_s)
     ok = np.isfinite(true).all(axis=1)
     pred, _ = _predicted(odometry, a[ok], a[ok] + delay_stretch_s, model)
