@@ -712,16 +712,16 @@ def _cmd_track(args: argparse.Namespace) -> int:
     )
     from .track.io import write_json_lines, write_tum
 
+    sensor, motion, config = preset(args.preset)
+    settings = _settings(args)
+    if settings:  # refused before the files are read
+        sensor, motion, config = with_settings(sensor, motion, config, settings)
     lm = LandmarkMap.load(args.map)
     odo = load_odometry(args.odometry)
     frames = load_frames(args.frames, degrees=args.degrees)
     if not frames:
         raise InputError(f"{args.frames}: no frames")
     truth = load_groundtruth(args.groundtruth) if args.groundtruth is not None else None
-    sensor, motion, config = preset(args.preset)
-    settings = _settings(args)
-    if settings:
-        sensor, motion, config = with_settings(sensor, motion, config, settings)
     changes: dict[str, Any] = {}
     if args.sigma is not None:
         changes["sigma"] = float(np.deg2rad(args.sigma))
