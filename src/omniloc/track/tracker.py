@@ -25,7 +25,9 @@ when the tracker wakes up.
   searches often miss the true pose; see :class:`TrackerConfig`.) With
   ``clutter_persistence`` set the clutter has memory: what a place called clutter in the
   last frame with bearings it expects again near the same bearing (another robot stays put
-  for seconds), each hypothesis and each of elsewhere's particles with its own memory.
+  for seconds), each hypothesis and each of elsewhere's particles with its own memory. With
+  ``turn_noise_s`` set, a frame taken while the robot turns has noisier bearings (variance
+  ``sigma^2 + (turn rate * turn_noise_s)^2``), for every hypothesis, replay and particle.
 * **New hypotheses.** While not localized, at most every ``search_interval_s``, the bearings
   of the shortest run of recent frames (at most ``search_window_s`` seconds) that holds
   ``search_min_bearings`` of them, stacked into the current frame by the odometry, go
