@@ -27,7 +27,6 @@ sequence), against independent Gaussian errors.
 from __future__ import annotations
 
 import argparse
-import itertools
 import math
 import sys
 from collections.abc import Sequence
@@ -43,6 +42,7 @@ from _results import run_meta, write_results  # noqa: E402
 from omniloc import predict_bearings  # noqa: E402
 from omniloc.angles import wrap  # noqa: E402
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
+from omniloc.track.calibrate import turn_noise_fit  # noqa: E402
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -217,51 +217,6 @@ def drifting_bias_fit(rows: Sequence[tuple[int, int, float, float]]) -> dict[str
         "tau_s": tau,
         "white_sd": sw,
         "gain_per_sighting": (independent - float(res.fun)) / err.size,
-    }
-
-
-#: Turn-rate bins (rad/s) of :func:`turn_noise_fit`.
-TURN_BINS = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.6)
-
-
-def turn_noise_fit(errors: FloatArray, turn_rate: FloatArray) -> dict[str, object]:
-    """How the bearing noise grows with the robot's turn rate: per bin of ``|turn_rate|``
-    (:data:`TURN_BINS`, rad/s) the robust sd of the errors (1.4826 times the median absolute
-    deviation), and the least-squares fit of ``var = sd0^2 + (turn_noise_s * w)^2`` to those
-    variances at the bins' median turn rates (weighted by the bins' counts).
-
-    Examples
-    --------
-    >>> rng = np.random.default_rng(1)
-    >>> w = rng.uniform(-0.6, 0.6, 40000)
-    >>> e = rng.normal(0, np.hypot(0.007, 0.05 * w))
-    >>> fit = turn_noise_fit(e, w)
-    >>> abs(fit["sd0"] - 0.007) < 0.0005, abs(fit["turn_noise_s"] - 0.05) < 0.003
-    (True, True)
-    """
-    e = np.asarray(errors, dtype=float)
-    w = np.abs(np.asarray(turn_rate, dtype=float))
-    ok = np.isfinite(e) & np.isfinite(w)
-    e, w = e[ok], w[ok]
-    bins = []
-    for lo, hi in itertools.pairwise(TURN_BINS):
-        m = (w >= lo) & (w < hi)
-        if m.sum() < 20:
-            continue
-        x = e[m]
-        sd = 1.4826 * float(np.median(np.abs(x - np.median(x))))
-        bins.append(
-            {"from": lo, "to": hi, "n": int(m.sum()), "w": float(np.median(w[m])), "sd": sd}
-        )
-    W = np.array([b["w"] for b in bins])
-    V = np.array([b["sd"] for b in bins]) ** 2
-    n = np.array([b["n"] for b in bins], dtype=float)
-    A = np.c_[np.ones_like(W), W**2] * np.sqrt(n)[:, None]
-    (a, c), *_ = np.linalg.lstsq(A, V * np.sqrt(n), rcond=None)
-    return {
-        "sd0": math.sqrt(max(float(a), 0.0)),
-        "turn_noise_s": math.sqrt(max(float(c), 0.0)),
-        "bins": bins,
     }
 
 

@@ -1402,7 +1402,15 @@ def _track_targets() -> list[Target]:
 
 def _settings_targets() -> list[Target]:
     """Settings by name, their file, and the motion model fitted to a recording."""
-    from omniloc.track import GroundTruth, Odometry, estimate_motion, load_settings, preset
+    from omniloc.track import (
+        Frame,
+        GroundTruth,
+        Odometry,
+        estimate_frame_sensor,
+        estimate_motion,
+        load_settings,
+        preset,
+    )
     from omniloc.track import with_settings as ws
 
     fields = ("setting", "settings", "must", "sigma", "min_age_s", "region", "v_scale", "fov")
@@ -1410,6 +1418,10 @@ def _settings_targets() -> list[Target]:
     odo = Odometry(t, np.full(t.size, 0.2), np.full(t.size, 0.1))
     th = 0.1 * t
     good = GroundTruth(t, 2.0 * np.sin(th), 2.0 - 2.0 * np.cos(th), th)
+    z = omniloc.predict_bearings(room().xy, ROOM_POSE)
+    frames = [Frame(0.1 * k, z) for k in range(10)]
+    p = ROOM_POSE
+    still = GroundTruth([0.0, 2.0], [p.x, p.x], [p.y, p.y], [p.theta, p.theta])
     return [
         Target(
             "with_settings",
@@ -1438,6 +1450,27 @@ def _settings_targets() -> list[Target]:
             lambda kw: load_settings(**kw),
             lambda: {"path": file_with("s.json", "{}")},
             {"path": Arg(("settings", "file", "path", "JSON", ".json", ".csv"), TEXT_FILES)},
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "estimate_frame_sensor",
+            lambda kw: estimate_frame_sensor(**kw),
+            lambda: {"landmarks": room(), "frames": frames, "truth": still},
+            {
+                "frames": Arg(
+                    ("frames", "too few"),
+                    (("None", None), ("a string", "frames.csv"), ("empty", []), ("ints", [1, 2])),
+                ),
+                "truth": Arg(("truth", "GroundTruth", "too few"), (("None", None), ("list", [1]))),
+                "landmarks": Arg(("landmark", "map", "positions"), (("nan", [[float("nan"), 0]]),)),
+                **{
+                    k: Arg(
+                        (k,),
+                        (("nan", float("nan")), ("zero", 0.0), ("huge", 1e300), ("bool", True)),
+                    )
+                    for k in ("fov", "max_range", "gate", "max_gap_s")
+                },
+            },
             check=lambda kw, v: None,
         ),
         Target(
@@ -1914,4 +1947,27 @@ def cli_targets() -> dict[str, CliTarget]:
         },
         limit_s=60.0,
     )
-    return {t.name: t for t in (localize, bearings, demo, evaluate, track, fit_motion)}
+    sensor_frames = "t,bearing\n" + "".join(
+        f"{0.2 * k!r},{b!r}\n" for k in range(8) for b in z.tolist()
+    )
+    p = ROOM_POSE
+    still_gt = f"t,x,y,theta\n0,{p.x!r},{p.y!r},{p.theta!r}\n2,{p.x!r},{p.y!r},{p.theta!r}\n"
+    fit_sensor = CliTarget(
+        "fit-sensor",
+        (
+            ("--map", file_with("room.csv", ROOM_CSV)),
+            ("--frames", file_with("frames.csv", sensor_frames)),
+            ("--groundtruth", file_with("gt.csv", still_gt)),
+        ),
+        {
+            "--map": MAP_FILES,
+            "--frames": FRAME_FILES,
+            "--groundtruth": GROUNDTRUTH_FILES,
+            "--out": (
+                ("a directory", Lazy(lambda f: f, needs_dir=True)),
+                ("under a file", Lazy(lambda f: _a_file(f) / "s.json", needs_dir=True)),
+            ),
+            **{k: CLI_NUMBERS for k in ("--fov", "--max-range", "--gate")},
+        },
+    )
+    return {t.name: t for t in (localize, bearings, demo, evaluate, track, fit_motion, fit_sensor)}

@@ -17,11 +17,11 @@ from bearing_correlation import (
     lag_correlations,
     sightings,
     systematic,
-    turn_noise_fit,
 )
 from omniloc import LandmarkMap
 from omniloc.evaluate.tracking import Segment, Stream
 from omniloc.track import Frame, GroundTruth, Odometry
+from omniloc.track.calibrate import turn_noise_fit
 
 
 def test_an_ar1_error_has_its_correlation_at_each_lag() -> None:

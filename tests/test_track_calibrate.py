@@ -139,3 +139,74 @@ def test_fit_motion_on_the_command_line_writes_settings_for_track(
     assert main(argv) == 1
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "too little" in err
+
+
+def test_a_simulated_sensor_gives_back_its_noise_detection_and_clutter() -> None:
+    import math
+
+    import omniloc
+    from omniloc.track import estimate_frame_sensor, simulate_run
+
+    room = omniloc.demo_room()
+    sensor = omniloc.SensorModel(
+        sigma=math.radians(0.5), fov=math.radians(120.0), p_detect=0.7, clutter=0.5
+    )
+    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=300.0, rng=2)
+    fit = estimate_frame_sensor(room, run.frames, run.truth, fov=math.radians(120.0))
+    assert fit.sigma == pytest.approx(math.radians(0.5), rel=0.1)
+    assert fit.p_detect == pytest.approx(0.7, abs=0.05)
+    assert fit.clutter == pytest.approx(0.5, abs=0.1)
+    assert fit.turn_noise_s < 0.02  # the simulated camera's noise does not grow with the turn
+    assert fit.frames == len(run.frames) and fit.matched <= fit.bearings
+    assert set(fit.settings()) == {"sigma", "p_detect", "clutter", "turn_noise_s"}
+    with pytest.raises(InputError, match="too few"):
+        estimate_frame_sensor(room, run.frames[:3], run.truth)
+    with pytest.raises(InputError, match="gate"):
+        estimate_frame_sensor(room, run.frames, run.truth, gate=-1.0)
+    with pytest.raises(InputError, match="frames must be"):
+        estimate_frame_sensor(room, "frames.csv", run.truth)  # type: ignore[arg-type]
+
+
+def test_fit_sensor_on_the_command_line_writes_settings_for_track(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import math
+
+    import omniloc
+    from omniloc.cli import main
+    from omniloc.track import load_settings, preset, simulate_run, with_settings
+
+    room = omniloc.demo_room()
+    sensor = omniloc.SensorModel(sigma=math.radians(0.5), p_detect=0.8, clutter=0.3)
+    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=60.0, rng=3)
+    lm = tmp_path / "map.csv"
+    lm.write_text(
+        "id,x,y\n" + "".join(f"{k},{x!r},{y!r}\n" for k, (x, y) in enumerate(room.xy.tolist()))
+    )
+    fr = tmp_path / "frames.csv"
+    fr.write_text(
+        "t,bearing\n" + "".join(f"{f.t!r},{b!r}\n" for f in run.frames for b in f.bearings.tolist())
+    )
+    gt = tmp_path / "gt.csv"
+    tr = run.truth
+    gt.write_text(
+        "t,x,y,theta\n"
+        + "".join(
+            f"{a!r},{b!r},{c!r},{d!r}\n"
+            for a, b, c, d in zip(
+                tr.t.tolist(), tr.x.tolist(), tr.y.tolist(), tr.theta.tolist(), strict=True
+            )
+        )
+    )
+    out = tmp_path / "sensor.json"
+    argv = ["fit-sensor", "--map", str(lm), "--frames", str(fr), "--groundtruth", str(gt)]
+    assert main([*argv, "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "p_detect" in text and str(out) in text
+    s, _, c = with_settings(*preset("generic"), load_settings(out))
+    assert s.p_detect == pytest.approx(0.8, abs=0.07) and c.turn_noise_s >= 0.0
+    # A truth of another time: one line, status 1.
+    gt.write_text("t,x,y,theta\n1e6,0,0,0\n1000001,0,0,0\n")
+    assert main(argv) == 1
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "too few" in err

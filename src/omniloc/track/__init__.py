@@ -4,7 +4,8 @@
   bearings, it reports ``lost``, ``ambiguous`` or ``localized`` after every frame;
 * :func:`track` (:mod:`.offline`) -- the same over a whole recording;
 * :mod:`.motion` -- the odometry's motion and noise (:class:`MotionModel`); :mod:`.calibrate`
-  -- that model fitted to odometry and a ground-truth track (:func:`estimate_motion`);
+  -- that model fitted to odometry and a ground-truth track (:func:`estimate_motion`), and
+  the bearing sensor to frames and the track (:func:`estimate_frame_sensor`);
 * :mod:`.likelihood` -- what a frame of bearings says about a set of Gaussian pose
   hypotheses, and how it moves them;
 * :mod:`.window`, :mod:`.relocalize` -- the recent frames, and new hypotheses from the
@@ -24,7 +25,7 @@ import sys
 import types
 from typing import Any
 
-from .calibrate import MotionFit, estimate_motion
+from .calibrate import MotionFit, SensorFit, estimate_frame_sensor, estimate_motion
 from .data import Frame, GroundTruth, Odometry, load_frames, load_groundtruth, load_odometry
 from .io import read_tum, write_json_lines, write_tum
 from .motion import MotionModel
@@ -42,12 +43,14 @@ __all__ = [
     "MotionModel",
     "Odometry",
     "Preset",
+    "SensorFit",
     "SimulatedRun",
     "TrackEstimate",
     "TrackRun",
     "TrackState",
     "Tracker",
     "TrackerConfig",
+    "estimate_frame_sensor",
     "estimate_motion",
     "load_frames",
     "load_groundtruth",

@@ -19,11 +19,19 @@ were fitted by hand before this existed; ``docs/tracking.md`` compares the two).
    (:func:`~omniloc.track.motion.integrate`: linear in the six values), a small floor
    standing for the truth's own noise. A second pass leaves out the stretches whose error is
    beyond the 99.9 % chi-square bound (the truth's glitches, a wheel that slipped once).
+
+:func:`estimate_frame_sensor` does the same for the bearing sensor from frames of bearings
+and the truth (no landmark ids needed): each bearing is taken as the landmark whose bearing
+from the true pose is nearest, within a gate; then the noise (robust spread of those
+errors), how it grows with the turn rate (:func:`turn_noise_fit`), the detection probability
+of a landmark plainly in view, and the clutter per frame.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -34,10 +42,17 @@ from scipy.stats import chi2
 from ..angles import wrap
 from ..errors import InputError
 from ..io import shorten
-from .data import GroundTruth, Odometry
+from ..maps import LandmarkMap, as_landmark_map
+from .data import Frame, GroundTruth, Odometry
 from .motion import MotionModel, between, integrate
 
-__all__ = ["MotionFit", "estimate_motion"]
+__all__ = [
+    "MotionFit",
+    "SensorFit",
+    "estimate_frame_sensor",
+    "estimate_motion",
+    "turn_noise_fit",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -301,3 +316,225 @@ def estimate_motion(
     noise = {f: (v if v > 1e-9 else 0.0) for f, v in noise.items()}
     model = replace(model, **noise)
     return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()))
+
+
+#: Turn-rate bins (rad/s) of :func:`turn_noise_fit`.
+TURN_BINS = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.6)
+
+
+def turn_noise_fit(errors: ArrayLike, turn_rate: ArrayLike) -> dict[str, object]:
+    """How the bearing noise grows with the robot's turn rate: per bin of ``|turn_rate|``
+    (:data:`TURN_BINS`, rad/s; bins of fewer than 20 errors left out) the robust sd of the
+    errors (1.4826 times the median absolute deviation), and the least-squares fit of
+    ``var = sd0^2 + (turn_noise_s * w)^2`` to those variances at the bins' median turn rates
+    (weighted by the bins' counts).
+
+    Returns
+    -------
+    dict
+        ``sd0`` (rad), ``turn_noise_s`` (s) and ``bins`` (each ``from``, ``to``, ``n``, ``w``,
+        ``sd``).
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> w = rng.uniform(-0.6, 0.6, 40000)
+    >>> e = rng.normal(0, np.hypot(0.007, 0.05 * w))
+    >>> fit = turn_noise_fit(e, w)
+    >>> abs(fit["sd0"] - 0.007) < 0.0005, abs(fit["turn_noise_s"] - 0.05) < 0.003
+    (True, True)
+    """
+    e = np.asarray(errors, dtype=float).reshape(-1)
+    w = np.abs(np.asarray(turn_rate, dtype=float)).reshape(-1)
+    if e.shape != w.shape:
+        raise InputError(f"one turn rate per error: got {e.size} errors and {w.size} rates")
+    ok = np.isfinite(e) & np.isfinite(w)
+    e, w = e[ok], w[ok]
+    bins = []
+    for lo, hi in itertools.pairwise(TURN_BINS):
+        m = (w >= lo) & (w < hi)
+        if m.sum() < 20:
+            continue
+        x = e[m]
+        sd = 1.4826 * float(np.median(np.abs(x - np.median(x))))
+        bins.append(
+            {"from": lo, "to": hi, "n": int(m.sum()), "w": float(np.median(w[m])), "sd": sd}
+        )
+    if not bins:
+        return {"sd0": math.nan, "turn_noise_s": math.nan, "bins": bins}
+    W = np.array([b["w"] for b in bins])
+    V = np.array([b["sd"] for b in bins]) ** 2
+    n = np.array([b["n"] for b in bins], dtype=float)
+    if len(bins) == 1:
+        return {"sd0": math.sqrt(float(V[0])), "turn_noise_s": 0.0, "bins": bins}
+    A = np.c_[np.ones_like(W), W**2] * np.sqrt(n)[:, None]
+    (a, c), *_ = np.linalg.lstsq(A, V * np.sqrt(n), rcond=None)
+    return {
+        "sd0": math.sqrt(max(float(a), 0.0)),
+        "turn_noise_s": math.sqrt(max(float(c), 0.0)),
+        "bins": bins,
+    }
+
+
+@dataclass(frozen=True)
+class SensorFit:
+    """What :func:`estimate_frame_sensor` found.
+
+    Attributes
+    ----------
+    sigma : float
+        Robust sd of the bearing errors (rad): 1.4826 times their median absolute deviation.
+    turn_noise_s : float
+        How that noise grows with the turn rate (:func:`turn_noise_fit`; 0 when the
+        recording does not turn enough to tell).
+    p_detect : float
+        Share of the landmarks plainly in view (inside the field of view by more than the
+        gate, within the range) that a frame reported.
+    clutter : float
+        Bearings per frame that are no landmark (none within the gate).
+    frames, matched, bearings : int
+        Frames with a true pose, bearings taken as landmarks, all their bearings.
+    """
+
+    sigma: float
+    turn_noise_s: float
+    p_detect: float
+    clutter: float
+    frames: int
+    matched: int
+    bearings: int
+
+    def settings(self) -> dict[str, float]:
+        """As settings for :func:`~omniloc.track.with_settings` (``omniloc track --config``)."""
+        return {
+            "sigma": self.sigma,
+            "p_detect": self.p_detect,
+            "clutter": self.clutter,
+            "turn_noise_s": self.turn_noise_s,
+        }
+
+
+def estimate_frame_sensor(
+    landmarks: LandmarkMap | ArrayLike,
+    frames: Sequence[Frame],
+    truth: GroundTruth,
+    *,
+    fov: float | None = None,
+    max_range: float | None = None,
+    gate: float = math.radians(3.0),
+    max_gap_s: float = 0.5,
+) -> SensorFit:
+    """Fit the bearing sensor's noise, its growth with the turn rate, the detection
+    probability and the clutter from frames of bearings and a ground-truth track (see the
+    module's documentation).
+
+    Parameters
+    ----------
+    landmarks : LandmarkMap or array_like, shape (N, 2)
+    frames : sequence of Frame
+        The recording's frames (their landmark ids, if any, are not used).
+    truth : GroundTruth
+        The true track over (part of) the same time; frames outside it, or where it has a gap
+        longer than ``max_gap_s``, are left out.
+    fov : float, optional
+        Full field of view (rad); None: all around.
+    max_range : float, optional
+        Range (m) beyond which no landmark is taken as in view.
+    gate : float
+        A bearing is taken as the nearest landmark's within this (rad), else as clutter.
+
+    Returns
+    -------
+    SensorFit
+
+    Raises
+    ------
+    InputError
+        Fewer than 20 bearings taken as landmarks, or an argument out of range.
+    """
+    lm = as_landmark_map(landmarks)
+    if not isinstance(truth, GroundTruth):
+        raise InputError(f"truth must be a GroundTruth, got {type(truth).__name__}")
+    items: list[object]
+    try:
+        items = [frames] if isinstance(frames, (str, bytes)) else list(frames)
+    except TypeError:
+        items = [frames]
+    if not all(isinstance(f, Frame) for f in items):
+        raise InputError("frames must be a sequence of Frame (see omniloc.track.load_frames)")
+    frames = [f for f in items if isinstance(f, Frame)]
+    for name, val, top in (
+        ("gate", gate, math.pi),
+        ("max_gap_s", max_gap_s, MAX_STRETCH_S),
+        ("fov", fov, 2 * math.pi),
+        ("max_range", max_range, 1e9),
+    ):
+        if val is None and name in ("fov", "max_range"):
+            continue
+        if not (
+            isinstance(val, (int, float))
+            and not isinstance(val, bool)
+            and math.isfinite(val)
+            and 0 < val <= top
+        ):
+            raise InputError(
+                f"{name} must be a positive number (at most {top:g}), got {shorten(val)}"
+            )
+    L = lm.xy
+    half = None if fov is None else 0.5 * float(fov)
+    t = np.array([f.t for f in frames], dtype=np.float64)
+    poses, gaps = truth.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
+    before, _ = truth.at(t - 0.1) if t.size else (np.zeros((0, 3)), None)
+    after, _ = truth.at(t + 0.1) if t.size else (np.zeros((0, 3)), None)
+    errors: list[float] = []
+    rates: list[float] = []
+    seen = visible = unmatched = used = total = 0
+    for k, f in enumerate(frames):
+        x = poses[k]
+        if not (np.isfinite(x).all() and gaps[k] <= max_gap_s):
+            continue
+        used += 1
+        total += f.bearings.size
+        d = L - x[:2]
+        r = np.hypot(d[:, 0], d[:, 1])
+        h = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - x[2]))
+        near = r > 1e-9
+        if max_range is not None:
+            near &= r <= max_range
+        cand = np.flatnonzero(near)
+        taken = np.zeros(L.shape[0], dtype=bool)
+        rate = float(wrap(after[k, 2] - before[k, 2])) / 0.2
+        for b in f.bearings:
+            if cand.size == 0:
+                unmatched += 1
+                continue
+            e = np.asarray(wrap(b - h[cand]))
+            j = int(np.argmin(np.abs(e)))
+            if abs(e[j]) <= gate and not taken[cand[j]]:
+                taken[cand[j]] = True
+                errors.append(float(e[j]))
+                rates.append(rate)
+            else:
+                unmatched += 1
+        plain = near & ((np.abs(h) <= half - gate) if half is not None else True)
+        visible += int(plain.sum())
+        seen += int((plain & taken).sum())
+    if len(errors) < 20:
+        raise InputError(
+            f"only {len(errors)} bearings within {math.degrees(gate):.1f} deg of a landmark "
+            "seen from the true pose: too few to fit the sensor (do the frames, the map and "
+            "the truth belong together?)"
+        )
+    err = np.array(errors)
+    sigma = 1.4826 * float(np.median(np.abs(err - np.median(err))))
+    turn = turn_noise_fit(err, np.array(rates))
+    tn = float(turn["turn_noise_s"])  # type: ignore[arg-type]
+    return SensorFit(
+        sigma=sigma,
+        turn_noise_s=tn if math.isfinite(tn) else 0.0,
+        p_detect=seen / visible if visible else math.nan,
+        clutter=unmatched / used,
+        frames=used,
+        matched=len(errors),
+        bearings=total,
+    )
