@@ -110,6 +110,19 @@ def _seconds(values: ArrayLike, name: str, what: str) -> FloatArray:
     return a
 
 
+def _positive(name: str, value: object, top: float) -> None:
+    """An InputError naming ``name`` unless ``value`` is a real number in ``(0, top]``."""
+    if not (
+        isinstance(value, (int, float))
+        and not isinstance(value, bool)
+        and math.isfinite(value)
+        and 0 < value <= top
+    ):
+        raise InputError(
+            f"{name} must be a positive number (at most {top:g}), got {shorten(value)}"
+        )
+
+
 def _stretches(t0: float, t1: float, length: float, step: float) -> FloatArray:
     """Starts of stretches ``[a, a + length]`` inside ``[t0, t1]``, ``step`` apart."""
     if t1 - t0 < length:
@@ -218,17 +231,8 @@ def estimate_motion(
     )
     if float(np.abs(grid).max()) > MAX_DELAY_S:
         raise InputError(f"delays must lie within {MAX_DELAY_S} s, got {shorten(delays)}")
-    for name, val in (("delay_stretch_s", delay_stretch_s), ("max_gap_s", max_gap_s)):
-        if not (
-            isinstance(val, (int, float))
-            and not isinstance(val, bool)
-            and math.isfinite(val)
-            and 0 < val <= MAX_STRETCH_S
-        ):
-            raise InputError(
-                f"{name} must be a positive number of seconds (at most {MAX_STRETCH_S:g}), "
-                f"got {shorten(val)}"
-            )
+    _positive("delay_stretch_s", delay_stretch_s, MAX_STRETCH_S)
+    _positive("max_gap_s", max_gap_s, MAX_STRETCH_S)
     if float(lengths.max()) > MAX_STRETCH_S:
         raise InputError(f"stretch_s must be at most {MAX_STRETCH_S:g} s, got {shorten(stretch_s)}")
     # The span both cover, leaving room for any delay of the grid.
@@ -463,23 +467,12 @@ def estimate_frame_sensor(
     if not all(isinstance(f, Frame) for f in items):
         raise InputError("frames must be a sequence of Frame (see omniloc.track.load_frames)")
     frames = [f for f in items if isinstance(f, Frame)]
-    for name, val, top in (
-        ("gate", gate, math.pi),
-        ("max_gap_s", max_gap_s, MAX_STRETCH_S),
-        ("fov", fov, 2 * math.pi),
-        ("max_range", max_range, 1e9),
-    ):
-        if val is None and name in ("fov", "max_range"):
-            continue
-        if not (
-            isinstance(val, (int, float))
-            and not isinstance(val, bool)
-            and math.isfinite(val)
-            and 0 < val <= top
-        ):
-            raise InputError(
-                f"{name} must be a positive number (at most {top:g}), got {shorten(val)}"
-            )
+    _positive("gate", gate, math.pi)
+    _positive("max_gap_s", max_gap_s, MAX_STRETCH_S)
+    if fov is not None:
+        _positive("fov", fov, 2 * math.pi)
+    if max_range is not None:
+        _positive("max_range", max_range, 1e9)
     L = lm.xy
     half = None if fov is None else 0.5 * float(fov)
     t = np.array([f.t for f in frames], dtype=np.float64)
