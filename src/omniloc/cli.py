@@ -714,13 +714,13 @@ def _setting(item: str) -> dict[str, Any]:
 
     name, sep, text = item.partition("=")
     if not sep or not name.strip():
-        raise InputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set min_age_s=10")
+        raise InputError(f"--set {shorten(item)}: expected NAME=VALUE, e.g. --set min_age_s=10")
     try:
         value = json.loads(text)
     except (json.JSONDecodeError, RecursionError, ValueError) as exc:
         raise InputError(
-            f"--set {item!r}: the value must be JSON (a number, true/false, null or a list), "
-            f"got {text!r}"
+            f"--set {shorten(name)}=...: the value must be JSON (a number, true/false, null or a "
+            f"list), got {shorten(text)}"
         ) from exc
     return {name.strip(): value}
 

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from ..io import shorten
 from ..sensor import SensorModel
 from .motion import MotionModel
 from .tracker import TrackerConfig
@@ -166,8 +167,8 @@ def with_settings(
             near = difflib.get_close_matches(str(name), list(names), n=3)
             hint = f" (did you mean {' or '.join(map(repr, near))}?)" if near else ""
             raise InputError(
-                f"unknown setting {name!r}{hint}: not a field of SensorModel, MotionModel or "
-                "TrackerConfig"
+                f"unknown setting {shorten(name)}{hint}: not a field of SensorModel, MotionModel "
+                "or TrackerConfig"
             )
         parts[names[name]][name] = value
     try:
@@ -180,7 +181,7 @@ def with_settings(
     except InputError:
         raise
     except (TypeError, ValueError, OverflowError) as exc:
-        raise InputError(f"settings {dict(settings)!r}: {exc}") from exc
+        raise InputError(f"settings {shorten(dict(settings))}: {shorten(str(exc), 200)}") from exc
     return sensor, motion, config
 
 
