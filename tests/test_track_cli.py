@@ -156,15 +156,17 @@ def _first_localized_after(out: str) -> float:
 def test_settings_from_a_file_and_the_command_line_change_the_run(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    # min_age_s: a place must be tracked that long before it is called localized. The file
-    # sets 6 s, --set (applied after the file) 8 s.
+    # min_age_s: a place must be tracked that long before it is called localized. The
+    # files set 4 s then 6 s (the later wins), --set (applied after the files) 8 s.
     lm, odo, fr = _write_inputs(tmp_path)
     argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
     assert main(argv) == 0
     plain = _first_localized_after(capsys.readouterr().out)
     settings = tmp_path / "settings.json"
-    settings.write_text('{"min_age_s": 6.0, "split_clutter": 0.02}')
-    assert main([*argv, "--config", str(settings)]) == 0
+    settings.write_text('{"min_age_s": 4.0, "split_clutter": 0.02}')
+    later = tmp_path / "later.json"
+    later.write_text('{"min_age_s": 6.0}')
+    assert main([*argv, "--config", str(settings), "--config", str(later)]) == 0
     from_file = _first_localized_after(capsys.readouterr().out)
     assert main([*argv, "--config", str(settings), "--set", "min_age_s=8"]) == 0
     both = _first_localized_after(capsys.readouterr().out)

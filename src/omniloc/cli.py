@@ -286,9 +286,12 @@ def _add_settings_options(p: argparse.ArgumentParser, scope: str = "") -> None:
     p.add_argument(
         "--config",
         type=Path,
+        action="append",
+        default=[],
         metavar="SETTINGS.json",
         help=f"{scope}a JSON object of settings (name: value, the library's units: rad, m, s) "
-        "applied to the tracker's preset",
+        "applied to the tracker's preset; repeatable (e.g. fit-motion's and fit-sensor's), "
+        "later files win",
     )
     p.add_argument(
         "--set",
@@ -306,8 +309,8 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
     from .track import load_settings
 
     settings: dict[str, Any] = {}
-    if args.config is not None:
-        settings.update(load_settings(args.config))
+    for path in args.config:
+        settings.update(load_settings(path))
     for item in args.set:
         settings.update(_setting(item))
     return settings
@@ -631,9 +634,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     from . import evaluate as ev
 
     progress = not args.quiet
-    if (args.config is not None or args.set) and (
-        args.dataset is None or args.dataset[0] != "mrclam-track"
-    ):
+    if (args.config or args.set) and (args.dataset is None or args.dataset[0] != "mrclam-track"):
         raise InputError(
             "--config and --set change the tracker's settings: they apply to --dataset "
             "mrclam-track only"
