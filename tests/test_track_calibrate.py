@@ -210,3 +210,24 @@ def test_fit_sensor_on_the_command_line_writes_settings_for_track(
     assert main(argv) == 1
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "too few" in err
+
+
+def test_p_detect_counts_every_landmark_in_view_as_the_tracker_does() -> None:
+    # Landmarks A (dead ahead) and B (1 deg beside it) and C (60 deg left), 5 m away; every
+    # frame reports A and C, never B. The tracker's frame model reports each landmark in view
+    # with p_detect: 2 of 3. (The single-frame estimate_sensor would count B as hidden behind
+    # A's bearing and say 1.0 -- a tracker given that is sure of too much.)
+    import math
+
+    from omniloc.track import Frame, estimate_frame_sensor
+
+    ang = np.radians([0.0, 1.0, 60.0])
+    lm = 5.0 * np.column_stack([np.cos(ang), np.sin(ang)])
+    rng = np.random.default_rng(8)
+    frames = [Frame(0.1 * k, np.array([0.0, ang[2]]) + rng.normal(0.0, 1e-3, 2)) for k in range(30)]
+    truth = GroundTruth(np.array([-1.0, 10.0]), np.zeros(2), np.zeros(2), np.zeros(2))
+    fit = estimate_frame_sensor(lm, frames, truth, fov=math.radians(180.0), gate=math.radians(0.4))
+    assert fit.p_detect == pytest.approx(2.0 / 3.0)
+    assert fit.clutter == 0.0 and fit.matched == 60
+    with pytest.raises(InputError, match="no landmark was in view"):
+        estimate_frame_sensor(lm, frames, truth, fov=math.radians(0.5), gate=math.radians(0.4))

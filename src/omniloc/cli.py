@@ -861,7 +861,7 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
         "tails are heavier: the mrclam preset takes 1 deg for a robust 0.3-0.7)"
     )
     print(f"  turn_noise_s  {fit.turn_noise_s:.3f} s (extra noise per rad/s of turn)")
-    print(f"  p_detect      {fit.p_detect:.3f} (of the landmarks plainly in view)")
+    print(f"  p_detect      {fit.p_detect:.3f} (of the landmarks in view)")
     print(f"  clutter       {fit.clutter:.3f} bearings per frame")
     if args.out is not None:
         write_text(args.out, json.dumps(fit.settings(), indent=1) + "\n", InputError)
