@@ -246,12 +246,7 @@ def _build_parser() -> argparse.ArgumentParser:
     f.add_argument(
         "--groundtruth", required=True, type=Path, help="true track of the same run: t,x,y,theta"
     )
-    f.add_argument(
-        "--out",
-        type=_out_path,
-        metavar="SETTINGS.json",
-        help="write the fitted values as settings (omniloc track --config SETTINGS.json)",
-    )
+    _add_settings_out(f)
     fs = sub.add_parser(
         "fit-sensor",
         help="fit the bearing sensor to frames and a ground-truth track (settings for track)",
@@ -272,13 +267,18 @@ def _build_parser() -> argparse.ArgumentParser:
     fs.add_argument(
         "--gate", type=_positive, default=3.0, help="a bearing within this of a landmark, deg"
     )
-    fs.add_argument(
+    _add_settings_out(fs)
+    return parser
+
+
+def _add_settings_out(p: argparse.ArgumentParser) -> None:
+    """``--out`` of the fit commands: their values as a settings file."""
+    p.add_argument(
         "--out",
         type=_out_path,
         metavar="SETTINGS.json",
         help="write the fitted values as settings (omniloc track --config SETTINGS.json)",
     )
-    return parser
 
 
 def _add_settings_options(p: argparse.ArgumentParser, scope: str = "") -> None:
@@ -833,6 +833,11 @@ def _cmd_fit_motion(args: argparse.Namespace) -> int:
     for name, v in values.items():
         if name not in ("delay_s", "v_scale"):
             print(f"  {name:<13} {v:.3g}")
+    if any(v == 0.0 for v in values.values()):
+        print(
+            "  (0: the recording cannot tell that noise from none; the tracker needs some -- "
+            "docs/tracking.md, 'Calibrating a robot of your own')"
+        )
     if args.out is not None:
         write_text(args.out, json.dumps(values, indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")
