@@ -387,7 +387,10 @@ class SensorFit:
     Attributes
     ----------
     sigma : float
-        Robust sd of the bearing errors (rad): 1.4826 times their median absolute deviation.
+        Robust sd of the bearing errors (rad): 1.4826 times their median absolute deviation
+        (around their median: a constant offset, e.g. the camera turned on the robot, which the
+        tracker's heading takes in, does not count as noise; ``estimate_sensor`` takes the
+        median absolute error instead).
     turn_noise_s : float
         How that noise grows with the turn rate (:func:`turn_noise_fit`; 0 when the
         recording does not turn enough to tell).
