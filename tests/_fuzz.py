@@ -658,6 +658,31 @@ def _localize_check(kw: dict[str, Any], v: Any) -> None:
         raise Insane("an incomplete search gave an unambiguous answer")
 
 
+#: Values for ``clutter_by_detections`` (a sequence of expected clutter counts).
+CLUTTER_TABLES: Pool = (
+    ("empty", []),
+    ("string", "0.3"),
+    ("number", 0.3),
+    ("None", None),
+    ("dict", {"a": 1}),
+    ("nan entry", [0.3, float("nan")]),
+    ("inf entry", [float("inf")]),
+    ("negative", [-1.0]),
+    ("1e300", [1e300, 1e300]),
+    ("denormal", [5e-324, 1.0]),
+    ("zeros", [0.0, 0.0, 0.0]),
+    ("400-digit int", [10**400]),
+    ("nested", [[0.1, 0.2]]),
+    ("strings", ["a", "b"]),
+    ("bools", [True, False]),
+    ("complex", [1j]),
+    ("2,000 entries", [0.5] * 2000),
+    ("numpy", Lazy(lambda: np.array([0.3, 0.9, 1.2]))),
+    ("numpy 2-D", Lazy(lambda: np.ones((2, 2)))),
+    ("generator", Lazy(lambda: (x for x in (0.3, 0.9)))),
+)
+
+
 def _search_targets() -> list[Target]:
     from omniloc.search import Budget
     from omniloc.sensor import SensorModel
@@ -686,6 +711,7 @@ def _search_targets() -> list[Target]:
             for k in ("confidence", "p_miss", "p_detect", "decisive")
         }
     )
+    keywords["clutter_by_detections"] = Arg(("clutter_by_detections",), CLUTTER_TABLES)
     args = {
         "landmarks": Arg(("landmark", "map"), LANDMARKS),
         "bearings": Arg(("bearing",), BEARINGS),
@@ -716,7 +742,8 @@ def _search_targets() -> list[Target]:
                 for k in ("sigma", "threshold", "fov", "max_range", "min_range", "clutter")
             }
             | {k: Arg((k,), PROBABILITIES) for k in ("gate_confidence", "p_detect")}
-            | {"allow_wide": Arg(("allow_wide",), (("string", "yes"), ("None", None)))},
+            | {"allow_wide": Arg(("allow_wide",), (("string", "yes"), ("None", None)))}
+            | {"clutter_by_detections": Arg(("clutter_by_detections",), CLUTTER_TABLES)},
             check=lambda kw, v: None,
         ),
         Target(

@@ -259,6 +259,7 @@ def test_dataset_defaults_are_the_recordings_own_estimates() -> None:
     assert est["p_detect"] == pytest.approx(o["p_detect"], abs=0.01)
     assert est["clutter"] == pytest.approx(o["clutter"], abs=0.01)
     assert est["sigma"] == pytest.approx(o["sigma"], rel=0.1)
+    assert est["clutter_by_detections"] == pytest.approx(o["clutter_by_detections"], abs=0.01)
     roh = load_roh(DATA / "roh")
     est = estimate_sensor(roh.landmarks, list(roh.samples(0)))
     assert est["p_detect"] == 1.0 and est["clutter"] == 0.0
@@ -331,3 +332,37 @@ def test_mrclam_tracking_preset_remembers_the_other_robots_as_the_recordings_sho
     assert seen > 3000
     assert config.clutter_persistence == pytest.approx(share, abs=0.02)
     assert config.clutter_persistence_sd == pytest.approx(rms, rel=0.05)
+
+
+def test_estimate_sensor_measures_the_clutter_by_the_landmarks_a_frame_reports() -> None:
+    # Frames that report one landmark carry no clutter, frames with two one spurious
+    # bearing, frames with three or more two: the table says so, the last entry pooling.
+    from omniloc.datasets import DatasetSample
+    from omniloc.evaluate.real import CLUTTER_ENTRY_SAMPLES, estimate_sensor
+    from omniloc.pose import Pose, predict_bearings
+    from omniloc.simulate import demo_room
+
+    room = demo_room()
+    pose = Pose(2.0, 2.5, 0.3)
+    samples = []
+    for n, k, copies in ((1, 0, 40), (2, 1, 40), (3, 2, 40), (4, 2, 20)):
+        z = np.concatenate([predict_bearings(room.xy[:n], pose), np.linspace(-3, -2.5, k)])
+        for _ in range(copies):
+            samples.append(DatasetSample(z, (*range(n), *[None] * k), pose, "t"))
+    est = estimate_sensor(room, samples)
+    assert CLUTTER_ENTRY_SAMPLES == 30  # 60 frames report 3 or more, 20 report 4
+    assert est["clutter_by_detections"] == pytest.approx((0.0, 1.0, 2.0))
+    assert est["clutter"] == pytest.approx((40 * 1 + 60 * 2) / 140)
+
+
+def test_estimate_sensor_refuses_what_it_cannot_measure() -> None:
+    from omniloc.datasets import DatasetSample
+    from omniloc.evaluate.real import estimate_sensor
+    from omniloc.pose import Pose
+    from omniloc.simulate import demo_room
+
+    only_clutter = [DatasetSample(np.array([0.1, 0.2]), (None, None), Pose(1, 1, 0), "t")]
+    with pytest.raises(InputError, match="noise cannot be measured"):
+        estimate_sensor(demo_room(), only_clutter)
+    with pytest.raises(InputError, match="at least one sample"):
+        estimate_sensor(demo_room(), [])

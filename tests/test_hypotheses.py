@@ -725,3 +725,80 @@ def test_a_callers_budget_replaces_the_second_looks_default(
     assert first < cut.stats.nodes <= first + 2 * 100_000 + 1000
     assert not cut.complete and cut.stats.stopped == "budget" and cut.ambiguous
     assert cut.stats.default_budget == ""
+
+
+# ---- clutter whose rate follows the landmarks detected ---------------------------------------
+
+
+def test_clutter_count_term_is_the_poisson_ratio() -> None:
+    from omniloc.sensor import SensorModel
+
+    s = SensorModel(sigma=DEG, clutter=0.3, clutter_by_detections=(0.2, 0.4, 1.2))
+    n = np.arange(7)
+    rate = np.array([0.3, 0.2, 0.4, 1.2, 1.2, 1.2, 1.2])  # n = 0 keeps the one rate
+    want = (6 - n) * np.log(rate / 0.3) - (rate - 0.3)
+    np.testing.assert_allclose(s.clutter_count_term(6, n), want, rtol=1e-12, atol=1e-15)
+    assert not SensorModel(sigma=DEG, clutter=0.3).clutter_count_term(6, n).any()
+    # A table equal to the one rate changes nothing.
+    flat = SensorModel(sigma=DEG, clutter=0.3, clutter_by_detections=(0.3,))
+    assert not flat.clutter_count_term(6, n).any()
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ("0.3", "sequence"),
+        (0.3, "sequence"),
+        ([], "1 to 1000 entries"),
+        ([0.3, float("nan")], r"clutter_by_detections\[1\]"),
+        ([-1.0], r"clutter_by_detections\[0\]"),
+        ([0.5] * 1001, "1 to 1000 entries"),
+    ],
+)
+def test_clutter_table_is_checked(value: Any, message: str) -> None:
+    from omniloc.sensor import SensorModel
+
+    with pytest.raises(InputError, match=message):
+        SensorModel(clutter_by_detections=value)
+    with pytest.raises(InputError, match=message):
+        localize(demo_room(), [0.1, 0.5, 1.0, 2.0], clutter_by_detections=value)
+
+
+def test_clutter_by_detections_shifts_each_interpretation_by_its_clutter_count() -> None:
+    # Without merging, each interpretation's log evidence moves by the Poisson ratio of its
+    # own clutter count: the confidences' log ratios move by the difference of the terms.
+    import dataclasses
+
+    from omniloc.sensor import SensorModel
+
+    room = demo_room()
+    rng = np.random.default_rng(4)
+    pose = Pose(2.0, 2.5, 0.3)
+    from omniloc.pose import predict_bearings
+
+    idx = rng.choice(room.n, 5, replace=False)
+    z = np.concatenate([predict_bearings(room.xy[idx], pose), rng.uniform(-np.pi, np.pi, 2)])
+    base = SensorModel(sigma=DEG, p_detect=0.5, clutter=0.5)
+    table = base.replace(clutter_by_detections=(0.5, 0.5, 0.2, 1.5, 3.0))
+    conf = {}
+    for name, sensor in (("base", base), ("table", table)):
+        opt = make_options(
+            len(z), method=Method.ROBUST, sensor=sensor, budget=None, max_spurious=2,
+            ordering=False, legacy={},
+        )  # fmt: skip
+        opt = dataclasses.replace(opt, merge=False)
+        leaves = Leaves(len(z), np.arange(len(z)))
+        hyp_search.run_hypotheses(room, z, opt, leaves, stop_first=False)
+        scored = scoring.finish(room, z, leaves, opt)
+        conf[name] = {s.assignment: s for s in scored.solutions}
+    common = list(set(conf["base"]) & set(conf["table"]))
+    assert len(common) > 50
+    counts = {conf["base"][a].matched for a in common}
+    assert len(counts) >= 2  # interpretations with different clutter counts
+    shift = [
+        math.log(conf["table"][a].confidence)
+        - math.log(conf["base"][a].confidence)
+        - float(table.clutter_count_term(len(z), conf["base"][a].matched, 2))
+        for a in common
+    ]
+    assert np.ptp(shift) < 1e-6  # one normalising constant for all

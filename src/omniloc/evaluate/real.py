@@ -11,12 +11,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from ..angles import wrap
 from ..datasets import DatasetSample
 from ..errors import InputError
 from ..maps import LandmarkMap
-from ..pose import predict_bearings
+from ..pose import MIN_SIGMA, predict_bearings
 from ..search import localize
 from ..sensor import SensorModel
 from .common import (
@@ -40,6 +41,7 @@ __all__ = [
 ]
 
 RngLike = np.random.Generator | int | None
+FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -210,8 +212,10 @@ class DatasetResult:
 #: Solver options and tolerances per dataset (see docs/evaluation.md for the reasons). The
 #: sensor's noise, detection probability and clutter are those :func:`estimate_sensor` finds
 #: in the recording (tests/test_evaluate.py checks them against it): MRCLAM set 6, all frames
-#: at 67 deg / 8 m: sigma 0.48 deg, p_detect 0.49, 0.28 robots per frame; Roh: sigma 2.1 deg,
-#: every beacon detected (p_detect 1.0, taken as 0.99: no sensor is perfect), no clutter.
+#: at 67 deg / 8 m: sigma 0.48 deg, p_detect 0.49, 0.28 robots per frame, and by the tubes a
+#: frame reports (1, 2, ..., 8 or more) 0.30, 0.06, 0.40, 0.89, 0.99, 1.09, 0.89, 0.43 robots:
+#: the robots come with the tubes (see omniloc.sensor); Roh: sigma 2.1 deg, every beacon
+#: detected (p_detect 1.0, taken as 0.99: no sensor is perfect), no clutter.
 DATASET_DEFAULTS: dict[str, dict[str, Any]] = {
     "roh": {
         "options": {
@@ -231,6 +235,7 @@ DATASET_DEFAULTS: dict[str, dict[str, Any]] = {
             "max_range": 8.0,
             "p_detect": 0.49,
             "clutter": 0.28,
+            "clutter_by_detections": (0.30, 0.06, 0.40, 0.89, 0.99, 1.09, 0.89, 0.43),
             "timeout_s": 5.0,
         },
         "pos_tol_m": 0.3,
@@ -352,7 +357,7 @@ def estimate_sensor(
     *,
     fov: float | None = None,
     max_range: float | None = None,
-) -> dict[str, float]:
+) -> dict[str, Any]:
     """Estimate a bearing sensor's noise, detection probability and clutter from a recording
     with ground truth and known correspondences (the method of :mod:`omniloc.sensor`).
 
@@ -362,12 +367,23 @@ def estimate_sensor(
       (by the given ``fov`` and ``max_range``, at that ``sigma``) over those plus the plainly
       visible ones missed -- not detected, and not hidden behind a reported bearing (the two
       cases the posterior scores with ``ln p_detect`` and ``ln(1 - p_detect)``);
-    * ``clutter``: mean number of bearings per sample that are no landmark of the map.
+    * ``clutter``: mean number of bearings per sample that are no landmark of the map;
+    * ``clutter_by_detections``: the same mean over the samples that report 1, 2, ...
+      landmarks (:class:`~omniloc.sensor.SensorModel`), up to the largest count that at
+      least :data:`CLUTTER_ENTRY_SAMPLES` samples reach, the last entry pooling every sample
+      with that many or more (a count without samples below it takes ``clutter``).
 
     Returns
     -------
     dict
-        ``sigma`` (rad), ``p_detect``, ``clutter``, and ``samples`` (how many were used).
+        ``sigma`` (rad), ``p_detect``, ``clutter``, ``clutter_by_detections`` (a tuple),
+        and ``samples`` (how many were used).
+
+    Raises
+    ------
+    InputError
+        No samples; no sample with a landmark (nothing to measure the noise on); no landmark
+        plainly visible from any true pose (nothing to measure ``p_detect`` on).
     """
     residuals: list[float] = []
     data = list(samples)
@@ -379,21 +395,54 @@ def estimate_sensor(
         if rows:
             pred = predict_bearings(landmarks.xy[rows], s.pose)
             residuals.extend(np.abs(np.asarray(wrap(b - pred))).tolist())
-    sigma = 1.4826 * float(np.median(residuals)) if residuals else float("nan")
-    model = SensorModel(sigma=sigma, fov=fov, max_range=max_range, allow_wide=True)
+    if not residuals:
+        raise InputError(
+            f"estimate_sensor: none of the {len(data)} samples reports a landmark of the map, "
+            "so the bearing noise cannot be measured"
+        )
+    sigma = 1.4826 * float(np.median(residuals))
+    model = SensorModel(sigma=max(sigma, MIN_SIGMA), fov=fov, max_range=max_range, allow_wide=True)
     seen = missed = 0
-    clutter = 0
-    for s in data:
+    spurious = np.zeros(len(data))
+    detected = np.zeros(len(data), dtype=np.int64)
+    for j, s in enumerate(data):
         plain = model.plainly_visible(landmarks.xy, s.pose)
         alone = model.plainly_visible(landmarks.xy, s.pose, s.bearings)
         found = np.zeros(landmarks.n, dtype=bool)
         found[[a for a in s.assignment if a is not None]] = True
         seen += int((plain & found).sum())
         missed += int((alone & ~found).sum())
-        clutter += sum(a is None for a in s.assignment)
+        spurious[j] = sum(a is None for a in s.assignment)
+        detected[j] = int(found.sum())
+    if seen + missed == 0:
+        raise InputError(
+            "estimate_sensor: no landmark is plainly visible from any true pose (by fov and "
+            "max_range), so p_detect cannot be measured"
+        )
+    clutter = float(spurious.mean())
     return {
         "sigma": sigma,
-        "p_detect": seen / (seen + missed) if seen + missed else float("nan"),
-        "clutter": clutter / len(data),
+        "p_detect": seen / (seen + missed),
+        "clutter": clutter,
+        "clutter_by_detections": _clutter_by_detections(spurious, detected, clutter),
         "samples": float(len(data)),
     }
+
+
+#: ``clutter_by_detections`` has an entry for a count of landmarks only while at least this
+#: many samples report that many or more.
+CLUTTER_ENTRY_SAMPLES = 30
+
+
+def _clutter_by_detections(
+    spurious: FloatArray, detected: NDArray[np.int64], clutter: float
+) -> tuple[float, ...]:
+    """Mean clutter of the samples reporting n = 1, 2, ... landmarks (see estimate_sensor)."""
+    last = 1
+    while (detected >= last + 1).sum() >= CLUTTER_ENTRY_SAMPLES:
+        last += 1
+    out = []
+    for n in range(1, last + 1):
+        sel = detected >= n if n == last else detected == n
+        out.append(float(spurious[sel].mean()) if sel.any() else clutter)
+    return tuple(out)

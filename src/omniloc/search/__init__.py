@@ -21,6 +21,7 @@ import dataclasses
 import logging
 import math
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -179,6 +180,7 @@ def localize(
     p_miss: float | None = None,
     p_detect: float | None = None,
     clutter: float | None = None,
+    clutter_by_detections: Sequence[float] | None = None,
     max_nodes: int | None = None,
     timeout_s: float | None = None,
 ) -> LocalizationResult:
@@ -257,6 +259,11 @@ def localize(
     clutter : float, optional
         Expected number of spurious bearings per frame (default: ``max_spurious``, at least
         0.5), spread over the field of view: what a bearing left unmatched costs.
+    clutter_by_detections : sequence of float, optional
+        The expected clutter per frame by the number of landmarks the frame reports (entry
+        ``i`` for ``i + 1``), where clutter comes with the landmarks (see
+        :class:`~omniloc.sensor.SensorModel`; measured by
+        :func:`omniloc.evaluate.estimate_sensor`).
     max_nodes, timeout_s : optional
         The budget (see ``budget``). A search that nothing bounds -- a gate wider than 10
         degrees (``allow_wide``) or more than LARGE_MAP landmarks without ``max_range`` --
@@ -309,6 +316,7 @@ def localize(
         "p_miss": p_miss,
         "p_detect": p_detect,
         "clutter": clutter,
+        "clutter_by_detections": clutter_by_detections,
         "max_nodes": max_nodes,
         "timeout_s": timeout_s,
     }

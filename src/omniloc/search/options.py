@@ -163,7 +163,8 @@ def make_options(
 
     ``legacy`` holds the keyword arguments of :func:`~omniloc.localize` that describe the
     sensor or the budget (``threshold``, ``sigma``, ``confidence``, ``max_range``,
-    ``min_range``, ``fov``, ``p_miss``, ``p_detect``, ``clutter``, ``max_nodes``,
+    ``min_range``, ``fov``, ``p_miss``, ``p_detect``, ``clutter``, ``clutter_by_detections``,
+    ``max_nodes``,
     ``timeout_s``) that the caller actually
     gave; with ``sensor`` or ``budget`` also given, they may not repeat what those say.
     """
@@ -177,6 +178,7 @@ def make_options(
         "p_miss",
         "p_detect",
         "clutter",
+        "clutter_by_detections",
     )
     budget_keys = ("max_nodes", "timeout_s")
     given = {k: v for k, v in legacy.items() if v is not None}
@@ -226,6 +228,7 @@ def make_options(
             "fov": sensor.fov is not None,
             "p_miss": sensor.p_detect is not None,
             "clutter": sensor.clutter is not None,
+            "clutter_by_detections": sensor.clutter_by_detections is not None,
         }
         used = [name for name, on in extras.items() if on]
         if used:

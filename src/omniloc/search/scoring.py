@@ -17,6 +17,8 @@ What :func:`finish` does with the complete paths an engine found, in order:
                                                         p_detect unknown but a range given:
                                                         ln B(matched + 1, missed + 1))
                  + ln sqrt(det(2 pi Cov)) + ln prior(pose)   (Laplace: volume x prior)
+                 [+ the clutter count's term when its rate follows the detections:
+                  SensorModel.clutter_count_term]
 
    with ``c`` the clutter density (expected spurious bearings per frame over the width of the
    field of view) and ``prior`` the density of poses before the bearings are seen: uniform
@@ -277,7 +279,10 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         # MAX_LEAVES by matches and fit (the evidence without the volume term) are refined.
         sse0 = path_sse(lm.xy, bearings[order], level_assign, level_pose)
         nm = (level_assign >= 0).sum(axis=1)
-        keep0 = np.argsort(-(nm * ev.per_match - 0.5 * sse0 / ev.sig2), kind="stable")
+        score0 = (
+            nm * ev.per_match - 0.5 * sse0 / ev.sig2 + s.clutter_count_term(m, nm, opt.max_wild)
+        )
+        keep0 = np.argsort(-score0, kind="stable")
         keep0 = keep0[:MAX_LEAVES]
         level_assign, level_pose = level_assign[keep0], level_pose[keep0]
         if engine_missed is not None:
@@ -330,6 +335,10 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     elif s.p_detect is not None or ev.unknown_rate:
         missed = missed_landmarks(lm, poses, assign, bearings, opt)
     ln_e = log_evidence(ev, nmatch, sse, cov, missed, poses)
+    if s.clutter_by_detections is not None:
+        # Clutter whose rate follows the landmarks detected (SensorModel): each
+        # interpretation's clutter count at the rate of frames that report as many.
+        ln_e = ln_e + s.clutter_count_term(m, nmatch, opt.max_wild)
     rank = np.argsort(-ln_e, kind="stable")
     if opt.merge and len(rank) > 1:
         keep, owner = _merge(rank, poses, cov)
