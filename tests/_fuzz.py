@@ -1866,6 +1866,16 @@ def cli_targets() -> dict[str, CliTarget]:
             "--method": (("unknown", "fast"), ("empty", "")),
             "--strategy": (("unknown", "fast"), ("upper case", "TREE")),
             "--center": (("one value", "5"), ("word", "x")),
+            "--clutter-by-detections": (
+                *CLI_NUMBERS,
+                ("list", "0.3,0.9,1.2"),
+                ("empty entries", ",,"),
+                ("word in list", "0.3,x"),
+                ("negative in list", "0.3,-1"),
+                ("nan in list", "0.3,nan"),
+                ("2,000 entries", ",".join(["0.5"] * 2000)),
+                ("1e999", "1e999,1"),
+            ),
             **{k: CLI_NUMBERS for k in LOCALIZE_NUMERIC},
         },
     )

@@ -199,3 +199,26 @@ def test_human_output_lists_at_most_twenty_solutions(tmp_path, capsys) -> None:
     lines = [ln for ln in out.splitlines() if ln.startswith("  #")]
     assert len(lines) == 20
     assert "more (all of them with --json)" in out
+
+
+def test_localize_takes_the_clutter_by_detections(room_files, capsys) -> None:
+    # The CLI hands the table to the library: the same confidences as the library's call.
+    import omniloc
+
+    m, b = room_files
+    z = np.deg2rad(
+        [float(f"{v:.6f}") for v in np.rad2deg(predict_bearings(demo_room().xy[SEEN], ROOM_POSE))]
+    )
+    args = ["localize", "--map", str(m), "--bearings", str(b), "--degrees", "--sigma", "0.5"]
+    args += ["--max-spurious", "1", "--clutter", "0.3", "--json"]
+    assert main([*args, "--clutter-by-detections", "0.2, 0.3,1.5"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    want = omniloc.localize(
+        demo_room(), z, sigma=np.deg2rad(0.5), max_spurious=1,
+        clutter=0.3, clutter_by_detections=(0.2, 0.3, 1.5),
+    )  # fmt: skip
+    got = [s["confidence"] for s in data["solutions"]]
+    assert got == pytest.approx([s.confidence for s in want.solutions], rel=1e-9)
+    assert main([*args, "--clutter-by-detections", "0.2,x"]) == 1
+    err = capsys.readouterr().err
+    assert "--clutter-by-detections" in err and len(err.strip().splitlines()) == 1

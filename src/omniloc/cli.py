@@ -83,6 +83,13 @@ def _nonnegative(text: str) -> float:
     return v
 
 
+def _nonnegative_list(text: str) -> tuple[float, ...]:
+    parts = [t for t in text.replace(" ", "").split(",") if t]
+    if not parts:
+        raise argparse.ArgumentTypeError(f"a comma-separated list of numbers, got {text!r}")
+    return tuple(_nonnegative(t) for t in parts)
+
+
 def _fov_deg(text: str) -> float:
     v = _positive(text)
     if v > 360:
@@ -151,6 +158,14 @@ def _build_parser() -> argparse.ArgumentParser:
         "--clutter",
         type=_nonnegative,
         help="expected spurious bearings per frame (default: --max-spurious, at least 0.5)",
+    )
+    p.add_argument(
+        "--clutter-by-detections",
+        type=_nonnegative_list,
+        metavar="N1,N2,...",
+        help="expected spurious bearings per frame in frames that report 1, 2, ... landmarks "
+        "(the last for more), where clutter comes with the landmarks; see "
+        "omniloc.evaluate.estimate_sensor",
     )
     p.add_argument(
         "--confidence",
@@ -405,6 +420,7 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         p_miss=args.p_miss,
         p_detect=args.p_detect,
         clutter=args.clutter,
+        clutter_by_detections=args.clutter_by_detections,
         confidence=args.confidence,
         decisive=args.decisive,
         max_nodes=args.max_nodes,
