@@ -209,6 +209,20 @@ def test_bad_odometry_is_refused_and_changes_nothing() -> None:
     assert tr.frame(0.45, _frames()[0].bearings).t == 0.45
 
 
+def test_a_clutter_table_is_named_as_unused_by_the_tracker(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    # The tracker's frame likelihood has no detection count to look the rate up by: it
+    # says so rather than take the table silently.
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.tracker"):
+        Tracker(GRID, SENSOR.replace(clutter_by_detections=(0.3, 0.9)), MOTION, CONFIG)
+    assert "clutter_by_detections" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.tracker"):
+        Tracker(GRID, SENSOR, MOTION, CONFIG)
+    assert "clutter_by_detections" not in caplog.text
+
+
 def test_frame_before_any_odometry_is_a_robot_standing_still(
     caplog: pytest.LogCaptureFixture,
 ) -> None:

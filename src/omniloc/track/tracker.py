@@ -455,6 +455,14 @@ class Tracker:
         self.sensor = sensor if sensor is not None else SensorModel(sigma=float(np.deg2rad(0.5)))
         if not isinstance(self.sensor, SensorModel):
             raise InputError(f"sensor must be a SensorModel, got {type(sensor).__name__}")
+        if self.sensor.clutter_by_detections is not None:
+            # The frame likelihood sums over the landmarks each bearing may be, without
+            # counting detections: it has no count to look the rate up by.
+            log.warning(
+                "Tracker: the sensor's clutter_by_detections is for scoring single frames; "
+                "the tracker uses its clutter (%s per frame)",
+                self.sensor.clutter,
+            )
         self.motion = motion if motion is not None else MotionModel()
         if not isinstance(self.motion, MotionModel):
             raise InputError(f"motion must be a MotionModel, got {type(motion).__name__}")
