@@ -338,8 +338,9 @@ def test_estimate_sensor_measures_the_clutter_by_the_landmarks_a_frame_reports()
     # Frames that report one landmark carry no clutter, frames with two one spurious
     # bearing, frames with three or more two: the table says so, the last entry pooling.
     from omniloc.datasets import DatasetSample
-    from omniloc.evaluate.real import CLUTTER_ENTRY_SAMPLES, estimate_sensor
+    from omniloc.evaluate.real import estimate_sensor
     from omniloc.pose import Pose, predict_bearings
+    from omniloc.sensor import CLUTTER_ENTRY_FRAMES
     from omniloc.simulate import demo_room
 
     room = demo_room()
@@ -350,7 +351,7 @@ def test_estimate_sensor_measures_the_clutter_by_the_landmarks_a_frame_reports()
         for _ in range(copies):
             samples.append(DatasetSample(z, (*range(n), *[None] * k), pose, "t"))
     est = estimate_sensor(room, samples)
-    assert CLUTTER_ENTRY_SAMPLES == 30  # 60 frames report 3 or more, 20 report 4
+    assert CLUTTER_ENTRY_FRAMES == 30  # 60 frames report 3 or more, 20 report 4
     assert est["clutter_by_detections"] == pytest.approx((0.0, 1.0, 2.0))
     assert est["clutter"] == pytest.approx((40 * 1 + 60 * 2) / 140)
 

@@ -744,6 +744,21 @@ def test_clutter_count_term_is_the_poisson_ratio() -> None:
     assert not flat.clutter_count_term(6, n).any()
 
 
+def test_the_clutter_table_of_a_recording() -> None:
+    from omniloc.sensor import CLUTTER_ENTRY_FRAMES, clutter_by_detections
+
+    detected = [0] * 10 + [1] * 50 + [2] * 50 + [3] * 20 + [4] * 15
+    spurious = [2] * 10 + [0] * 50 + [1] * 50 + [2] * 20 + [4] * 15
+    assert CLUTTER_ENTRY_FRAMES == 30  # 35 frames report 3 or more, 15 report 4
+    assert clutter_by_detections(detected, spurious) == pytest.approx(
+        (0.0, 1.0, (20 * 2 + 15 * 4) / 35)
+    )
+    with pytest.raises(InputError, match="one count of each per frame"):
+        clutter_by_detections([1, 2], [0])
+    with pytest.raises(InputError, match="one count of each per frame"):
+        clutter_by_detections([], [])
+
+
 @pytest.mark.parametrize(
     ("value", "message"),
     [

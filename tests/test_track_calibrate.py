@@ -159,6 +159,10 @@ def test_a_simulated_sensor_gives_back_its_noise_detection_and_clutter() -> None
     assert fit.turn_noise_s < 0.02  # the simulated camera's noise does not grow with the turn
     assert fit.frames == len(run.frames) and fit.matched <= fit.bearings
     assert set(fit.settings()) == {"sigma", "p_detect", "clutter", "turn_noise_s"}
+    # The simulated clutter does not depend on the detections: every entry of the table
+    # (frames that report 1, 2, ... landmarks) is near the one rate.
+    assert len(fit.clutter_by_detections) >= 2
+    assert np.abs(np.array(fit.clutter_by_detections) - 0.5).max() < 0.25
     with pytest.raises(InputError, match="too few"):
         estimate_frame_sensor(room, run.frames[:3], run.truth)
     with pytest.raises(InputError, match="gate"):
@@ -203,6 +207,11 @@ def test_fit_sensor_on_the_command_line_writes_settings_for_track(
     assert main([*argv, "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "p_detect" in text and str(out) in text
+    # The clutter table is printed as localize's option, and kept out of the tracker's file.
+    line = next(x for x in text.splitlines() if "--clutter-by-detections" in x)
+    table = line.rsplit("--clutter-by-detections ", 1)[1].rstrip(")")
+    assert all(float(v) >= 0 for v in table.split(","))
+    assert "clutter_by_detections" not in load_settings(out)
     s, _, c = with_settings(*preset("generic"), load_settings(out))
     assert s.p_detect == pytest.approx(0.8, abs=0.07) and c.turn_noise_s >= 0.0
     # A truth of another time: one line, status 1.

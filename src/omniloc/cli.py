@@ -884,6 +884,11 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
     print(f"  turn_noise_s  {fit.turn_noise_s:.3f} s (extra noise per rad/s of turn)")
     print(f"  p_detect      {fit.p_detect:.3f} (of the landmarks in view)")
     print(f"  clutter       {fit.clutter:.3f} bearings per frame")
+    table = ",".join(f"{v:.2f}" for v in fit.clutter_by_detections)
+    print(
+        f"  by landmarks reported (1, 2, ...): {table} (single frames, where clutter comes "
+        f"with the landmarks: omniloc localize --clutter-by-detections {table})"
+    )
     if args.out is not None:
         write_text(args.out, json.dumps(fit.settings(), indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")

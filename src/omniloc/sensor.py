@@ -28,7 +28,8 @@ bearing residuals of matched landmarks (1.4826 x their median absolute deviation
 ``p_detect`` is, over all frames, the number of landmark detections divided by the number of
 landmarks plainly visible from the true pose (:meth:`SensorModel.plainly_visible`);
 ``clutter`` is the mean number of bearings per frame that match no landmark, and
-``clutter_by_detections`` the same mean over the frames that report 1, 2, ... landmarks.
+``clutter_by_detections`` the same mean over the frames that report 1, 2, ... landmarks
+(:func:`clutter_by_detections` from the per-frame counts).
 The values for the recordings in ``shared/data`` are in
 :data:`omniloc.evaluate.DATASET_DEFAULTS`.
 
@@ -65,11 +66,13 @@ from .io import finite_number
 from .pose import MIN_SIGMA, Pose
 
 __all__ = [
+    "CLUTTER_ENTRY_FRAMES",
     "DEFAULT_THRESHOLD",
     "IMPLAUSIBLE_NOISE",
     "MAX_RANGE",
     "RANGE_SLACK",
     "SensorModel",
+    "clutter_by_detections",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -121,6 +124,45 @@ def _rates(name: str, value: Any) -> tuple[float, ...]:
     if not 1 <= len(value) <= MAX_CLUTTER_ENTRIES:
         raise InputError(f"{name} must hold 1 to {MAX_CLUTTER_ENTRIES} entries, got {len(value)}")
     return tuple(_number(f"{name}[{i}]", v, allow_zero=True) for i, v in enumerate(list(value)))
+
+
+#: :func:`clutter_by_detections` has an entry for a count of landmarks only while at least
+#: this many frames report that many or more.
+CLUTTER_ENTRY_FRAMES = 30
+
+
+def clutter_by_detections(detected: ArrayLike, spurious: ArrayLike) -> tuple[float, ...]:
+    """The ``clutter_by_detections`` of a recording: the mean number of spurious bearings of
+    the frames that report 1, 2, ... landmarks, up to the largest count that at least
+    :data:`CLUTTER_ENTRY_FRAMES` frames reach, the last entry pooling every frame with that
+    many or more (a count no frame reports takes the mean over all frames).
+
+    Parameters
+    ----------
+    detected, spurious : array_like of int, shape (F,)
+        Per frame, the landmarks it reported and its bearings that are no landmark (from
+        ground truth). Frames that report no landmark count in the overall mean only.
+
+    Examples
+    --------
+    >>> clutter_by_detections([1] * 40 + [2] * 40 + [3] * 10, [0] * 40 + [1] * 40 + [2] * 10)
+    (0.0, 1.2)
+    """
+    d = np.asarray(detected, dtype=np.int64).reshape(-1)
+    k = np.asarray(spurious, dtype=np.float64).reshape(-1)
+    if d.size == 0 or d.shape != k.shape:
+        raise InputError(
+            f"clutter_by_detections needs one count of each per frame, got {d.size} and {k.size}"
+        )
+    mean = float(k.mean())
+    last = 1
+    while (d >= last + 1).sum() >= CLUTTER_ENTRY_FRAMES:
+        last += 1
+    out = []
+    for n in range(1, last + 1):
+        sel = d >= n if n == last else d == n
+        out.append(float(k[sel].mean()) if sel.any() else mean)
+    return tuple(out)
 
 
 def _probability(name: str, value: Any) -> float:

@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ..angles import wrap
 from ..datasets import DatasetSample
@@ -19,7 +18,7 @@ from ..errors import InputError
 from ..maps import LandmarkMap
 from ..pose import MIN_SIGMA, predict_bearings
 from ..search import localize
-from ..sensor import SensorModel
+from ..sensor import SensorModel, clutter_by_detections
 from .common import (
     NAN,
     Calibration,
@@ -41,7 +40,6 @@ __all__ = [
 ]
 
 RngLike = np.random.Generator | int | None
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -369,9 +367,8 @@ def estimate_sensor(
       cases the posterior scores with ``ln p_detect`` and ``ln(1 - p_detect)``);
     * ``clutter``: mean number of bearings per sample that are no landmark of the map;
     * ``clutter_by_detections``: the same mean over the samples that report 1, 2, ...
-      landmarks (:class:`~omniloc.sensor.SensorModel`), up to the largest count that at
-      least :data:`CLUTTER_ENTRY_SAMPLES` samples reach, the last entry pooling every sample
-      with that many or more (a count without samples below it takes ``clutter``).
+      landmarks (:func:`omniloc.sensor.clutter_by_detections`: up to the largest count that
+      at least 30 samples reach, the last entry pooling every sample with that many or more).
 
     Returns
     -------
@@ -424,25 +421,6 @@ def estimate_sensor(
         "sigma": sigma,
         "p_detect": seen / (seen + missed),
         "clutter": clutter,
-        "clutter_by_detections": _clutter_by_detections(spurious, detected, clutter),
+        "clutter_by_detections": clutter_by_detections(detected, spurious),
         "samples": float(len(data)),
     }
-
-
-#: ``clutter_by_detections`` has an entry for a count of landmarks only while at least this
-#: many samples report that many or more.
-CLUTTER_ENTRY_SAMPLES = 30
-
-
-def _clutter_by_detections(
-    spurious: FloatArray, detected: NDArray[np.int64], clutter: float
-) -> tuple[float, ...]:
-    """Mean clutter of the samples reporting n = 1, 2, ... landmarks (see estimate_sensor)."""
-    last = 1
-    while (detected >= last + 1).sum() >= CLUTTER_ENTRY_SAMPLES:
-        last += 1
-    out = []
-    for n in range(1, last + 1):
-        sel = detected >= n if n == last else detected == n
-        out.append(float(spurious[sel].mean()) if sel.any() else clutter)
-    return tuple(out)

@@ -43,6 +43,7 @@ from ..angles import wrap
 from ..errors import InputError
 from ..io import shorten
 from ..maps import LandmarkMap, as_landmark_map
+from ..sensor import clutter_by_detections
 from .data import Frame, GroundTruth, Odometry
 from .motion import MotionModel, between, integrate
 
@@ -404,6 +405,11 @@ class SensorFit:
         0.47 was localized at a wrong place in 16 % of its localized frames.
     clutter : float
         Bearings per frame that are no landmark (none within the gate).
+    clutter_by_detections : tuple of float
+        The same by the number of landmarks a frame reported (1, 2, ...; see
+        :func:`omniloc.sensor.clutter_by_detections`): for scoring single frames where the
+        clutter comes with the landmarks (``omniloc localize --clutter-by-detections``); not
+        among the tracker's :meth:`settings`.
     frames, matched, bearings : int
         Frames with a true pose, bearings taken as landmarks, all their bearings.
     """
@@ -415,6 +421,7 @@ class SensorFit:
     frames: int
     matched: int
     bearings: int
+    clutter_by_detections: tuple[float, ...] = ()
 
     def settings(self) -> dict[str, float]:
         """As settings for :func:`~omniloc.track.with_settings` (``omniloc track --config``)."""
@@ -490,6 +497,7 @@ def estimate_frame_sensor(
     errors: list[float] = []
     rates: list[float] = []
     seen = visible = unmatched = used = total = 0
+    per_frame: list[tuple[int, int]] = []  # (landmarks reported, clutter) of each frame used
     for k, f in enumerate(frames):
         x = poses[k]
         if not (np.isfinite(x).all() and gaps[k] <= max_gap_s):
@@ -505,6 +513,7 @@ def estimate_frame_sensor(
         cand = np.flatnonzero(near)
         taken = np.zeros(L.shape[0], dtype=bool)
         rate = float(wrap(after[k, 2] - before[k, 2])) / 0.2
+        unmatched0 = unmatched
         for b in f.bearings:
             if cand.size == 0:
                 unmatched += 1
@@ -517,6 +526,7 @@ def estimate_frame_sensor(
                 rates.append(rate)
             else:
                 unmatched += 1
+        per_frame.append((int(taken.sum()), unmatched - unmatched0))
         plain = near & ((np.abs(h) <= half - gate) if half is not None else True)
         visible += int(plain.sum())
         seen += int((plain & taken).sum())
@@ -543,4 +553,5 @@ def estimate_frame_sensor(
         frames=used,
         matched=len(errors),
         bearings=total,
+        clutter_by_detections=clutter_by_detections(*np.array(per_frame).reshape(-1, 2).T),
     )
