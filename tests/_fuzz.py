@@ -683,9 +683,15 @@ CLUTTER_TABLES: Pool = (
 )
 
 
+def _clutter_table_check(v: Any) -> None:
+    """A clutter table: a non-empty tuple of finite numbers >= 0."""
+    if not (isinstance(v, tuple) and v and all(math.isfinite(x) and x >= 0 for x in v)):
+        raise Insane(f"not a table of finite clutter rates: {v!r}")
+
+
 def _search_targets() -> list[Target]:
     from omniloc.search import Budget
-    from omniloc.sensor import SensorModel
+    from omniloc.sensor import SensorModel, clutter_by_detections
 
     sensors: Pool = (
         ("default", Lazy(SensorModel)),
@@ -745,6 +751,16 @@ def _search_targets() -> list[Target]:
             | {"allow_wide": Arg(("allow_wide",), (("string", "yes"), ("None", None)))}
             | {"clutter_by_detections": Arg(("clutter_by_detections",), CLUTTER_TABLES)},
             check=lambda kw, v: None,
+        ),
+        Target(
+            "clutter_by_detections",
+            lambda kw: clutter_by_detections(**kw),
+            lambda: {"detected": [1, 2, 3] * 20, "spurious": [0, 1, 1] * 20},
+            {
+                "detected": Arg(("detected", "count"), merged(BEARINGS, CLUTTER_TABLES)),
+                "spurious": Arg(("spurious", "count"), merged(BEARINGS, CLUTTER_TABLES)),
+            },
+            check=lambda kw, v: _clutter_table_check(v),
         ),
         Target(
             "Budget",

@@ -62,7 +62,7 @@ from scipy.special import chdtri, ndtri
 
 from .angles import TWO_PI, wrap
 from .errors import InputError
-from .io import finite_number
+from .io import finite_number, real_array
 from .pose import MIN_SIGMA, Pose
 
 __all__ = [
@@ -148,8 +148,15 @@ def clutter_by_detections(detected: ArrayLike, spurious: ArrayLike) -> tuple[flo
     >>> clutter_by_detections([1] * 40 + [2] * 40 + [3] * 10, [0] * 40 + [1] * 40 + [2] * 10)
     (0.0, 1.2)
     """
-    d = np.asarray(detected, dtype=np.int64).reshape(-1)
-    k = np.asarray(spurious, dtype=np.float64).reshape(-1)
+    counts = []
+    for name, values in (("detected", detected), ("spurious", spurious)):
+        a = real_array(values, name, InputError).reshape(-1)
+        if not (np.isfinite(a).all() and (a >= 0).all() and (a == np.round(a)).all()):
+            raise InputError(f"{name} must hold counts (whole numbers >= 0), one per frame")
+        if a.size and a.max() > 1e9:
+            raise InputError(f"{name} holds a count above 1e9: not a frame's")
+        counts.append(a)
+    d, k = counts[0].astype(np.int64), counts[1]
     if d.size == 0 or d.shape != k.shape:
         raise InputError(
             f"clutter_by_detections needs one count of each per frame, got {d.size} and {k.size}"
