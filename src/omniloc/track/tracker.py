@@ -460,8 +460,8 @@ class Tracker:
             # counting detections: it has no count to look the rate up by.
             log.warning(
                 "Tracker: the sensor's clutter_by_detections is for scoring single frames; "
-                "the tracker uses its clutter (%s per frame)",
-                self.sensor.clutter,
+                "the tracker uses one clutter rate, %s per frame",
+                self.sensor.clutter if self.sensor.clutter is not None else "0.5 (its default)",
             )
         self.motion = motion if motion is not None else MotionModel()
         if not isinstance(self.motion, MotionModel):
