@@ -679,6 +679,9 @@ CLUTTER_TABLES: Pool = (
     ("2,000 entries", [0.5] * 2000),
     ("numpy", Lazy(lambda: np.array([0.3, 0.9, 1.2]))),
     ("numpy 2-D", Lazy(lambda: np.ones((2, 2)))),
+    ("numpy 0-D", Lazy(lambda: np.array(0.3))),
+    ("set", {0.3, 0.9}),
+    ("range", range(3)),
     ("generator", Lazy(lambda: (x for x in (0.3, 0.9)))),
 )
 

@@ -757,6 +757,10 @@ def test_the_clutter_table_of_a_recording() -> None:
         clutter_by_detections([1, 2], [0])
     with pytest.raises(InputError, match="one count of each per frame"):
         clutter_by_detections([], [])
+    with pytest.raises(InputError, match=r"detected must hold one count per frame \(1-D\)"):
+        clutter_by_detections([[1, 2]], [[0, 0]])
+    with pytest.raises(InputError, match="spurious must hold counts"):
+        clutter_by_detections([1, 2], [0.5, 0])
 
 
 @pytest.mark.parametrize(
@@ -768,6 +772,9 @@ def test_the_clutter_table_of_a_recording() -> None:
         ([0.3, float("nan")], r"clutter_by_detections\[1\]"),
         ([-1.0], r"clutter_by_detections\[0\]"),
         ([0.5] * 1001, "1 to 1000 entries"),
+        ({0.3, 0.9}, "sequence"),  # no order to index by
+        (np.array(0.3), "sequence"),
+        (np.ones((2, 2)), "sequence"),
     ],
 )
 def test_clutter_table_is_checked(value: Any, message: str) -> None:

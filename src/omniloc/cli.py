@@ -164,8 +164,8 @@ def _build_parser() -> argparse.ArgumentParser:
         type=_nonnegative_list,
         metavar="N1,N2,...",
         help="expected spurious bearings per frame in frames that report 1, 2, ... landmarks "
-        "(the last for more), where clutter comes with the landmarks; see "
-        "omniloc.evaluate.estimate_sensor",
+        "(the last for more), where clutter comes with the landmarks; omniloc fit-sensor "
+        "prints it for a recording",
     )
     p.add_argument(
         "--confidence",

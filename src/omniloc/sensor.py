@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -116,7 +117,9 @@ MAX_CLUTTER_ENTRIES = 1000
 
 def _rates(name: str, value: Any) -> tuple[float, ...]:
     """A non-empty sequence of finite numbers >= 0, as a tuple, or a clear error."""
-    if isinstance(value, (str, bytes, dict)) or not hasattr(value, "__len__"):
+    ordered = isinstance(value, Sequence) and not isinstance(value, (str, bytes))
+    if not (ordered or (isinstance(value, np.ndarray) and value.ndim == 1)):
+        # (A set or a dict has no order to index by; a 0-d or 2-D array is no list.)
         raise InputError(
             f"{name} must be a sequence of expected clutter counts (one per number of "
             f"landmarks detected, from 1), got {type(value).__name__}"
@@ -150,7 +153,9 @@ def clutter_by_detections(detected: ArrayLike, spurious: ArrayLike) -> tuple[flo
     """
     counts = []
     for name, values in (("detected", detected), ("spurious", spurious)):
-        a = real_array(values, name, InputError).reshape(-1)
+        a = real_array(values, name, InputError)
+        if a.ndim != 1:
+            raise InputError(f"{name} must hold one count per frame (1-D), got shape {a.shape}")
         if not (np.isfinite(a).all() and (a >= 0).all() and (a == np.round(a)).all()):
             raise InputError(f"{name} must hold counts (whole numbers >= 0), one per frame")
         if a.size and a.max() > 1e9:
