@@ -355,6 +355,15 @@ def _cpu_per_s(runs: list[dict[str, Any]]) -> float:
     return cpu / dur if dur else math.nan
 
 
+def _cov(t: dict[str, Any]) -> str:
+    """The truth inside the reported covariance's 50 % / 99 % regions, over the localized
+    frames ("-" for rows measured before the scoring had it)."""
+    if not t.get("cov_frames"):
+        return "-"
+    inside_50 = _f(100 * t["cov_inside_50_rate"], "{:.0f}")
+    return f"{inside_50} / {_f(100 * t['cov_inside_99_rate'], '{:.0f}')} %"
+
+
 def _totals(runs: list[dict[str, Any]]) -> dict[str, Any]:
     from omniloc.evaluate.tracking import RunScore
 
@@ -399,8 +408,8 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
         "| localizer | streams | n | time to localize median / max s | never | "
         "correct after | correct | confidently wrong | pos RMSE m | heading RMSE deg | "
         "detection delay median s | undetected | recovery median s | unrecovered | "
-        "false-alarm run rate | CPU s / s |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "false-alarm run rate | truth in the covariance's 50 % / 99 % region | CPU s / s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for k in keys:
         runs = results[k]["runs"]
@@ -427,7 +436,7 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
                 f"{_f(t['recovery_median_s'], '{:.1f}') if kid else '-'} | "
                 f"{int(t['unrecovered']) if kid else '-'} | "
                 f"{_pct(t['false_alarm_run_rate']) if set_name == 'plain' else '-'} | "
-                f"{_f(_cpu_per_s(rs), '{:.4f}')} |"
+                f"{_cov(t)} | {_f(_cpu_per_s(rs), '{:.4f}')} |"
             )
     skipped = [f"{_label(k)}: {v['skipped']}" for k, v in results.items() if "skipped" in v]
     if skipped:

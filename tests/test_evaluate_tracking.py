@@ -87,3 +87,49 @@ def test_the_summary_says_never_for_a_run_never_localized() -> None:
     assert "never" in rows[1] and "never" not in rows[0]
     assert len(rows[0]) == len(rows[1])  # the columns stay aligned
     assert "never on 1 of 2 runs" in text
+
+
+def _localized(t: float, dx: float, sd: float, dtheta: float = 0.0) -> TrackEstimate:
+    pose = Pose(TRUE.x + dx, TRUE.y, TRUE.theta + dtheta)
+    return TrackEstimate(t, TrackState.LOCALIZED, pose=pose, covariance=np.eye(3) * sd**2)
+
+
+def test_the_reported_covariance_is_scored_against_the_truth() -> None:
+    from omniloc.evaluate.tracking import CHI2_3DOF_50, CHI2_3DOF_99, tracking_summary
+
+    assert CHI2_3DOF_50 == pytest.approx(2.36597, abs=1e-5)
+    assert CHI2_3DOF_99 == pytest.approx(11.3449, abs=1e-4)
+    stream = _stream(8)
+    est = [
+        _localized(0.0, 0.01, 0.01),  # NEES 1: inside both regions
+        _localized(1.0, 0.02, 0.01),  # 4: inside the 99 % region only
+        _localized(2.0, 0.04, 0.01),  # 16: outside both
+        # A heading error across the seam: 2 pi + 0.01 off is 0.01 off (NEES 1).
+        _localized(3.0, 0.0, 0.01, dtheta=2 * math.pi + 0.01),
+        TrackEstimate(4.0, TrackState.LOCALIZED, pose=TRUE),  # no covariance: not scored
+        TrackEstimate(  # not positive definite: not scored
+            5.0, TrackState.LOCALIZED, pose=TRUE, covariance=-np.eye(3)
+        ),
+        _ambiguous(6.0, Pose(TRUE.x + 1.0, TRUE.y, TRUE.theta), 0.5),  # not localized
+        TrackEstimate(7.0, TrackState.LOST),
+    ]
+    r = score_run(stream, est)
+    assert (r.cov_frames, r.cov_inside_50, r.cov_inside_99) == (4, 2, 3)
+    tot = TrackingResult("x", [r, score_run(stream, est[:1] + est[1:])]).totals()
+    assert tot["cov_frames"] == 8
+    assert tot["cov_inside_50_rate"] == pytest.approx(0.5)
+    assert tot["cov_inside_99_rate"] == pytest.approx(0.75)
+    text = tracking_summary(TrackingResult("x", [r]))
+    assert "over 4 localized frames: the truth inside its 50 % region in 50.0 %" in text
+    assert "99 % region in 75.0 %" in text
+
+
+def test_without_localized_frames_the_covariance_is_not_scored() -> None:
+    from omniloc.evaluate.tracking import tracking_summary
+
+    stream = _stream(3)
+    r = score_run(stream, [_ambiguous(float(k), TRUE, 0.9) for k in range(3)])
+    assert r.cov_frames == 0
+    tot = TrackingResult("x", [r]).totals()
+    assert math.isnan(tot["cov_inside_50_rate"]) and math.isnan(tot["cov_inside_99_rate"])
+    assert "reported covariance" not in tracking_summary(TrackingResult("x", [r]))

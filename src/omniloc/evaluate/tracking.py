@@ -24,6 +24,11 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
   tolerance, in tenths of [0, 1]; its expected calibration error (``best_weight_ece``) says
   how far those weights are from the frequencies (0: calibrated).
 * *RMSE*: position and heading errors over the ``localized`` frames.
+* *covariance consistency*: over the ``localized`` frames with a covariance, whether the
+  truth lies inside the reported covariance's 50 % and 99 % regions of the pose (its
+  normalised estimation error squared, ``e' P^-1 e``, against the chi-square quantiles of 3
+  degrees of freedom). A consistent covariance holds the truth in 50 % and 99 % of them;
+  fewer say the localizer is surer of its pose than it should be.
 * *kidnapping*: at ``jump_t`` the stream continues elsewhere. *Detection delay*: from the jump
   to the first frame that is no longer localized-and-wrong (the localizer left ``localized``,
   flagged ``kidnapped``, or is already right again). *Recovery*: from the jump to the first
@@ -42,6 +47,7 @@ from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
 
 from ..angles import wrap
 from ..errors import InputError
@@ -83,6 +89,12 @@ MAX_GAP_S = 0.5
 
 #: Bins of the strongest hypothesis's weight (tenths of [0, 1]) for its calibration.
 WEIGHT_BINS = 10
+
+#: The 50 % and 99 % quantiles of the chi-square distribution with 3 degrees of freedom:
+#: the normalised estimation error squared of a pose (x, y, theta) under a consistent
+#: covariance is below them in 50 % and 99 % of the frames.
+CHI2_3DOF_50 = float(chi2.ppf(0.5, 3))
+CHI2_3DOF_99 = float(chi2.ppf(0.99, 3))
 
 
 class LocalizerOverTime(Protocol):
@@ -334,6 +346,11 @@ class RunScore:
     #: Per tenth of [0, 1] of the strongest hypothesis's weight: (frames, sum of the weights,
     #: frames where that hypothesis was within tolerance).
     weight_bins: tuple[tuple[int, float, int], ...] = ()
+    #: Localized frames with a covariance, and of them those whose truth lies inside the
+    #: covariance's 50 % and 99 % regions (see the module's definitions).
+    cov_frames: int = 0
+    cov_inside_50: int = 0
+    cov_inside_99: int = 0
 
     @property
     def realtime_factor(self) -> float:
@@ -407,6 +424,7 @@ def score_run(
             recovery = float(t[np.flatnonzero(back)[0]] - jump)
     false_alarms = int((kid & pre).sum())
     weight_bins = _weight_bins(estimates, truth, scored, pos_tol_m, heading_tol_deg)
+    nees = _nees(estimates, est, truth, sel)
     ends = [float(stream.odometry.t[-1])] + ([t[-1]] if t.size else [])
     return RunScore(
         name=stream.name,
@@ -425,7 +443,37 @@ def score_run(
         false_alarms=false_alarms,
         cpu_s=cpu_s,
         weight_bins=weight_bins,
+        cov_frames=int(nees.size),
+        cov_inside_50=int((nees <= CHI2_3DOF_50).sum()),
+        cov_inside_99=int((nees <= CHI2_3DOF_99).sum()),
     )
+
+
+def _nees(
+    estimates: Sequence[TrackEstimate],
+    est: FloatArray,
+    truth: FloatArray,
+    sel: NDArray[np.bool_],
+) -> FloatArray:
+    """The normalised estimation error squared of each selected frame's pose under its
+    covariance (frames without a finite, positive-definite covariance left out)."""
+    out: list[float] = []
+    for k in np.flatnonzero(sel).tolist():
+        P = estimates[k].covariance
+        if P is None:
+            continue
+        P = np.asarray(P, dtype=np.float64)
+        if P.shape != (3, 3) or not np.isfinite(P).all():
+            continue
+        e = est[k] - truth[k]
+        e[2] = float(wrap(e[2]))
+        try:
+            L = np.linalg.cholesky(0.5 * (P + P.T))
+        except np.linalg.LinAlgError:
+            continue
+        z = np.linalg.solve(L, e)
+        out.append(float(z @ z))
+    return np.asarray(out, dtype=np.float64)
 
 
 def _weight_bins(
@@ -502,6 +550,7 @@ class TrackingResult:
         jumps = [r for r in rs if math.isfinite(r.jump_t)]
         plain = [r for r in rs if not math.isfinite(r.jump_t)]
         cpu = sum(r.cpu_s for r in rs)
+        cov = sum(r.cov_frames for r in rs)
         dur = sum(r.duration_s for r in rs)
         bins = [
             tuple(sum(float(r.weight_bins[b][i]) for r in rs if r.weight_bins) for i in range(3))
@@ -528,6 +577,9 @@ class TrackingResult:
             "realtime_factor": dur / cpu if cpu > 0 else NAN,
             "best_weight_frames": float(sum(b[0] for b in bins)),
             "best_weight_ece": weight_ece(bins),
+            "cov_frames": float(cov),
+            "cov_inside_50_rate": sum(r.cov_inside_50 for r in rs) / cov if cov else NAN,
+            "cov_inside_99_rate": sum(r.cov_inside_99 for r in rs) / cov if cov else NAN,
         }
 
     def to_csv(self, path: str | Path) -> None:
@@ -750,6 +802,13 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
         f"strongest hypothesis's weight against the truth ({int(tot['best_weight_frames'])} "
         f"frames with hypotheses): expected calibration error {_fmt(tot['best_weight_ece'], '.3f')}"
     )
+    if tot["cov_frames"]:
+        lines.append(
+            f"reported covariance over {int(tot['cov_frames'])} localized frames: the truth "
+            f"inside its 50 % region in {_fmt(100 * tot['cov_inside_50_rate'], '.1f')} %, its "
+            f"99 % region in {_fmt(100 * tot['cov_inside_99_rate'], '.1f')} % (consistent: 50 %"
+            ", 99 %)"
+        )
     if report.kidnap is not None:
         k = report.kidnap
         tj = k.totals(True)
