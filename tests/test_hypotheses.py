@@ -514,6 +514,85 @@ def test_output_buffer_keeps_one_row_per_interpretation() -> None:
     assert bar[0] == np.inf  # no interpretation had to go
 
 
+def _path_of(pairs: list[tuple[int, int]], n_landmarks: int = 50) -> Any:
+    """A kernel path holding ``pairs`` (observation, landmark) in that order."""
+    m = len(pairs)
+    obs = np.array([o for o, _ in pairs], dtype=np.int64)
+    lm = np.array([q for _, q in pairs], dtype=np.int64)
+    xy = np.zeros((n_landmarks, 2))
+    return hk._Path(
+        xy, lm, np.zeros(m), np.zeros(m), np.zeros(m), obs, np.ones(m),
+        np.zeros(n_landmarks, dtype=np.int64),
+    )  # fmt: skip
+
+
+def _empty_seen(rows: int) -> Any:
+    return hk._Seen(np.zeros((rows, 2), dtype=np.uint64), np.zeros(1, dtype=np.int64))
+
+
+def test_a_complete_path_is_known_again_whatever_the_order_of_its_pairs() -> None:
+    # The same interpretation reached from another seed has its pairs in another order.
+    seen = _empty_seen(64)
+    pairs = [(0, 5), (2, 9), (3, 1), (5, 40)]
+    assert hk._first_visit(seen, _path_of(pairs), 4)
+    for perm in itertools.permutations(pairs):
+        assert not hk._first_visit(seen, _path_of(list(perm)), 4)
+    # One pair more, one fewer, a landmark or an observation changed: new interpretations.
+    others = [
+        [*pairs, (6, 7)],
+        pairs[:3],
+        [(0, 5), (2, 9), (3, 1), (5, 41)],
+        [(0, 5), (2, 9), (4, 1), (5, 40)],
+        [(0, 9), (2, 5), (3, 1), (5, 40)],  # the same landmarks, swapped between bearings
+    ]
+    for other in others:
+        assert hk._first_visit(seen, _path_of(other), len(other))
+    assert seen.used[0] == 1 + len(others)
+
+
+def test_the_table_of_refined_paths_grows_and_keeps_what_it_knew() -> None:
+    seen = _empty_seen(16)
+    rng = np.random.default_rng(3)
+    paths = [
+        _path_of([(o, int(q)) for o, q in enumerate(rng.choice(50, 4, replace=False))])
+        for _ in range(40)
+    ]
+    for p in paths[:6]:
+        assert hk._first_visit(seen, p, 4)
+    # More than a quarter full: four times the rows, the same entries.
+    grown = hk._grown(seen)
+    assert grown.keys.shape == (64, 2) and grown.used[0] == 6
+    assert sorted(map(tuple, grown.keys[grown.keys[:, 0] > 0])) == sorted(
+        map(tuple, seen.keys[seen.keys[:, 0] > 0])
+    )
+    for p in paths[:6]:
+        assert not hk._first_visit(grown, p, 4)
+    # A table at most half full takes no more: a later repeat is refined again, never lost.
+    small = _empty_seen(8)
+    assert all(hk._first_visit(small, p, 4) for p in paths[:6])
+    assert small.used[0] == 4
+    assert hk._first_visit(small, paths[5], 4)
+
+
+def test_interpretations_from_several_seeds_answer_as_one_seed_at_a_time() -> None:
+    # Every landmark in view, 2 spurious bearings: the same interpretation is reached from
+    # several seed triples. In one kernel call it is refined once; with a time budget each
+    # seed runs alone (its own table), so nothing is skipped across seeds. Same answer.
+    rng = np.random.default_rng(11)
+    lm = random_map(16, size=20.0, rng=rng)
+    pose = random_pose(lm, rng=rng)
+    sc = observe(lm, pose, n_obs=7, n_spurious=2, sigma=0.5 * DEG, rng=rng)
+    kw: dict[str, Any] = {"sigma": 0.5 * DEG, "max_spurious": 2}
+    one = localize(lm, sc.bearings, **kw)
+    per_seed = localize(lm, sc.bearings, timeout_s=1000.0, **kw)
+    assert one.stats.complete and per_seed.stats.complete
+    assert len(one) > 10
+    assert [s.assignment for s in one.solutions] == [s.assignment for s in per_seed.solutions]
+    for a, b in zip(one.solutions, per_seed.solutions, strict=True):
+        assert np.allclose(a.pose.as_array(), b.pose.as_array(), atol=1e-9)
+        assert a.confidence == pytest.approx(b.confidence, abs=1e-9)
+
+
 # ---- the cheap test before verification ------------------------------------------------------
 
 

@@ -38,6 +38,7 @@ __all__ = [
     "COVARIANCE_FLOOR",
     "GATE_FLOOR",
     "GN_HALVINGS",
+    "GN_ROUNDING",
     "covariances",
     "det3",
     "distance_ratio",
@@ -58,7 +59,6 @@ __all__ = [
     "position_from_sums",
     "pred_var",
     "ratio_from_parts",
-    "squared_error",
     "sums_invertible",
     "wrap_angle",
 ]
@@ -70,6 +70,11 @@ TWO_PI = 2.0 * np.pi
 #: Gauss-Newton halves a step that does not lower the squared error up to this many times
 #: before it stops (a step of 1/64 of the Gauss-Newton step is still tried).
 GN_HALVINGS = 6
+
+#: A Gauss-Newton step smaller than this (metres, radians) that does not lower the squared
+#: error is rounding (the quadratic model is exact to far below it unless a landmark is
+#: within micrometres): the descent ends there rather than halving the step six times more.
+GN_ROUNDING = 1e-9
 
 #: Floor added to the diagonal of the information (in units of 1/sigma^2) before it is
 #: inverted for a *gate*: a near-singular geometry (the robot near the circle through three
@@ -240,7 +245,7 @@ def information(
 
 
 @_jit
-def squared_error(
+def _normal_equations(
     lx: FloatArray,
     ly: FloatArray,
     bm: FloatArray,
@@ -249,14 +254,31 @@ def squared_error(
     x: float,
     y: float,
     t: float,
-) -> float:
-    """``sum_i wrap(predicted_i - bm[i])^2`` over the pairs ``i < n`` with ``w[i] > 0``."""
+) -> tuple[float, float, float, float, float, float, float, float, float, float]:
+    """The squared error ``sum_i wrap(predicted_i - bm[i])^2`` over the pairs ``i < n`` with
+    ``w[i] > 0`` at (x, y, t), and the Gauss-Newton normal equations there: ``sum g g^T``
+    (six terms) and ``-sum g r`` (three), in one pass."""
     sse = 0.0
+    h00 = h01 = h02 = h11 = h12 = h22 = 0.0
+    g0 = g1 = g2 = 0.0
     for i in range(n):
         if w[i] > 0:
-            r = wrap_angle(np.arctan2(ly[i] - y, lx[i] - x) - t - bm[i])
+            dx = lx[i] - x
+            dy = ly[i] - y
+            r2 = dx * dx + dy * dy
+            r = wrap_angle(np.arctan2(dy, dx) - t - bm[i])
             sse += r * r
-    return sse
+            gx, gy = dy / r2, -dx / r2
+            h00 += gx * gx
+            h01 += gx * gy
+            h02 -= gx
+            h11 += gy * gy
+            h12 -= gy
+            h22 += 1.0
+            g0 -= gx * r
+            g1 -= gy * r
+            g2 += r
+    return sse, h00, h01, h02, h11, h12, h22, g0, g1, g2
 
 
 @_jit
@@ -275,30 +297,14 @@ def gn_refine(
     (lx[i], ly[i]), bearing bm[i]. A step is kept only if it lowers the squared error, and is
     halved up to GN_HALVINGS times until it does (where the pose is poorly fixed -- a narrow
     field of view -- the full step can overshoot along the valley), so the result is never
-    worse than the start. The normal equations are solved by Cramer's rule.
+    worse than the start; a step below GN_ROUNDING that does not lower it is rounding, and
+    ends the descent without halving. The normal equations are solved by Cramer's rule; each
+    trial point's pass gives its squared error and its normal equations together.
 
     Returns the pose (heading wrapped) and its squared error.
     """
-    sse = squared_error(lx, ly, bm, w, n, x, y, t)
+    sse, h00, h01, h02, h11, h12, h22, g0, g1, g2 = _normal_equations(lx, ly, bm, w, n, x, y, t)
     for _ in range(iters):
-        h00 = h01 = h02 = h11 = h12 = h22 = 0.0
-        g0 = g1 = g2 = 0.0
-        for i in range(n):
-            if w[i] > 0:
-                dx = lx[i] - x
-                dy = ly[i] - y
-                r2 = dx * dx + dy * dy
-                r = wrap_angle(np.arctan2(dy, dx) - t - bm[i])
-                gx, gy = dy / r2, -dx / r2
-                h00 += gx * gx
-                h01 += gx * gy
-                h02 -= gx
-                h11 += gy * gy
-                h12 -= gy
-                h22 += 1.0
-                g0 -= gx * r
-                g1 -= gy * r
-                g2 += r
         c00 = h11 * h22 - h12 * h12
         c01 = h02 * h12 - h01 * h22
         c02 = h01 * h12 - h02 * h11
@@ -315,16 +321,23 @@ def gn_refine(
             break
         if max(abs(s0), abs(s1), abs(s2)) < 1e-13:
             break
-        nsse = sse
+        better = False
         for _ in range(GN_HALVINGS + 1):
             nx, ny, nt = x + s0, y + s1, t + s2
-            nsse = squared_error(lx, ly, bm, w, n, nx, ny, nt)
+            nsse, n00, n01, n02, n11, n12, n22, m0, m1, m2 = _normal_equations(
+                lx, ly, bm, w, n, nx, ny, nt
+            )
             if nsse < sse:
+                better = True
+                break
+            if max(abs(s0), abs(s1), abs(s2)) < GN_ROUNDING:
                 break
             s0, s1, s2 = 0.5 * s0, 0.5 * s1, 0.5 * s2
-        if not nsse < sse:
+        if not better:
             break
         x, y, t, sse = nx, ny, nt, nsse
+        h00, h01, h02, h11, h12, h22 = n00, n01, n02, n11, n12, n22
+        g0, g1, g2 = m0, m1, m2
     return x, y, wrap_angle(t), sse
 
 

@@ -15,7 +15,8 @@ each anchor landmark ``i`` of the chunk ``[i0, i1)``:
    (:func:`_can_reach`), then the depth-first verification (:func:`_verify`): each other
    bearing matched to every landmark inside its chi-square gate, best first, the pose and
    covariance taking it in with a Kalman update, or left unmatched (a wildcard) while the
-   path can still reach ``min_match`` matches; complete paths are refined by Gauss-Newton,
+   path can still reach ``min_match`` matches; complete paths are refined by Gauss-Newton
+   (once per interpretation: one reached again from another seed is skipped, :func:`_first_visit`),
    tested jointly, counted for negative evidence and kept in a bounded buffer by their cost
    (:func:`_keep`, :func:`_compact`).
 
@@ -163,7 +164,7 @@ class HypothesisCounts(NamedTuple):
     triples: int  #: landmark triples whose pose was solved
     pruned_existence: int  #: triples with no pose (rule i)
     pruned_gate: int  #: verification nodes where no landmark fell in the gate
-    found: int  #: complete paths that passed the joint test
+    found: int  #: complete paths that passed the joint test (a repeat from another seed once)
     stopped: int  #: 1 a budget ran out, 2 a first fit ended the search
     pruned_visibility: int  #: candidates beyond a pair limit or out of range
     pruned_bound: int  #: hypotheses cut by the cheap test, paths cut by the match bound
@@ -478,6 +479,75 @@ def _tally(status: IntArray, lo: int, hi: int) -> tuple[int, int, int]:
     return vis, existence, solved
 
 
+class _Seen(NamedTuple):
+    """The complete paths refined so far, by their assignment's two 64-bit hashes (open
+    addressing; a row of zeros is empty): the same interpretation reached again from another
+    seed is not refined again."""
+
+    keys: NDArray[np.uint64]  #: (S, 2), S a power of two
+    used: IntArray  #: (1,) rows in use
+
+
+#: Rows of the first table of refined paths, and the most it grows to (16 MiB).
+SEEN_ROWS = 1 << 12
+SEEN_MAX_ROWS = 1 << 20
+
+
+@_jit
+def _mix(z: np.uint64) -> np.uint64:
+    """SplitMix64's finaliser: a 64-bit value spread over all 64 bits."""
+    z = z + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@_jit
+def _first_visit(seen: _Seen, path: _Path, n: int) -> bool:
+    """Whether the path's set of pairs (observation, landmark) was not refined before, and
+    note it (while the table is at most half full). Two independent sums of mixed pairs,
+    so the order in which the pairs were matched does not matter."""
+    h1 = np.uint64(0)
+    h2 = np.uint64(0)
+    for q in range(n):
+        k = np.uint64(path.obs[q]) * np.uint64(0x100000000) + np.uint64(path.lm[q])
+        h1 = h1 + _mix(k)
+        h2 = h2 + _mix(k ^ np.uint64(0x5851F42D4C957F2D))
+    if h1 == np.uint64(0):
+        h1 = np.uint64(1)
+    keys = seen.keys
+    mask = np.uint64(keys.shape[0] - 1)
+    at = h1 & mask
+    while keys[at, 0] != np.uint64(0):
+        if keys[at, 0] == h1 and keys[at, 1] == h2:
+            return False
+        at = (at + np.uint64(1)) & mask
+    if 2 * seen.used[0] < keys.shape[0]:
+        keys[at, 0] = h1
+        keys[at, 1] = h2
+        seen.used[0] += 1
+    return True
+
+
+@_jit
+def _grown(seen: _Seen) -> _Seen:
+    """The table four times larger (at most SEEN_MAX_ROWS) once a quarter full."""
+    rows = seen.keys.shape[0]
+    if 4 * seen.used[0] < rows or rows >= SEEN_MAX_ROWS:
+        return seen
+    new = np.zeros((min(4 * rows, SEEN_MAX_ROWS), 2), dtype=np.uint64)
+    mask = np.uint64(new.shape[0] - 1)
+    for r in range(rows):
+        h1 = seen.keys[r, 0]
+        if h1 != np.uint64(0):
+            at = h1 & mask
+            while new[at, 0] != np.uint64(0):
+                at = (at + np.uint64(1)) & mask
+            new[at, 0] = h1
+            new[at, 1] = seen.keys[r, 1]
+    return _Seen(new, seen.used)
+
+
 @_jit
 def _walk_work(nodes: int, leaves: int, nn: int, counts_missed: bool) -> int:
     """The work of a verification that visited ``nodes`` nodes and reached ``leaves``
@@ -679,6 +749,7 @@ def _verify(
     relin: int,
     look: float,
     cnt: IntArray,
+    seen: _Seen,
 ) -> tuple[int, int]:
     """Verify one hypothesis: a depth-first walk over the other bearings (``rest``), each
     matched in turn to every landmark inside its gate, best first, then left unmatched (a
@@ -723,7 +794,10 @@ def _verify(
             walk.n[level], walk.wild[level] = n, wild
             walk.chosen[level], walk.next[level] = -1, 0
             if level == nr:
-                if n >= gate.min_match:
+                # The same interpretation reached again from another seed is not refined
+                # again (its first visit was; the buffer kept it or it was no better than
+                # the bar). A first fit refines every one: its stop test moves as it goes.
+                if n >= gate.min_match and (budget.stop_first or _first_visit(seen, path, n)):
                     qx, qy, qt, sse = gn_refine(
                         path.lx, path.ly, path.bearing, path.ones, n, px, py, pt, 10
                     )
@@ -944,6 +1018,7 @@ def hypotheses(
         np.empty((2, width + 1), dtype=np.int64),
     )
     cnt = np.zeros(5, dtype=np.int64)
+    seen = _Seen(np.zeros((SEEN_ROWS, 2), dtype=np.uint64), np.zeros(1, dtype=np.int64))
     pre_work = np.empty((4, max(width + 1, m)))
     found = 0
     nodes = examined = triples = existence = n_gate = n_out = stopped = n_vis = bound = 0
@@ -1069,8 +1144,9 @@ def hypotheses(
                     look = np.log(hyp * scoring.total_units / units)
                     n_out, stop = _verify(
                         bearings, rest, nr, path, hyp, near, nn, walk, d, gate, vis, scoring,
-                        budget, out, n_out, left, left_work, seeds.relin[s], look, cnt,
+                        budget, out, n_out, left, left_work, seeds.relin[s], look, cnt, seen,
                     )  # fmt: skip
+                    seen = _grown(seen)
                     nodes += cnt[0]
                     work += _walk_work(cnt[0], cnt[4], nn, _counts_missed(scoring))
                     examined += cnt[1]
