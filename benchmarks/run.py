@@ -184,8 +184,16 @@ def worker(group: str, n_trials: int | None, quick: bool) -> dict[str, Any]:
     map_s = time.perf_counter() - t
     names = GROUPS[group]
     trials = {n: [make_trial(CASES[n], i, lm) for i in range(trials_n)] for n in names}
-    lm0, sc0 = trials[names[0]][0]
-    localize(lm0, sc0.bearings, timeout_s=1.0, **CASES[names[0]].kwargs)  # warm-up
+    # Warm-up: one call of every case (and its paper mode) before anything is timed, so
+    # that no trial pays for numba compiling a kernel (a cold cache, as in a fresh clone or
+    # after a kernel's source changed, took 41 s in the first a4n trial) or for a map's
+    # neighbour lists.
+    for name in names:
+        lm0, sc0 = trials[name][0]
+        localize(lm0, sc0.bearings, timeout_s=1.0, **CASES[name].kwargs)
+        if group == "a":
+            paper_kw = {**CASES[name].kwargs, "sigma": None}
+            localize(lm0, sc0.bearings, timeout_s=1.0, method="paper", **paper_kw)
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     rows: list[dict[str, Any]] = []
     base: list[dict[str, Any]] = []

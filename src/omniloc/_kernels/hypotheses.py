@@ -489,7 +489,7 @@ class _Seen(NamedTuple):
 
 
 #: Rows of the first table of refined paths, and the most it grows to (16 MiB).
-SEEN_ROWS = 1 << 12
+SEEN_ROWS = 1 << 10
 SEEN_MAX_ROWS = 1 << 20
 
 
