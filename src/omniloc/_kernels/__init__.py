@@ -30,8 +30,9 @@ def clear_stale_cache(folder: Path) -> bool:
     the files of the functions it calls (numba issue 1833; its documentation's "cache
     invalidation fails to recognize changes in symbols defined in a different file"): after
     an edit of ``geometry.py`` the search kernels, which inline its Gauss-Newton, ran the
-    old one, and tests passed on code that no longer existed. So a change to any kernel's
-    source recompiles them all (about 20 s, once). Where the folder cannot be written
+    old one (a timing comparison measured code that no longer existed, and the tests would
+    have run it too). So a change to any kernel's source recompiles them all (about 20 s,
+    once). Where the folder cannot be written
     (a read-only install), nothing is done: numba then caches elsewhere, and installed
     sources do not change in place.
     """
