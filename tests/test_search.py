@@ -282,6 +282,21 @@ def test_budget_stops_early_and_says_so() -> None:
     assert not quick.complete
 
 
+def test_a_time_budget_on_one_seed_answers_as_without_one_and_still_stops() -> None:
+    # No spurious bearing allowed on a small map: one seed, one chunk, run in the caller's
+    # thread (a thread pool for it cost as much as the search). Same answer as without a
+    # budget; a budget too short for it still stops it and says so.
+    lm = random_map(60, rng=3)
+    scene = observe(lm, random_pose(lm, rng=3), n_obs=7, sigma=0.2 * DEG, rng=3)
+    free = localize(lm, scene.bearings, sigma=0.2 * DEG)
+    timed = localize(lm, scene.bearings, sigma=0.2 * DEG, timeout_s=30.0)
+    assert free.complete and timed.complete
+    assert [s.assignment for s in timed.solutions] == [s.assignment for s in free.solutions]
+    assert timed.stats.nodes == free.stats.nodes
+    cut = localize(lm, scene.bearings, sigma=0.2 * DEG, timeout_s=1e-6)
+    assert not cut.complete and cut.stats.nodes < free.stats.nodes
+
+
 def test_no_solution_is_falsy() -> None:
     lm = symmetric_map("square")
     res = localize(lm, np.deg2rad([0.0, 5.0, 10.0, 180.0]))

@@ -413,6 +413,25 @@ def _run_chunks(
     results: list[KernelResult] = []
     max_nodes, max_work = caps
     spent = spent_work = 0
+
+    def caps_now() -> tuple[int, int] | None:
+        """(nodes, work) the next chunk may spend, None when the time is up."""
+        work = _work_left(out, opt)
+        work = max(1, int(work * rate)) if work > 0 else work
+        if work < 0:
+            out.complete = False
+            return None
+        if max_work:
+            rest = max(1, max_work - spent_work)
+            work = rest if work == 0 else min(work, rest)
+        return (0 if max_nodes == 0 else max(1, max_nodes - spent), work)
+
+    if len(chunks) == 1:
+        # One chunk (one seed on a small map: no spurious bearing allowed): in this thread.
+        # Starting a pool for it cost as much as the search itself (a7n with a time budget:
+        # 1.25 ms against 0.66 ms without one).
+        cap = caps_now()
+        return [] if cap is None else [call(*chunks[0], cap)]
     workers = max(1, min(THREADS, os.cpu_count() or 1))
     with ThreadPoolExecutor(max_workers=workers) as pool:
         pending: list[Future[KernelResult]] = []
@@ -424,17 +443,11 @@ def _run_chunks(
                 if nxt is None:
                     done = True
                     break
-                work = _work_left(out, opt)
-                work = max(1, int(work * rate)) if work > 0 else work
-                if work < 0:
-                    out.complete = False
+                cap = caps_now()
+                if cap is None:
                     done = True
                     break
-                if max_work:
-                    rest = max(1, max_work - spent_work)
-                    work = rest if work == 0 else min(work, rest)
-                left = 0 if max_nodes == 0 else max(1, max_nodes - spent)
-                pending.append(pool.submit(call, nxt[0], nxt[1], nxt[2], (left, work)))
+                pending.append(pool.submit(call, nxt[0], nxt[1], nxt[2], cap))
             if not pending:
                 break
             r = pending.pop(0).result()
