@@ -406,10 +406,10 @@ def _run_chunks(
     opt: SearchOptions,
     rate: float = 1.0,
 ) -> list[KernelResult]:
-    """Run chunks on a small thread pool, in order; stop early on an answer (first fit),
-    when the budget of nodes or work (``caps``, 0 for no limit) is spent (summed over
-    chunks) or when the time is up (each chunk in flight may use what is left of it: they
-    run side by side)."""
+    """Run chunks on a small thread pool (a single chunk in the caller's thread), in order;
+    stop early on an answer (first fit), when the budget of nodes or work (``caps``, 0 for
+    no limit) is spent (summed over chunks) or when the time is up (each chunk in flight may
+    use what is left of it: they run side by side)."""
     results: list[KernelResult] = []
     max_nodes, max_work = caps
     spent = spent_work = 0
