@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import time
 from typing import Any
 
 import numpy as np
@@ -572,6 +573,36 @@ def test_the_table_of_refined_paths_grows_and_keeps_what_it_knew() -> None:
     assert all(hk._first_visit(small, p, 4) for p in paths[:6])
     assert small.used[0] == 4
     assert hk._first_visit(small, paths[5], 4)
+
+
+def test_loading_the_kernel_is_not_the_time_budgets(monkeypatch: pytest.MonkeyPatch) -> None:
+    # numba loads (or compiles) the kernel at its first call in a process; a time budget
+    # used to pay for it, so a process's first search stopped short of the same search run
+    # again. A stand-in kernel that takes 0.6 s at its first call, as a load would.
+    rng = np.random.default_rng(5)
+    lm = random_map(30, size=30.0, rng=rng)
+    sc = observe(lm, random_pose(lm, rng=rng), max_range=12.0, n_spurious=2, sigma=0.5 * DEG,
+                 rng=rng)  # fmt: skip
+    kw: dict[str, Any] = {"sigma": 0.5 * DEG, "max_spurious": 2, "max_range": 12.0}
+    warm = localize(lm, sc.bearings, timeout_s=0.3, **kw)
+    assert warm.complete
+    real = hk.hypotheses
+
+    class Loading:
+        def __init__(self) -> None:
+            self.signatures: list[str] = []
+
+        def __call__(self, *args: Any) -> Any:
+            if not self.signatures:
+                time.sleep(0.6)
+                self.signatures.append("loaded")
+            return real(*args)
+
+    monkeypatch.setattr(hyp_search, "hypotheses", Loading())
+    first = localize(lm, sc.bearings, timeout_s=0.3, **kw)
+    assert first.complete
+    assert [s.assignment for s in first.solutions] == [s.assignment for s in warm.solutions]
+    assert first.stats.nodes == warm.stats.nodes
 
 
 def test_interpretations_from_several_seeds_answer_as_one_seed_at_a_time() -> None:
