@@ -7,6 +7,7 @@ import dataclasses
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.stats import norm
@@ -202,3 +203,57 @@ def test_at_an_exact_pose_the_field_of_view_has_a_sharp_edge() -> None:
     L = 3.0 * np.array([[np.cos(inside), np.sin(inside)], [np.cos(outside), np.sin(outside)]])
     lr = log_ratios(np.zeros((1, 3)), np.zeros(0), L, model)
     assert math.isclose(lr[0], math.log(1.0 - 0.6), rel_tol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    fov_deg=st.floats(1.0, 360.0),
+    seed=st.integers(0, 2**31),
+    edge=st.booleans(),
+)
+def test_exact_poses_skip_the_landmarks_out_of_view_without_changing_a_bit(
+    fov_deg: float, seed: int, edge: bool
+) -> None:
+    # Particles (no covariance) test who is out of view without the bearing's atan2; the
+    # ratios must be those of the full test, bit for bit, landmarks on the edge of the view
+    # included. The update path always takes the full test; at a zero covariance and with
+    # one bearing, its ratio comes from the poses as given (a bearing's update, which
+    # moves nothing but wraps the heading, comes after it).
+    rng = np.random.default_rng(seed)
+    poses = np.column_stack(
+        [rng.uniform(-2, 2, 40), rng.uniform(-2, 2, 40), rng.uniform(-9, 9, 40)]
+    )
+    L = rng.uniform(-6, 6, (10, 2))
+    half = math.radians(fov_deg) / 2.0
+    if edge:
+        # Landmarks exactly at the edge of the first pose's view, and just either side of it.
+        for n, off in enumerate((0.0, 1e-12, -1e-12, 1e-8, -1e-8, 1e-7, -1e-7)):
+            a = poses[0, 2] + (half + off) * (1 if n % 2 else -1)
+            L[n] = poses[0, :2] + 3.0 * np.array([math.cos(a), math.sin(a)])
+    model = _model(fov=math.radians(fov_deg), max_range=7.0)
+    zero = np.zeros((poses.shape[0], 3, 3))
+    for b in rng.uniform(-math.pi, math.pi, (3, 1)):
+        fast = log_ratios(poses, b, L, model)
+        np.testing.assert_array_equal(fast, frame_update(poses, zero, b, L, model)[2])
+
+
+def test_many_hypotheses_run_in_two_halves_with_the_same_results(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import omniloc.track.likelihood as lk
+
+    rng = np.random.default_rng(5)
+    H = 2 * lk.PARALLEL_MIN + 3
+    L = rng.uniform(-5, 5, (12, 2))
+    mu = np.column_stack([rng.uniform(-3, 3, (H, 2)), rng.uniform(-math.pi, math.pi, H)])
+    P = np.repeat(np.diag([0.04, 0.04, 0.01])[None], H, axis=0)
+    b = rng.uniform(-1, 1, 4)
+    objects = Objects(rng.uniform(-1, 1, 2), rng.uniform(0, 0.5, (H, 2)))
+    model = _memory_model(fresh=0.3, sd=np.deg2rad(1.0))
+    halves = frame_update_clutter(mu, P, b, L, model, objects)
+    particles = log_ratios_clutter(mu, b, L, model, objects)
+    monkeypatch.setattr(lk, "PARALLEL_MIN", 10**9)
+    for x, y in zip(halves, frame_update_clutter(mu, P, b, L, model, objects), strict=True):
+        np.testing.assert_array_equal(x, y)
+    for x, y in zip(particles, log_ratios_clutter(mu, b, L, model, objects), strict=True):
+        np.testing.assert_array_equal(x, y)

@@ -14,9 +14,9 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from .geometry import wrap_angle
+from .geometry import det3, inv3, wrap_angle
 
-__all__ = ["frame_update_kernel", "integrate_pieces"]
+__all__ = ["covered_kernel", "frame_update_kernel", "integrate_pieces", "pair_forms"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -91,11 +91,20 @@ def _predict_one(
     J: FloatArray,
     var: FloatArray,
     d: FloatArray,
+    tan_out: float,
 ) -> None:
     """One hypothesis's predicted bearings ``h``, their Jacobians ``J`` (N, 3), variances
     from the pose ``var`` and detection probabilities ``d``, written in place
     (``half_fov`` < 0: no field of view). For a landmark out of range only ``d`` (0) is
-    written."""
+    written.
+
+    ``tan_out`` >= 0 (an exactly known pose, ``P`` zero, and a field of view narrower than
+    a half turn): a landmark whose direction is more than ``atan(tan_out)`` (a shade beyond
+    the half field of view) off the heading is out of view; only its ``d`` (0) is written,
+    without its bearing's ``atan2``. Beyond the shade the full test gives 0 too, so the
+    results are the same, bit for bit."""
+    c = math.cos(mu[2]) if tan_out >= 0.0 else 1.0
+    s = math.sin(mu[2]) if tan_out >= 0.0 else 0.0
     for n in range(L.shape[0]):
         dx = L[n, 0] - mu[0]
         dy = L[n, 1] - mu[1]
@@ -104,6 +113,11 @@ def _predict_one(
             # Out of range: never detected (the rest is not read for such a landmark).
             d[n] = 0.0
             continue
+        if tan_out >= 0.0:
+            ahead = dx * c + dy * s
+            if ahead <= 0.0 or abs(dy * c - dx * s) > ahead * tan_out:
+                d[n] = 0.0
+                continue
         h[n] = wrap_angle(math.atan2(dy, dx) - mu[2])
         J[n, 0] = dy / q
         J[n, 1] = -dx / q
@@ -183,10 +197,16 @@ def frame_update_kernel(
     mean = np.empty(3)
     M = np.empty((3, 3))
     norm = 1.0 / (math.sqrt(2.0 * math.pi) * kappa)
+    # Exactly known poses and a view narrower than a half turn: the cheap test of who is out
+    # of view (see _predict_one), with a margin of 1e-7 rad beyond the edge.
+    edge = half_fov + 1e-7
+    tan_out = math.tan(edge) if not update and 0.0 <= half_fov and edge < 1.5 else -1.0
     for k in range(H):
         m = mu[k]
         C = P[k]
-        _predict_one(m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d)
+        _predict_one(
+            m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d, tan_out
+        )
         s = 0.0
         for n in range(N):
             if d[n] > 0.0:
@@ -194,12 +214,16 @@ def frame_update_kernel(
         for o in range(K):
             s -= obj_w[k, o]
         log_ratio[k] = s + fresh_cost
+        # The prediction is redone only after a bearing has moved the hypothesis (the same
+        # pose and covariance predict the same, bit for bit).
+        moved = False
         for iz in range(bearings.shape[0]):
             z = bearings[iz]
-            if update:
+            if update and moved:
                 _predict_one(
-                    m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d
+                    m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d, -1.0
                 )
+                moved = False
             base = fresh
             for o in range(K):
                 if obj_w[k, o] > 0.0:
@@ -250,4 +274,61 @@ def frame_update_kernel(
             for i in range(3):
                 m[i] += mean[i]
             m[2] = wrap_angle(m[2])
+            moved = True
     return mu, P, log_ratio, explained, clutter_post
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def covered_kernel(
+    poses: FloatArray, mu: FloatArray, Pinv: FloatArray, radius: FloatArray, chi2: float
+) -> NDArray[np.bool_]:
+    """Which of the M poses (M, 3) lie within squared Mahalanobis distance ``chi2`` of any
+    of the H Gaussians ``(mu, Pinv)`` (the inverse covariances; headings compared wrapped).
+    Only poses within ``radius[k]`` of ``mu[k]`` in x, y are tested against it (the
+    caller's bound on the Gaussian's region)."""
+    M = poses.shape[0]
+    out = np.zeros(M, dtype=np.bool_)
+    for k in range(mu.shape[0]):
+        r2 = radius[k] * radius[k]
+        for i in range(M):
+            if out[i]:
+                continue
+            d0 = poses[i, 0] - mu[k, 0]
+            d1 = poses[i, 1] - mu[k, 1]
+            if d0 * d0 + d1 * d1 > r2:
+                continue
+            d2 = wrap_angle(poses[i, 2] - mu[k, 2])
+            G = Pinv[k]
+            m2 = (
+                d0 * (G[0, 0] * d0 + G[0, 1] * d1 + G[0, 2] * d2)
+                + d1 * (G[1, 0] * d0 + G[1, 1] * d1 + G[1, 2] * d2)
+                + d2 * (G[2, 0] * d0 + G[2, 1] * d1 + G[2, 2] * d2)
+            )
+            if m2 <= chi2:
+                out[i] = True
+    return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def pair_forms(
+    d: FloatArray, Pa: FloatArray, Pb: FloatArray, ia: IntArray, ib: IntArray
+) -> FloatArray:
+    """``d[k]^T (Pa[ia[k]] + Pb[ib[k]])^-1 d[k]`` for each pair ``k`` (the sums' upper
+    triangles, by Cramer's rule); inf where a sum's determinant is not positive."""
+    out = np.full(d.shape[0], np.inf)
+    for k in range(d.shape[0]):
+        A = Pa[ia[k]]
+        B = Pb[ib[k]]
+        h00 = A[0, 0] + B[0, 0]
+        h01 = A[0, 1] + B[0, 1]
+        h02 = A[0, 2] + B[0, 2]
+        h11 = A[1, 1] + B[1, 1]
+        h12 = A[1, 2] + B[1, 2]
+        h22 = A[2, 2] + B[2, 2]
+        if not det3(h00, h01, h02, h11, h12, h22) > 0.0:
+            continue
+        c00, c01, c02, c11, c12, c22, _ = inv3(h00, h01, h02, h11, h12, h22, 1.0, 0.0)
+        d0, d1, d2 = d[k, 0], d[k, 1], d[k, 2]
+        out[k] = c00 * d0 * d0 + c11 * d1 * d1 + c22 * d2 * d2
+        out[k] += 2.0 * (c01 * d0 * d1 + c02 * d0 * d2 + c12 * d1 * d2)
+    return out

@@ -352,18 +352,23 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     top = max(float(mass.max()), ev.log_null)
     total = top + math.log(float(np.exp(mass - top).sum()) + math.exp(ev.log_null - top))
     conf = np.exp(mass - total)
+    # Python numbers row by row (``tolist``: the same values as float()/int() of each
+    # entry, without a numpy scalar per field; the tracker's window searches return
+    # ~1,000 solutions each).
+    rows, pairs = poses.tolist(), assign.tolist()
+    rms_, nmatch_, cost_, missed_ = rms.tolist(), nmatch.tolist(), (-ln_e).tolist(), missed.tolist()
     sols = [
         Solution(
-            pose=Pose.from_array(poses[i]),
-            assignment=tuple(int(v) if v >= 0 else None for v in assign[i]),
-            residual_rms=float(rms[i]),
-            matched=int(nmatch[i]),
+            pose=Pose(*rows[i]),
+            assignment=tuple(v if v >= 0 else None for v in pairs[i]),
+            residual_rms=rms_[i],
+            matched=nmatch_[i],
             covariance=cov[i],
-            cost=float(-ln_e[i]),
-            confidence=float(cf),
-            missed=int(missed[i]),
+            cost=cost_[i],
+            confidence=cf,
+            missed=missed_[i],
         )
-        for i, cf in zip(keep, conf, strict=True)
+        for i, cf in zip(keep, conf.tolist(), strict=True)
     ]
     # The merge may have put a solution with more evidence behind the one it absorbed.
     sols.sort(key=lambda sol: -sol.confidence)

@@ -18,9 +18,8 @@ import math
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
-from ..angles import wrap
+from .._kernels.track import covered_kernel
 from .motion import compose
 
 __all__ = ["Elsewhere"]
@@ -99,27 +98,21 @@ class Elsewhere:
         elsewhere's mass they held (1.0 when nothing is left)."""
         if mu.shape[0] == 0:
             return 0.0
-        covered = np.zeros(self.n, dtype=bool)
         try:
             Pinv = np.linalg.inv(P)
         except np.linalg.LinAlgError:
             return 0.0
         # Only particles inside the ellipse that the hypothesis's region projects to in x, y
-        # can be covered: a k-d tree finds those within its longest half-axis.
+        # can be covered: those within its longest half-axis are tested.
         lam = np.linalg.eigvalsh(0.5 * (P[:, :2, :2] + np.swapaxes(P[:, :2, :2], 1, 2)))[:, -1]
         radius = np.sqrt(COVERED_CHI2 * np.maximum(lam, 0.0)) * (1.0 + 1e-9) + 1e-12
-        near = cKDTree(self.poses[:, :2]).query_ball_point(mu[:, :2], radius)
-        counts = np.fromiter((len(rows) for rows in near), dtype=np.int64, count=len(near))
-        if counts.sum():
-            # Every (particle, hypothesis) pair the tree found, tested at once.
-            idx = np.fromiter(
-                (i for rows in near for i in rows), dtype=np.int64, count=int(counts.sum())
-            )
-            hyp = np.repeat(np.arange(len(near)), counts)
-            d = self.poses[idx] - mu[hyp]
-            d[:, 2] = np.asarray(wrap(d[:, 2]))
-            m2 = np.einsum("ni,nij,nj->n", d, Pinv[hyp], d)
-            covered[idx[m2 <= COVERED_CHI2]] = True
+        covered = covered_kernel(
+            np.ascontiguousarray(self.poses, dtype=np.float64),
+            np.ascontiguousarray(mu, dtype=np.float64),
+            np.ascontiguousarray(Pinv, dtype=np.float64),
+            radius,
+            COVERED_CHI2,
+        )
         if not covered.any():
             return 0.0
         w = np.exp(self.logw)

@@ -34,6 +34,9 @@ All functions work on H hypotheses at once (``mu`` of shape ``(H, 3)``, ``P`` of
 from __future__ import annotations
 
 import math
+import os
+import threading
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,6 +59,29 @@ FloatArray = NDArray[np.float64]
 #: Readings whose posterior probability is below this do not move the pose (a speed-up: their
 #: share of the mixture is negligible).
 MIN_READING_PROBABILITY = 1e-6
+
+#: From this many hypotheses (or particles) on, a frame runs in two halves side by side (the
+#: compiled kernel releases the GIL; each hypothesis is computed alone, so the results are
+#: the same bit for bit). Below it, a thread's hand-off costs more than it saves.
+PARALLEL_MIN = 512
+#: Threads for the halves (at most the machine's cores).
+THREADS = 2
+
+_pool: ThreadPoolExecutor | None = None
+_pool_lock = threading.Lock()
+
+
+def _shared_pool() -> ThreadPoolExecutor | None:
+    """The module's pool of one helper thread (the caller runs the other half), made at
+    first use; None on a machine with one core."""
+    global _pool
+    if min(THREADS, os.cpu_count() or 1) < 2:
+        return None
+    with _pool_lock:
+        if _pool is None:
+            _pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="omniloc-frame")
+        return _pool
+
 
 #: Smallest distance (m) from a pose to a landmark for which a bearing is predicted.
 MIN_RANGE_M = 1e-6
@@ -216,9 +242,9 @@ def _kernel(
             raise ValueError(
                 f"object weights of shape {ow.shape} for {mu.shape[0]} poses and {ob.size} objects"
             )
-    return frame_update_kernel(
-        np.ascontiguousarray(mu, dtype=np.float64),
-        np.ascontiguousarray(P, dtype=np.float64),
+    mu = np.ascontiguousarray(mu, dtype=np.float64)
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    rest = (
         np.ascontiguousarray(np.asarray(bearings, dtype=np.float64).reshape(-1)),
         np.ascontiguousarray(L, dtype=np.float64),
         model.sigma2,
@@ -232,8 +258,22 @@ def _kernel(
         update,
         model.fresh,
         ob,
-        ow,
-        model.object_var if ob.size else 1.0,
+    )
+    var = model.object_var if ob.size else 1.0
+    H = mu.shape[0]
+    pool = _shared_pool() if H >= PARALLEL_MIN else None
+    if pool is None:
+        return frame_update_kernel(mu, P, *rest, ow, var)
+    half = H // 2
+    first = pool.submit(frame_update_kernel, mu[:half], P[:half], *rest, ow[:half], var)
+    second = frame_update_kernel(mu[half:], P[half:], *rest, ow[half:], var)
+    a = first.result()
+    return (
+        np.concatenate([a[0], second[0]]),
+        np.concatenate([a[1], second[1]]),
+        np.concatenate([a[2], second[2]]),
+        np.concatenate([a[3], second[3]]),
+        np.concatenate([a[4], second[4]]),
     )
 
 

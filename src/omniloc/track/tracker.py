@@ -67,6 +67,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
+from .._kernels.track import pair_forms
 from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number, shorten
@@ -780,11 +781,13 @@ class Tracker:
         d[:, 2] = np.asarray(wrap(d[:, 2]))
         keep = np.abs(d[:, 2]) <= c.merge_heading
         ia, ib, d = ia[keep], ib[keep], d[keep]
-        S = P_a[ia] + P_b[ib]
-        m2 = np.full(ia.size, np.inf)
-        ok = np.linalg.det(S) > 0.0 if ia.size else np.zeros(0, dtype=bool)
-        if ok.any():
-            m2[ok] = np.einsum("ni,nij,nj->n", d[ok], np.linalg.inv(S[ok]), d[ok])
+        m2 = pair_forms(
+            np.ascontiguousarray(d),
+            np.ascontiguousarray(P_a, dtype=np.float64),
+            np.ascontiguousarray(P_b, dtype=np.float64),
+            ia,
+            ib,
+        )
         same = m2 <= c.merge_chi2
         ia, ib = ia[same], ib[same]
         order = np.lexsort((ib, ia))
@@ -987,11 +990,11 @@ class Tracker:
         first, at = np.unique(ja, return_index=True)
         dup_of[first] = ib[at]
         ca, cb = self._same_pairs(mu, P, mu, P)
-        twins: dict[int, list[int]] = {}
-        for a, b in zip(ca.tolist(), cb.tolist(), strict=True):
-            if a != b:
-                twins.setdefault(a, []).append(b)
-        accepted = np.zeros(mu.shape[0], dtype=bool)
+        # Candidate j's twins are twin[start[j]:start[j + 1]] (the pairs come ordered by a).
+        other = ca != cb
+        twin = cb[other].tolist()
+        start = np.searchsorted(ca[other], np.arange(mu.shape[0] + 1)).tolist()
+        accepted = [False] * mu.shape[0]
         added: list[int] = []
         for j in idx.tolist():
             # A candidate at a pose already tracked adds nothing: that hypothesis holds the
@@ -1005,7 +1008,7 @@ class Tracker:
                     self._conf[dup] += 1
                     self._conf_t[dup] = t
                 continue
-            if any(accepted[k] for k in twins.get(j, ())):
+            if any(accepted[k] for k in twin[start[j] : start[j + 1]]):
                 continue
             if light[j]:
                 # Too light to be tracked -- but it was still looked for above: a search
