@@ -800,8 +800,9 @@ def _cmd_track(args: argparse.Namespace) -> int:
         return 0
     span = est[-1].t - est[0].t
     print(
-        f"{len(est)} frames over {span:.1f} s in {run.cpu_s:.2f} s CPU "
-        f"({span / run.cpu_s if run.cpu_s > 0 else float('inf'):.0f}x real time), "
+        f"{len(est)} frames over {span:.1f} s in {run.wall_s:.2f} s "
+        f"({span / run.wall_s if run.wall_s > 0 else float('inf'):.0f}x real time; "
+        f"{run.cpu_s:.2f} s CPU), "
         f"{run.searches} searches: localized {100 * run.share('localized'):.1f} %, "
         f"ambiguous {100 * run.share('ambiguous'):.1f} %, lost {100 * run.share('lost'):.1f} %"
     )

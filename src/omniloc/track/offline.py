@@ -37,12 +37,16 @@ class TrackRun:
     searches : int
         Interpretation-tree searches the tracker ran.
     cpu_s : float
-        Processor time spent, seconds.
+        Processor time spent, seconds (every thread's: the frame likelihood of many
+        hypotheses runs on two).
+    wall_s : float
+        Elapsed time, seconds.
     """
 
     estimates: tuple[TrackEstimate, ...] = field(repr=False)
     searches: int = 0
     cpu_s: float = 0.0
+    wall_s: float = 0.0
 
     def __len__(self) -> int:
         return len(self.estimates)
@@ -120,6 +124,7 @@ def track(
     out: list[TrackEstimate] = []
     k = 0
     c0 = time.process_time()
+    w0 = time.perf_counter()
     for n, f in enumerate(frames, 1):
         k1 = int(np.searchsorted(odometry.t, f.t, side="right"))
         if k1 > k:
@@ -128,4 +133,6 @@ def track(
         out.append(tracker.frame(f.t, f.bearings))
         if progress is not None:
             progress(n)
-    return TrackRun(tuple(out), tracker.searches, time.process_time() - c0)
+    return TrackRun(
+        tuple(out), tracker.searches, time.process_time() - c0, time.perf_counter() - w0
+    )
