@@ -53,10 +53,15 @@ def merge(
     for a in range(K):
         i = rank[a]
         xi, yi, ti = poses[i, 0], poses[i, 1], poses[i, 2]
+        # No test below passes a kept pose farther than this in x, y (the ellipsoid test's
+        # bound with tr[i] >= min(tr[i], tr[k])): such a pose is passed over at once.
+        reach = max(place_xy * place_xy, near_chi2 * tr[i] * (1.0 + 1e-9), 2e-12)
         for b in range(nk):
             k = keep[b]
             d0 = poses[k, 0] - xi
             d1 = poses[k, 1] - yi
+            if d0 * d0 + d1 * d1 > reach:
+                continue
             d2 = wrap_angle(poses[k, 2] - ti)
             if abs(d0) < 1e-6 and abs(d1) < 1e-6 and abs(d2) < 1e-6:
                 owner[i] = k
