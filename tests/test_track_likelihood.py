@@ -257,3 +257,27 @@ def test_many_hypotheses_run_in_two_halves_with_the_same_results(
         np.testing.assert_array_equal(x, y)
     for x, y in zip(particles, log_ratios_clutter(mu, b, L, model, objects), strict=True):
         np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.skipif(
+    "fork" not in __import__("multiprocessing").get_all_start_methods(), reason="no fork"
+)
+def test_a_forked_child_runs_many_hypotheses_on_its_own_pool() -> None:
+    # The parent's helper thread does not exist in a child made by fork: the child must not
+    # hand its half to it (it would wait for ever), e.g. evaluation workers forked after a
+    # run in the parent.
+    import multiprocessing as mp
+
+    import omniloc.track.likelihood as lk
+
+    rng = np.random.default_rng(6)
+    H = 2 * lk.PARALLEL_MIN
+    L = rng.uniform(-5, 5, (8, 2))
+    poses = np.column_stack([rng.uniform(-3, 3, (H, 2)), rng.uniform(-math.pi, math.pi, H)])
+    b = rng.uniform(-1, 1, 3)
+    model = _model(fov=np.deg2rad(120.0), max_range=8.0)
+    want = log_ratios(poses, b, L, model)  # the parent's pool now exists
+    ctx = mp.get_context("fork")
+    with ctx.Pool(1) as pool:
+        got = pool.apply_async(log_ratios, (poses, b, L, model)).get(timeout=60)
+    np.testing.assert_array_equal(got, want)

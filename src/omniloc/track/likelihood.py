@@ -83,6 +83,18 @@ def _shared_pool() -> ThreadPoolExecutor | None:
         return _pool
 
 
+def _forget_pool() -> None:
+    """In a forked child: the parent's pool has no thread here (work handed to it would
+    wait for ever), so the child makes its own at first use."""
+    global _pool, _pool_lock
+    _pool = None
+    _pool_lock = threading.Lock()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget_pool)
+
+
 #: Smallest distance (m) from a pose to a landmark for which a bearing is predicted.
 MIN_RANGE_M = 1e-6
 
