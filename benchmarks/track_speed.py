@@ -2,6 +2,7 @@
 runs it (the ``mrclam`` preset), elapsed and processor time.
 
 Run:  python benchmarks/track_speed.py [--data PATH] [--robots 1 2 3 4 5] [--repeat N]
+      [--frames N] [--out PATH]
 
 The issue's target is a whole ~900 s run in <= 9 s on a 2-core machine (>= 100x real time,
 elapsed). ``omniloc evaluate --dataset mrclam-track`` and ``track_baselines.py`` report
@@ -58,13 +59,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", type=Path, default=DATA, help="the mrclam-ds6 folder")
     ap.add_argument("--robots", type=int, nargs="+", default=[1, 2, 3, 4, 5])
     ap.add_argument("--repeat", type=int, default=1, help="runs of each robot (fastest kept)")
+    ap.add_argument("--frames", type=int, default=None, help="only each run's first N frames")
     ap.add_argument("--out", type=Path, default=HERE / "results_track_speed")
     args = ap.parse_args(argv)
     run_robot(args.data, 1, limit=200)  # loads (or compiles) every kernel: not timed
     rows = []
     for r in args.robots:
         best = min(
-            (run_robot(args.data, r) for _ in range(max(1, args.repeat))),
+            (run_robot(args.data, r, args.frames) for _ in range(max(1, args.repeat))),
             key=lambda row: row["wall_s"],
         )
         rows.append(best)
