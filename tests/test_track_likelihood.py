@@ -281,3 +281,21 @@ def test_a_forked_child_runs_many_hypotheses_on_its_own_pool() -> None:
     with ctx.Pool(1) as pool:
         got = pool.apply_async(log_ratios, (poses, b, L, model)).get(timeout=60)
     np.testing.assert_array_equal(got, want)
+
+
+def test_each_bearing_is_read_from_the_pose_the_bearings_before_it_moved() -> None:
+    # The chain rule of the frame: the second bearing is predicted from the hypothesis as the
+    # first left it, exactly as if it came alone in a frame after it.
+    L = np.array([[3.0, 0.4], [2.0, -1.5], [4.0, 2.0]])
+    mu = np.array([[0.05, -0.04, 0.02]])
+    P = np.diag([0.02, 0.02, 0.004])[None]
+    truth = np.zeros(3)
+    b = np.array([_bearing(truth, L[0]), _bearing(truth, L[1])])
+    model = _model(fov=np.deg2rad(120.0), max_range=8.0)
+    both = frame_update_clutter(mu, P, b, L, model, None)
+    mu1, P1 = frame_update(mu, P, b[:1], L, model)[:2]
+    mu2, P2, _, _, post2 = frame_update_clutter(mu1, P1, b[1:], L, model, None)
+    assert not np.allclose(mu1, mu)  # the first bearing moved the hypothesis
+    np.testing.assert_allclose(both[0], mu2, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(both[1], P2, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(both[4][:, 1], post2[:, 0], rtol=1e-12)

@@ -542,3 +542,36 @@ def test_a_frame_of_too_many_bearings_is_refused_and_changes_nothing() -> None:
         tr.frame(0.5, np.zeros(MAX_FRAME_BEARINGS + 1))
     assert tr._t is None
     tr.frame(0.5, np.linspace(-3.0, 3.0, MAX_FRAME_BEARINGS))  # the limit itself is taken
+
+
+def test_a_search_that_finds_one_place_twice_adds_it_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    # Candidates at the same pose are one place: the first is tracked, its twins add neither
+    # hypotheses nor mass (merged afterwards, their masses would have been summed).
+    import omniloc.track.tracker as tr
+    from omniloc.track.relocalize import Candidates
+
+    truth = Pose(5.0, 4.2, 0.0)
+    z = np.array(tr.wrap(np.arctan2(GRID.xy[:, 1] - 4.2, GRID.xy[:, 0] - 5.0)))
+    seen = z[np.hypot(GRID.xy[:, 0] - 5.0, GRID.xy[:, 1] - 4.2) <= 5.0]
+    cov = np.diag([1e-3, 1e-3, 1e-4])
+
+    def run(copies: int) -> list[tuple[float, float, float, float]]:
+        def search(*args, **kwargs):  # type: ignore[no-untyped-def]
+            poses = np.repeat(truth.as_array()[None], copies, axis=0)
+            return Candidates(poses, np.repeat(cov[None], copies, axis=0), seen.size, True)
+
+        monkeypatch.setattr(tr, "search_window", search)
+        tracker = Tracker(GRID, SENSOR, MOTION, CONFIG)
+        out = []
+        for k in range(3):
+            tracker.odometry(np.array([0.25 * k]), np.zeros(1), np.zeros(1))
+            est = tracker.frame(0.25 * k + 0.1, seen[: 3 + k])
+            out += [(h.pose.x, h.pose.y, h.pose.theta, h.weight) for h in est.hypotheses]
+            # Elsewhere's log-mass: where a summed twin's mass would show (the place's own
+            # weight is near 1 at once).
+            out.append((tracker.n_hypotheses, tracker._log_out, 0.0, 0.0))
+        return out
+
+    once = run(1)
+    assert once[0][0] == 0 and once[2][0] == 1  # the second frame's search added the place
+    assert run(3) == once
