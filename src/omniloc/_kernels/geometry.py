@@ -39,9 +39,11 @@ __all__ = [
     "GATE_FLOOR",
     "GN_HALVINGS",
     "GN_ROUNDING",
+    "add_pair",
     "covariances",
     "det3",
     "distance_ratio",
+    "form3",
     "gauss_newton",
     "gn_refine",
     "heading_from",
@@ -223,6 +225,32 @@ def pred_var(
 
 
 @_jit
+def add_pair(
+    h00: float, h01: float, h02: float, h11: float, h12: float, h22: float, gx: float, gy: float
+) -> tuple[float, float, float, float, float, float]:
+    """The upper triangle of ``H + g g^T`` for one bearing's gradient ``g = (gx, gy, -1)``
+    (its derivative with respect to x, y and the heading)."""
+    return h00 + gx * gx, h01 + gx * gy, h02 - gx, h11 + gy * gy, h12 - gy, h22 + 1.0
+
+
+@_jit
+def form3(
+    c00: float,
+    c01: float,
+    c02: float,
+    c11: float,
+    c12: float,
+    c22: float,
+    d0: float,
+    d1: float,
+    d2: float,
+) -> float:
+    """``d^T C d`` for a symmetric 3x3 ``C`` given by its upper triangle."""
+    q = c00 * d0 * d0 + c11 * d1 * d1 + c22 * d2 * d2
+    return q + 2.0 * (c01 * d0 * d1 + c02 * d0 * d2 + c12 * d1 * d2)
+
+
+@_jit
 def information(
     lx: FloatArray, ly: FloatArray, w: FloatArray, n: int, x: float, y: float
 ) -> tuple[float, float, float, float, float, float]:
@@ -235,12 +263,7 @@ def information(
             dy = ly[i] - y
             r2 = dx * dx + dy * dy
             gx, gy = dy / r2, -dx / r2
-            h00 += gx * gx
-            h01 += gx * gy
-            h02 -= gx
-            h11 += gy * gy
-            h12 -= gy
-            h22 += 1.0
+            h00, h01, h02, h11, h12, h22 = add_pair(h00, h01, h02, h11, h12, h22, gx, gy)
     return h00, h01, h02, h11, h12, h22
 
 
@@ -269,12 +292,7 @@ def _normal_equations(
             r = wrap_angle(np.arctan2(dy, dx) - t - bm[i])
             sse += r * r
             gx, gy = dy / r2, -dx / r2
-            h00 += gx * gx
-            h01 += gx * gy
-            h02 -= gx
-            h11 += gy * gy
-            h12 -= gy
-            h22 += 1.0
+            h00, h01, h02, h11, h12, h22 = add_pair(h00, h01, h02, h11, h12, h22, gx, gy)
             g0 -= gx * r
             g1 -= gy * r
             g2 += r

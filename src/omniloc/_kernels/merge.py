@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from .geometry import inv3, wrap_angle
+from .geometry import form3, inv3, wrap_angle
 
 __all__ = ["merge"]
 
@@ -14,12 +14,7 @@ __all__ = ["merge"]
 @njit(cache=True, error_model="numpy")
 def _form(c: NDArray[np.float64], d0: float, d1: float, d2: float) -> float:
     """``d^T c d`` for a symmetric 3x3 ``c``."""
-    return (
-        c[0, 0] * d0 * d0
-        + c[1, 1] * d1 * d1
-        + c[2, 2] * d2 * d2
-        + 2.0 * (c[0, 1] * d0 * d1 + c[0, 2] * d0 * d2 + c[1, 2] * d1 * d2)
-    )
+    return form3(c[0, 0], c[0, 1], c[0, 2], c[1, 1], c[1, 2], c[2, 2], d0, d1, d2)
 
 
 @njit(cache=True, error_model="numpy")
@@ -87,9 +82,7 @@ def merge(
                     1.0,
                     0.0,
                 )
-                q = c00 * d0 * d0 + c11 * d1 * d1 + c22 * d2 * d2
-                q += 2.0 * (c01 * d0 * d1 + c02 * d0 * d2 + c12 * d1 * d2)
-                if q <= place_chi2:
+                if form3(c00, c01, c02, c11, c12, c22, d0, d1, d2) <= place_chi2:
                     owner[i] = k
                     break
         if owner[i] == i:

@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from .geometry import det3, inv3, wrap_angle
+from .geometry import det3, form3, inv3, wrap_angle
 
 __all__ = ["covered_kernel", "frame_update_kernel", "integrate_pieces", "pair_forms"]
 
@@ -328,7 +328,5 @@ def pair_forms(
         if not det3(h00, h01, h02, h11, h12, h22) > 0.0:
             continue
         c00, c01, c02, c11, c12, c22, _ = inv3(h00, h01, h02, h11, h12, h22, 1.0, 0.0)
-        d0, d1, d2 = d[k, 0], d[k, 1], d[k, 2]
-        out[k] = c00 * d0 * d0 + c11 * d1 * d1 + c22 * d2 * d2
-        out[k] += 2.0 * (c01 * d0 * d1 + c02 * d0 * d2 + c12 * d1 * d2)
+        out[k] = form3(c00, c01, c02, c11, c12, c22, d[k, 0], d[k, 1], d[k, 2])
     return out
