@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from functools import cache
 
 import numpy as np
@@ -116,6 +117,57 @@ def test_notices_the_kidnapping_and_recovers() -> None:
     # localized and right again within ten seconds
     back = after & loc & (d < 0.3) & (h < 5.0)
     assert back.any() and t[back][0] < jump + 10.0
+
+
+class _Doubting(Tracker):
+    """A tracker that calls every frame from ``doubt_from`` to the jump ``ambiguous`` (its
+    hypotheses and their masses untouched): a place it stopped vouching for before the
+    kidnapping."""
+
+    doubt_from = float("inf")
+
+    def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
+        state, reason, best = super()._decide(t)
+        if self.doubt_from <= t < KIDNAP[0] and state is TrackState.LOCALIZED:
+            return TrackState.AMBIGUOUS, "doubting", best
+        return state, reason, best
+
+
+def _flags(doubt_s: float, watch_s: float) -> tuple[list[float], list[str]]:
+    run, _ = _scenario()
+    tr = _Doubting(GRID, SENSOR, MOTION, replace(CONFIG, kidnap_watch_s=watch_s))
+    tr.doubt_from = KIDNAP[0] - doubt_s
+    flagged, states = [], []
+    k = 0
+    for f in run.frames:
+        k1 = int(np.searchsorted(run.odometry.t, f.t, side="right"))
+        if k1 > k:
+            tr.odometry(run.odometry.t[k:k1], run.odometry.v[k:k1], run.odometry.w[k:k1])
+            k = k1
+        e = tr.frame(f.t, f.bearings)
+        states.append(e.state.value)
+        if e.kidnapped:
+            flagged.append(e.t)
+    return flagged, states
+
+
+def test_a_place_is_watched_for_kidnap_watch_s_after_it_was_last_called_localized() -> None:
+    jump = KIDNAP[0]
+    # Localized from about 18 s until the jump at 24 s (the scenario): flagged right after it.
+    flagged, states = _flags(0.0, 2.0)
+    assert flagged and jump <= flagged[0] < jump + 6.0
+    t = [f.t for f in _scenario()[0].frames]
+    before = [s for s, ti in zip(states, t, strict=True) if ti < jump - 4.0]
+    assert "localized" in before  # localized before the doubt below
+    # Called ambiguous for the 1 s before the jump: still watched, flagged at the same frame.
+    assert _flags(1.0, 2.0)[0] == flagged
+    # Ambiguous for 4 s: no longer watched -- the estimates have said so for 4 s, and the
+    # place's loss after the jump is not reported as a kidnapping ...
+    late, late_states = _flags(4.0, 2.0)
+    assert late == [] and late_states != states
+    # ... unless it is watched until its mass falls; the states are the same.
+    always, always_states = _flags(4.0, 1e6)
+    assert always == flagged and always_states == late_states
 
 
 def test_a_place_found_after_a_kidnapping_is_not_judged_by_the_frames_before_it() -> None:

@@ -47,7 +47,9 @@ when the tracker wakes up.
   otherwise, with the competing hypotheses; ``lost`` when elsewhere holds nearly all the mass.
 * **Kidnapping.** When the place the tracker was localized at loses its mass (below
   ``kidnap_share``) to elsewhere or to another place, the estimate is flagged ``kidnapped``;
-  the old hypothesis stays alongside the new ones until the evidence decides.
+  the old hypothesis stays alongside the new ones until the evidence decides. A place that
+  loses its mass more than ``kidnap_watch_s`` after the tracker stopped calling it
+  ``localized`` is not flagged: the estimates have said ``ambiguous`` all that while.
 
 Bad input: times that go back, values that are not finite and frames before any odometry
 get a clear :class:`~omniloc.errors.InputError` or a stated behaviour (see
@@ -244,7 +246,13 @@ class TrackerConfig:
         At most this many hypotheses are kept (the heaviest).
     kidnap_share : float
         The place the tracker was localized at is taken to be left (flagged ``kidnapped``)
-        when its mass falls below this share.
+        when its mass falls below this share ...
+    kidnap_watch_s : float
+        ... within this many seconds of the first frame that was not ``localized`` after it
+        (a gap without frames does not count). Later the place is no longer watched: on
+        MRCLAM, places that stayed ``ambiguous`` for tens of seconds after their last
+        ``localized`` frame and then lost their mass had lost it to the weights' swings, not
+        to a kidnapping (docs/tracking.md). ``1e6`` watches a place until its mass falls.
     max_odometry_gap_s : float
         Odometry rows further apart than this (s) leave the motion unknown: the hypotheses
         are dropped and the tracker relocalizes.
@@ -296,6 +304,7 @@ class TrackerConfig:
     prune_weight: float = 1e-6
     max_hypotheses: int = 50
     kidnap_share: float = 0.5
+    kidnap_watch_s: float = 10.0
     max_odometry_gap_s: float = 2.0
     max_reported: int = 10
 
@@ -524,6 +533,9 @@ class Tracker:
         self._last_search = -math.inf
         self._bearings_since_search = 0
         self._localized_id: int | None = None
+        # The first frame since the last localized one that was not localized (None while
+        # localized): kidnap_watch_s runs from there.
+        self._unvouched_t: float | None = None
         #: Number of searches run so far (for reports).
         self.searches = 0
 
@@ -1178,7 +1190,14 @@ class Tracker:
             state, reason, best = self._decide(tf)
         if reason_gap:
             reason = reason_gap + "; " + reason
-        # Kidnapping: the place we were localized at lost its mass.
+        # Kidnapping: the place we were localized at lost its mass (watched until kidnap_watch_s
+        # after the estimates stopped calling it localized).
+        if (
+            self._localized_id is not None
+            and self._unvouched_t is not None
+            and tf - self._unvouched_t > c.kidnap_watch_s
+        ):
+            self._localized_id = None
         if self._localized_id is not None:
             where = np.flatnonzero(self._ids == self._localized_id)
             share = 0.0
@@ -1194,6 +1213,9 @@ class Tracker:
                 )
         if state is TrackState.LOCALIZED and best is not None:
             self._localized_id = int(self._ids[best])
+            self._unvouched_t = None
+        elif self._unvouched_t is None:
+            self._unvouched_t = tf
         return self._estimate(tf, state, reason, kidnapped, best)
 
     def _place(self, i: int) -> NDArray[np.bool_]:
