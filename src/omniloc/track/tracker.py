@@ -249,7 +249,8 @@ class TrackerConfig:
         when its mass falls below this share ...
     kidnap_watch_s : float
         ... within this many seconds of the first frame that was not ``localized`` after it
-        (a gap without frames does not count). Later the place is no longer watched: on
+        (the clock starts at that frame: frames that stop coming while the tracker is
+        localized do not start it). Later the place is no longer watched: on
         MRCLAM, places that stayed ``ambiguous`` for tens of seconds after their last
         ``localized`` frame and then lost their mass had lost it to the weights' swings, not
         to a kidnapping (docs/tracking.md). ``1e6`` watches a place until its mass falls.
