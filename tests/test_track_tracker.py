@@ -133,13 +133,17 @@ class _Doubting(Tracker):
         return state, reason, best
 
 
-def _flags(doubt_s: float, watch_s: float) -> tuple[list[float], list[str]]:
+def _flags(doubt_s: float, watch_s: float, blind_s: float = 0.0) -> tuple[list[float], list[str]]:
+    """Times flagged kidnapped and every state, the place doubted for ``doubt_s`` and no
+    frame at all for ``blind_s`` before the jump."""
     run, _ = _scenario()
     tr = _Doubting(GRID, SENSOR, MOTION, replace(CONFIG, kidnap_watch_s=watch_s))
     tr.doubt_from = KIDNAP[0] - doubt_s
     flagged, states = [], []
     k = 0
     for f in run.frames:
+        if KIDNAP[0] - blind_s <= f.t < KIDNAP[0]:
+            continue
         k1 = int(np.searchsorted(run.odometry.t, f.t, side="right"))
         if k1 > k:
             tr.odometry(run.odometry.t[k:k1], run.odometry.v[k:k1], run.odometry.w[k:k1])
@@ -168,6 +172,9 @@ def test_a_place_is_watched_for_kidnap_watch_s_after_it_was_last_called_localize
     # ... unless it is watched until its mass falls; the states are the same.
     always, always_states = _flags(4.0, 1e6)
     assert always == flagged and always_states == late_states
+    # No frames for 4 s before the jump while localized: the place is still vouched for.
+    blind, _ = _flags(0.0, 2.0, blind_s=4.0)
+    assert blind and jump <= blind[0] < jump + 6.0
 
 
 def test_a_place_found_after_a_kidnapping_is_not_judged_by_the_frames_before_it() -> None:
