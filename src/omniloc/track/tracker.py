@@ -49,7 +49,8 @@ when the tracker wakes up.
   ``kidnap_share``) to elsewhere or to another place, the estimate is flagged ``kidnapped``;
   the old hypothesis stays alongside the new ones until the evidence decides. A place that
   loses its mass more than ``kidnap_watch_s`` after the tracker stopped calling it
-  ``localized`` is not flagged: the estimates have said ``ambiguous`` all that while.
+  ``localized`` is not flagged: the estimates have said ``ambiguous`` or ``lost`` all that
+  while.
 
 Bad input: times that go back, values that are not finite and frames before any odometry
 get a clear :class:`~omniloc.errors.InputError` or a stated behaviour (see
@@ -250,8 +251,9 @@ class TrackerConfig:
     kidnap_watch_s : float
         ... within this many seconds of the first frame that was not ``localized`` after it
         (the clock starts at that frame: frames that stop coming while the tracker is
-        localized do not start it). Later the place is no longer watched: on
-        MRCLAM, places that stayed ``ambiguous`` for tens of seconds after their last
+        localized do not start it). Later the place is no longer watched (the estimates have
+        not vouched for it since): on MRCLAM, places that stayed ``ambiguous`` for tens of
+        seconds after their last
         ``localized`` frame and then lost their mass had lost it to the weights' swings, not
         to a kidnapping (docs/tracking.md). ``1e6`` watches a place until its mass falls.
     max_odometry_gap_s : float
