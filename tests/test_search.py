@@ -573,3 +573,40 @@ def test_the_engines_counts_of_missed_landmarks_match_the_scorings(monkeypatch) 
             return [(s.assignment, s.missed) for s in res.solutions if s.confidence >= 1e-3]
 
         assert top(engine) == top(again) and engine.ambiguous == again.ambiguous
+
+
+def test_the_cap_on_complete_paths_keeps_the_truth_on_a_large_map(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # Benchmark scene (c), trial 189: four true bearings on a map of 10,000 landmarks. An
+    # exhaustive search finds tens of thousands of chance fits of four bearings; the cap
+    # (MAX_LEAVES) must keep the paths with the most evidence, volume term included: chance
+    # fits fit tightly but fix their pose poorly, and ranked by fit alone they crowded the
+    # true interpretation out of the solutions.
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from scenes import CASES, DEFAULT_KWARGS, build_map, make_trial
+
+    lm = build_map("c")
+    _, scene = make_trial(CASES["c-default"], 189, lm)
+    true = [i for i, a in enumerate(scene.assignment) if a is not None]
+    assert len(true) == 4
+    import omniloc.search as search_package
+    from omniloc.search.scoring import MAX_LEAVES, finish
+
+    leaves_seen: list[int] = []
+
+    def counting_finish(lm_, b_, leaves, opt):  # type: ignore[no-untyped-def]
+        leaves_seen.append(len(leaves.arrays()[0]))
+        return finish(lm_, b_, leaves, opt)
+
+    monkeypatch.setattr(search_package, "finish", counting_finish)
+    kwargs = {**DEFAULT_KWARGS, "max_spurious": 0, "exhaustive": True}
+    res = localize(lm, scene.bearings[true], **kwargs)
+    assert leaves_seen and leaves_seen[-1] > MAX_LEAVES  # the cap did cut
+    near = [s for s in res.solutions if s.pose.distance_to(scene.pose)[0] < 0.3]
+    # (Two of its landmarks lie 0.8 deg apart on one ray: the swapped pairing is the same
+    # pose, merged with it.)
+    assert near and set(near[0].assignment) == {scene.assignment[i] for i in true}

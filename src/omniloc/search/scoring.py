@@ -2,8 +2,9 @@
 
 What :func:`finish` does with the complete paths an engine found, in order:
 
-1. keeps at most MAX_LEAVES of them (the best by the evidence below without its pose-volume
-   term);
+1. keeps at most MAX_LEAVES of them, the best by the evidence below at their unrefined
+   poses (volume term included: on a large map tens of thousands of chance fits of a few
+   bearings fit more tightly than the truth but fix their pose poorly);
 2. refines each pose by Gauss-Newton on all its pairs and drops a pose that stands on one of
    its own landmarks; with ``sigma``, keeps the paths that pass the joint chi-square test on
    all their pairs (joint compatibility, as in JCBB);
@@ -275,13 +276,23 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     s = opt.sensor
     ev = evidence_model(lm, s, opt.max_wild)
     if len(level_assign) > MAX_LEAVES:
-        # Pathological inputs (huge gates, tiny maps) can leave very many paths; only the best
-        # MAX_LEAVES by matches and fit (the evidence without the volume term) are refined.
+        # Huge gates, tiny maps or a few bearings on a large map can leave very many paths;
+        # only the best MAX_LEAVES by their evidence at the unrefined poses are refined. The
+        # volume term counts: by matches and fit alone, chance fits that fix their pose poorly
+        # crowded the truth out (benchmark scene (c), trial 189). A path whose pairs do not
+        # fix a pose (non-finite evidence) goes last.
         sse0 = path_sse(lm.xy, bearings[order], level_assign, level_pose)
         nm = (level_assign >= 0).sum(axis=1)
-        score0 = (
-            nm * ev.per_match - 0.5 * sse0 / ev.sig2 + s.clutter_count_term(m, nm, opt.max_wild)
+        w0 = (level_assign >= 0).astype(np.float64)
+        lp0 = np.array(level_pose, dtype=np.float64)
+        cov0 = geo.covariances(
+            lm.xy[np.maximum(level_assign, 0)], w0, lp0, ev.sig2, geo.COVARIANCE_FLOOR
         )
+        miss0 = engine_missed if engine_missed is not None else np.zeros(len(nm), dtype=np.int64)
+        score0 = log_evidence(ev, nm, sse0, cov0, miss0, lp0) + s.clutter_count_term(
+            m, nm, opt.max_wild
+        )
+        score0 = np.where(np.isfinite(score0), score0, -np.inf)
         keep0 = np.argsort(-score0, kind="stable")
         keep0 = keep0[:MAX_LEAVES]
         level_assign, level_pose = level_assign[keep0], level_pose[keep0]
