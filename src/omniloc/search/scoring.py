@@ -280,7 +280,9 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         # only the best MAX_LEAVES by their evidence at the unrefined poses are refined. The
         # volume term counts: by matches and fit alone, chance fits that fix their pose poorly
         # crowded the truth out (benchmark scene (c), trial 189). A path whose pairs do not
-        # fix a pose (non-finite evidence) goes last.
+        # fix a pose (non-finite evidence) goes last. Landmarks left unseen count where the
+        # engine counted them (the hypotheses engine, the default, does; the tree does
+        # not): counting them here for every path would cost more than the refinement.
         sse0 = path_sse(lm.xy, bearings[order], level_assign, level_pose)
         nm = (level_assign >= 0).sum(axis=1)
         w0 = (level_assign >= 0).astype(np.float64)
