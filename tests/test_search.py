@@ -586,6 +586,9 @@ def test_the_cap_on_complete_paths_keeps_the_truth_on_a_large_map(
     import sys
     from pathlib import Path
 
+    import omniloc.search as search_package
+    from omniloc.search.scoring import MAX_LEAVES, finish
+
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
     from scenes import CASES, DEFAULT_KWARGS, build_map, make_trial
 
@@ -593,9 +596,6 @@ def test_the_cap_on_complete_paths_keeps_the_truth_on_a_large_map(
     _, scene = make_trial(CASES["c-default"], 189, lm)
     true = [i for i, a in enumerate(scene.assignment) if a is not None]
     assert len(true) == 4
-    import omniloc.search as search_package
-    from omniloc.search.scoring import MAX_LEAVES, finish
-
     leaves_seen: list[int] = []
 
     def counting_finish(lm_, b_, leaves, opt):  # type: ignore[no-untyped-def]
