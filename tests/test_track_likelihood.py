@@ -303,3 +303,46 @@ def test_each_bearing_is_read_from_the_pose_the_bearings_before_it_moved() -> No
     np.testing.assert_allclose(both[0], mu2, rtol=0, atol=1e-12)
     np.testing.assert_allclose(both[1], P2, rtol=0, atol=1e-15)
     np.testing.assert_allclose(both[4][:, 1], post2[:, 0], rtol=1e-12)
+
+
+def test_a_mixture_of_one_noise_twice_is_the_single_gaussian() -> None:
+    # (1 - c) N(0, s^2) + c N(0, s^2) = N(0, s^2): the same ratio and the same update.
+    L = np.array([[4.0, 1.0], [3.0, -2.0], [5.0, 0.5]])
+    mu = np.array([[0.0, 0.0, 0.2], [0.1, -0.1, 0.15]])
+    P = np.array([np.diag([0.01, 0.02, 0.003]), np.diag([0.02, 0.01, 0.002])])
+    z = np.array([_bearing(mu[0], L[0]) + 0.01, _bearing(mu[0], L[1]) - 0.02, 0.9])
+    plain = _model()
+    mixed = dataclasses.replace(plain, core_share=0.4, core_sigma2=plain.sigma2)
+    a = frame_update(mu, P, z, L, plain)
+    b = frame_update(mu, P, z, L, mixed)
+    for x, y in zip(a, b, strict=True):
+        np.testing.assert_allclose(y, x, rtol=1e-12, atol=1e-15)
+
+
+def test_a_sharp_core_rewards_a_precise_fit_more_than_one_wide_gaussian() -> None:
+    # One landmark, a bearing 0.15 deg off the first pose's prediction and 1 deg off the
+    # second's: the mixture (57 % at 0.33 deg, the rest at 1 deg) tells them apart by
+    # ln of its densities' ratio, the 1-deg Gaussian by much less.
+    L = np.array([[4.0, 0.0]])
+    mu = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, np.deg2rad(0.85)]])
+    z = np.array([np.deg2rad(0.15)])
+    plain = _model()
+    mixed = dataclasses.replace(plain, core_share=0.57, core_sigma2=np.deg2rad(0.33) ** 2)
+    lp = log_ratios(mu, z, L, plain)
+    lm = log_ratios(mu, z, L, mixed)
+
+    def density(e: float, model: FrameModel) -> float:
+        s, c = math.sqrt(model.sigma2), math.sqrt(model.core_sigma2) if model.core_share else 1.0
+        return (1 - model.core_share) * norm.pdf(e, 0, s) + model.core_share * norm.pdf(e, 0, c)
+
+    rho = 0.6 / 0.4
+    kappa = math.exp(plain.log_kappa)
+
+    def ratio(e: float, model: FrameModel) -> float:
+        return math.log(0.4) + math.log(1 + rho * density(e, model) / kappa)
+
+    e0, e1 = np.deg2rad(0.15), np.deg2rad(1.0)
+    assert lm[0] == pytest.approx(ratio(e0, mixed), rel=1e-9)
+    assert lm[1] == pytest.approx(ratio(e1, mixed), rel=1e-9)
+    assert lp[0] - lp[1] == pytest.approx(ratio(e0, plain) - ratio(e1, plain), rel=1e-9)
+    assert lm[0] - lm[1] > 1.5 > 2 * (lp[0] - lp[1])

@@ -156,6 +156,8 @@ def frame_update_kernel(
     min_reading: float,
     update: bool,
     fresh: float,
+    core_share: float,
+    core_sigma2: float,
     obj_b: FloatArray,
     obj_w: FloatArray,
     obj_var: float,
@@ -172,7 +174,13 @@ def frame_update_kernel(
     for each object ``o`` of the previous frame (its bearing ``obj_b[o]`` in this frame, its
     expected count for hypothesis ``k`` ``obj_w[k, o]``), ``obj_w[k, o]`` times a Gaussian of
     variance ``obj_var`` around it; the objects' expected count is paid once per frame.
-    ``fresh`` 1 and no objects: the memoryless model."""
+    ``fresh`` 1 and no objects: the memoryless model.
+
+    A bearing's error is Gaussian with variance ``sigma2`` or, with ``core_share`` > 0, the
+    mixture ``(1 - core_share) N(0, sigma2) + core_share N(0, core_sigma2)`` (a camera whose
+    errors have a sharp core and a heavier tail); each landmark's reading is then two, one
+    per component, each moving the pose by its own Kalman gain. ``core_share`` 0: exactly the
+    single Gaussian."""
     mu = mu.copy()
     P = P.copy()
     H = mu.shape[0]
@@ -192,7 +200,9 @@ def frame_update_kernel(
     var = np.empty(N)
     d = np.empty(N)
     a = np.empty(N)
+    ac = np.zeros(N)
     nu = np.empty(N)
+    wide = 1.0 - core_share
     PJ = np.empty(3)
     mean = np.empty(3)
     M = np.empty((3, 3))
@@ -233,12 +243,25 @@ def frame_update_kernel(
             for n in range(N):
                 if d[n] == 0.0:
                     a[n] = 0.0
+                    ac[n] = 0.0
                     continue
                 S = var[n] + sigma2
                 nu[n] = wrap_angle(z - h[n])
                 rho = d[n] / max(1.0 - d[n], 1e-12)
-                a[n] = rho * math.exp(-0.5 * nu[n] * nu[n] / S) / math.sqrt(S) * norm
-                total += a[n]
+                if core_share > 0.0:
+                    a[n] = wide * rho * math.exp(-0.5 * nu[n] * nu[n] / S) / math.sqrt(S) * norm
+                    Sc = var[n] + core_sigma2
+                    ac[n] = (
+                        core_share
+                        * rho
+                        * math.exp(-0.5 * nu[n] * nu[n] / Sc)
+                        / math.sqrt(Sc)
+                        * norm
+                    )
+                    total += a[n] + ac[n]
+                else:
+                    a[n] = rho * math.exp(-0.5 * nu[n] * nu[n] / S) / math.sqrt(S) * norm
+                    total += a[n]
             log_ratio[k] += math.log(total)
             explained[k] += 1.0 - base / total
             clutter_post[k, iz] = base / total
@@ -248,19 +271,24 @@ def frame_update_kernel(
             M[:, :] = 0.0  # minus the shrink plus the spread of the readings
             used = False
             for n in range(N):
-                b = a[n] / total
-                if not b > min_reading:
-                    continue
-                used = True
-                S = var[n] + sigma2
-                for i in range(3):
-                    PJ[i] = C[i, 0] * J[n, 0] + C[i, 1] * J[n, 1] + C[i, 2] * J[n, 2]
-                for i in range(3):
-                    Ki = PJ[i] / S
-                    mean[i] += b * Ki * nu[n]
-                    for j in range(3):
-                        Kj = PJ[j] / S
-                        M[i, j] += b * (Ki * Kj * nu[n] * nu[n] - S * Ki * Kj)
+                for comp in range(2):
+                    if comp == 0:
+                        b = a[n] / total
+                        S = var[n] + sigma2
+                    else:
+                        b = ac[n] / total
+                        S = var[n] + core_sigma2
+                    if not b > min_reading:
+                        continue
+                    used = True
+                    for i in range(3):
+                        PJ[i] = C[i, 0] * J[n, 0] + C[i, 1] * J[n, 1] + C[i, 2] * J[n, 2]
+                    for i in range(3):
+                        Ki = PJ[i] / S
+                        mean[i] += b * Ki * nu[n]
+                        for j in range(3):
+                            Kj = PJ[j] / S
+                            M[i, j] += b * (Ki * Kj * nu[n] * nu[n] - S * Ki * Kj)
             if not used:
                 continue
             for i in range(3):

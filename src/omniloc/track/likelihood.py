@@ -120,6 +120,9 @@ class FrameModel:
         the rest comes from the objects of the previous frame (:class:`Objects`).
     object_var : float
         Variance (rad^2) of an object's bearing from one frame to the next.
+    core_share, core_sigma2 : float
+        A bearing's error is ``(1 - core_share) N(0, sigma2) + core_share N(0,
+        core_sigma2)`` (0: the single Gaussian).
     """
 
     sigma2: float
@@ -130,6 +133,8 @@ class FrameModel:
     log_kappa: float
     fresh: float = 1.0
     object_var: float = 0.0
+    core_share: float = 0.0
+    core_sigma2: float = 0.0
 
     @classmethod
     def of(cls, sensor: SensorModel, *, p_detect: float = 0.5, clutter: float = 0.5) -> FrameModel:
@@ -269,6 +274,8 @@ def _kernel(
         MIN_READING_PROBABILITY,
         update,
         model.fresh,
+        model.core_share,
+        model.core_sigma2,
         ob,
     )
     var = model.object_var if ob.size else 1.0

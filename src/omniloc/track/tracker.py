@@ -109,7 +109,7 @@ _PROBABILITIES = {
     "prune_weight",
     "elsewhere_inject",
 }
-_SHARES = {"fit_explained"}
+_SHARES = {"fit_explained", "core_share"}
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
 VALUE_MAX = 1e6
@@ -224,6 +224,12 @@ class TrackerConfig:
         image's exposure and time stamp are not one instant). MRCLAM: bearing errors with a
         robust sd of 0.41 deg standing still, 1.3 deg turning at 0.3-0.6 rad/s. 0 (default):
         off.
+    core_share, core_sigma : float
+        Bearing errors with a sharp core and a heavier tail: a share ``core_share`` of the
+        bearings has the error sd ``core_sigma`` (radians), the rest the sensor's sigma
+        (the mixture of two Gaussians, in every hypothesis, replay and particle). MRCLAM's
+        errors at the true poses fit 57 % at 0.33 deg and 43 % at 1.03 deg (15,000
+        bearings, two components by EM). 0 (default): the sensor's sigma alone.
     search_miss : float or None
         None (the default): Bayes' rule -- elsewhere earns each frame's likelihood ratio
         averaged over its particles, like any hypothesis. A probability: the chance that a
@@ -298,6 +304,8 @@ class TrackerConfig:
     clutter_memory_s: float = 2.0
     split_clutter: float = 0.0
     turn_noise_s: float = 0.0
+    core_share: float = 0.0
+    core_sigma: float = float(np.deg2rad(0.33))
     search_miss: float | None = None
     replay_s: float = 4.0
     max_candidates: int = 3000
@@ -375,6 +383,11 @@ class TrackerConfig:
         ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if not self.core_share < 1.0 or (self.core_share > 0 and not self.core_sigma > 0):
+            raise InputError(
+                f"core_share must lie in [0, 1) and core_sigma be > 0 with it, got "
+                f"core_share={self.core_share!r}, core_sigma={self.core_sigma!r}"
+            )
         if not self.clutter_persistence < 1.0:
             raise InputError(
                 f"clutter_persistence must lie in [0, 1), got {self.clutter_persistence!r}"
@@ -485,6 +498,8 @@ class Tracker:
         c = self.config
         self._L = np.ascontiguousarray(self.landmarks.xy, dtype=np.float64)
         self._model = FrameModel.of(self.sensor)
+        if c.core_share > 0:
+            self._model = replace(self._model, core_share=c.core_share, core_sigma2=c.core_sigma**2)
         if c.clutter_persistence > 0:
             self._model = replace(
                 self._model,
