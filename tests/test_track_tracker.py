@@ -634,3 +634,29 @@ def test_a_search_that_finds_one_place_twice_adds_it_once(monkeypatch: pytest.Mo
     once = run(1)
     assert once[0][0] == 0 and once[2][0] == 1  # the second frame's search added the place
     assert run(3) == once
+
+
+def test_a_sharp_core_reaches_the_frame_model_and_widens_with_the_turn() -> None:
+    sd_c, sd_t = np.deg2rad(0.3), 0.06
+    config = TrackerConfig(core_share=0.4, core_sigma=sd_c, turn_noise_s=sd_t)
+    tr = Tracker(GRID, SENSOR, MOTION, config)
+    assert tr._model.core_share == 0.4 and tr._model.core_sigma2 == pytest.approx(sd_c**2)
+    turning = tr._frame_model(0.5)
+    assert turning.core_sigma2 == pytest.approx(sd_c**2 + (0.5 * sd_t) ** 2)
+    assert turning.sigma2 == pytest.approx(tr._model.sigma2 + (0.5 * sd_t) ** 2)
+    plain = Tracker(GRID, SENSOR, MOTION, TrackerConfig(turn_noise_s=sd_t))
+    assert plain._model.core_share == 0.0 and plain._frame_model(0.5).core_sigma2 == 0.0
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        (dict(core_share=1.0), "core_share"),
+        (dict(core_share=-0.1), "core_share"),
+        (dict(core_share=0.5, core_sigma=0.0), "core_sigma"),
+        (dict(core_share=float("nan")), "core_share"),
+    ],
+)
+def test_a_sharp_core_needs_a_share_below_one_and_a_positive_sigma(kw, match) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(InputError, match=match):
+        TrackerConfig(**kw)

@@ -937,11 +937,17 @@ class Tracker:
 
     def _frame_model(self, turn_rate: float) -> FrameModel:
         """The frame model of a frame taken while turning at ``turn_rate`` (rad/s): the
-        bearing variance grows by ``(turn_rate * turn_noise_s)^2``."""
+        bearing variance grows by ``(turn_rate * turn_noise_s)^2`` (both components' with a
+        sharp core, ``core_share``)."""
         extra = (turn_rate * self.config.turn_noise_s) ** 2
         if extra == 0.0:
             return self._model
-        return replace(self._model, sigma2=self._model.sigma2 + extra)
+        m = self._model
+        return replace(
+            m,
+            sigma2=m.sigma2 + extra,
+            core_sigma2=m.core_sigma2 + extra if m.core_share > 0 else m.core_sigma2,
+        )
 
     def _search(self, t: float) -> int:
         """Search the recent frames for new hypotheses; returns how many were added."""
