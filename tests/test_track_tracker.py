@@ -660,3 +660,32 @@ def test_a_sharp_core_reaches_the_frame_model_and_widens_with_the_turn() -> None
 def test_a_sharp_core_needs_a_share_below_one_and_a_positive_sigma(kw, match) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(InputError, match=match):
         TrackerConfig(**kw)
+
+
+def test_the_covariance_inflation_scales_what_is_reported_and_decided_not_the_filter() -> None:
+    # One hypothesis 0.2 m sd in position: localized with the tolerance of 1 m, not once its
+    # covariance is taken 25 times larger (sd 1 m); the filter itself is the same.
+    pose = np.array([0.0, 0.0, 0.0])
+    P = np.diag([0.04, 0.04, np.deg2rad(1.0) ** 2])
+    base = dict(
+        search_min_bearings=100,
+        region=(-10.0, 10.0, -10.0, 10.0),
+        tolerance_m=1.0,
+        min_age_s=0.0,
+        min_confirmations=1,
+        fit_explained=0.0,
+    )
+    z = np.array([0.0])
+    out = {}
+    for f in (1.0, 25.0):
+        tr = _one_hypothesis(TrackerConfig(covariance_inflation=f, **base), pose, P)
+        out[f] = (tr, tr.frame(0.0, z))
+    (t1, e1), (t25, e25) = out[1.0], out[25.0]
+    np.testing.assert_array_equal(t1._P, t25._P)
+    np.testing.assert_array_equal(t1._mu, t25._mu)
+    assert e1.localized and not e25.localized
+    np.testing.assert_allclose(e25.hypotheses[0].covariance, 25.0 * e1.hypotheses[0].covariance)
+    np.testing.assert_allclose(e25.covariance, 25.0 * e1.covariance)
+    for bad in (0.0, -1.0, float("inf")):
+        with pytest.raises(InputError, match="covariance_inflation"):
+            TrackerConfig(covariance_inflation=bad)
