@@ -686,6 +686,6 @@ def test_the_covariance_inflation_scales_what_is_reported_and_decided_not_the_fi
     assert e1.localized and not e25.localized
     np.testing.assert_allclose(e25.hypotheses[0].covariance, 25.0 * e1.hypotheses[0].covariance)
     np.testing.assert_allclose(e25.covariance, 25.0 * e1.covariance)
-    for bad in (0.0, -1.0, float("inf")):
+    for bad in (0.0, 0.5, -1.0, float("inf")):
         with pytest.raises(InputError, match="covariance_inflation"):
             TrackerConfig(covariance_inflation=bad)

@@ -78,6 +78,14 @@ def integrate_pieces(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _reading(share: float, rho: float, nu: float, S: float, norm: float) -> float:
+    """One reading's term of a bearing's likelihood ratio: ``share`` of the detection odds
+    ``rho`` times the Gaussian density of the innovation ``nu`` with variance ``S`` (over the
+    clutter density: ``norm`` = 1 / (sqrt(2 pi) kappa))."""
+    return share * rho * math.exp(-0.5 * nu * nu / S) / math.sqrt(S) * norm
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _predict_one(
     mu: FloatArray,
     P: FloatArray,
@@ -203,6 +211,7 @@ def frame_update_kernel(
     ac = np.zeros(N)
     nu = np.empty(N)
     wide = 1.0 - core_share
+    components = 2 if core_share > 0.0 else 1
     PJ = np.empty(3)
     mean = np.empty(3)
     M = np.empty((3, 3))
@@ -249,18 +258,11 @@ def frame_update_kernel(
                 nu[n] = wrap_angle(z - h[n])
                 rho = d[n] / max(1.0 - d[n], 1e-12)
                 if core_share > 0.0:
-                    a[n] = wide * rho * math.exp(-0.5 * nu[n] * nu[n] / S) / math.sqrt(S) * norm
-                    Sc = var[n] + core_sigma2
-                    ac[n] = (
-                        core_share
-                        * rho
-                        * math.exp(-0.5 * nu[n] * nu[n] / Sc)
-                        / math.sqrt(Sc)
-                        * norm
-                    )
+                    a[n] = _reading(wide, rho, nu[n], S, norm)
+                    ac[n] = _reading(core_share, rho, nu[n], var[n] + core_sigma2, norm)
                     total += a[n] + ac[n]
                 else:
-                    a[n] = rho * math.exp(-0.5 * nu[n] * nu[n] / S) / math.sqrt(S) * norm
+                    a[n] = _reading(1.0, rho, nu[n], S, norm)
                     total += a[n]
             log_ratio[k] += math.log(total)
             explained[k] += 1.0 - base / total
@@ -271,7 +273,7 @@ def frame_update_kernel(
             M[:, :] = 0.0  # minus the shrink plus the spread of the readings
             used = False
             for n in range(N):
-                for comp in range(2):
+                for comp in range(components):
                     if comp == 0:
                         b = a[n] / total
                         S = var[n] + sigma2

@@ -231,7 +231,7 @@ class TrackerConfig:
         errors at the true poses fit 57 % at 0.33 deg and 43 % at 1.03 deg (15,000
         bearings, two components by EM). 0 (default): the sensor's sigma alone.
     covariance_inflation : float
-        Factor on the covariances the tracker reports and decides ``localized`` by (the
+        Factor (>= 1) on the covariances the tracker reports and decides ``localized`` by (the
         probability of being within the tolerances), not on its filters' own: for data
         where the filters' covariances are too small (MRCLAM: the truth inside the 50 %
         region in 40 % of the localized frames). 1 (default): as the filters have them.
@@ -390,6 +390,11 @@ class TrackerConfig:
         ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if not self.covariance_inflation >= 1.0:
+            raise InputError(
+                "covariance_inflation must be >= 1 (a factor below 1 would report more "
+                f"certainty than the filters have), got {self.covariance_inflation!r}"
+            )
         if not self.core_share < 1.0 or (self.core_share > 0 and not self.core_sigma > 0):
             raise InputError(
                 f"core_share must lie in [0, 1) and core_sigma be > 0 with it, got "
