@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from omniloc.errors import InputError
-from omniloc.track import GroundTruth, MotionModel, Odometry, estimate_motion
+from omniloc.track import Frame, GroundTruth, MotionModel, Odometry, estimate_motion
 from omniloc.track.motion import compose, integrate
 
 TRUE = MotionModel(
@@ -159,6 +159,20 @@ def test_a_simulated_sensor_gives_back_its_noise_detection_and_clutter() -> None
     assert fit.turn_noise_s < 0.02  # the simulated camera's noise does not grow with the turn
     assert fit.frames == len(run.frames) and fit.matched <= fit.bearings
     assert set(fit.settings()) == {"sigma", "p_detect", "clutter", "turn_noise_s"}
+    # The simulator's noise is one Gaussian, but the clutter within the gate (uniform over
+    # 6 deg) is no landmark's noise: it comes out as a wide tail of 5 %, the core is the
+    # sensor's noise.
+    assert fit.core_share == pytest.approx(0.95, abs=0.02)
+    assert fit.core_sigma == pytest.approx(math.radians(0.5), rel=0.1)
+    assert fit.tail_sigma > 2 * fit.core_sigma
+    # Without clutter: no sharp core, the tail is that Gaussian.
+    clean = simulate_run(
+        room, sensor.replace(clutter=0.0), omniloc.Pose(4.0, 3.0, 0.3), duration_s=300.0, rng=2
+    )
+    one = estimate_frame_sensor(room, clean.frames, clean.truth, fov=math.radians(120.0))
+    assert one.core_share == 0.0 and one.core_sigma == 0.0
+    assert one.tail_sigma == pytest.approx(math.radians(0.5), rel=0.1)
+    assert one.mixture_settings() == {**one.settings(), "core_share": 0.0}
     # The simulated clutter does not depend on the detections: every entry of the table
     # (frames that report 1, 2, ... landmarks) is near the one rate.
     assert len(fit.clutter_by_detections) >= 2
@@ -240,3 +254,120 @@ def test_p_detect_counts_every_landmark_in_view_as_the_tracker_does() -> None:
     assert fit.clutter == 0.0 and fit.matched == 60
     with pytest.raises(InputError, match="no landmark was in view"):
         estimate_frame_sensor(lm, frames, truth, fov=math.radians(0.5), gate=math.radians(0.4))
+
+
+def _mixture(n: int, share: float, core_deg: float, tail_deg: float, seed: int) -> np.ndarray:
+    """``n`` bearing errors (rad): a share ``share`` from a zero-mean Gaussian of sd
+    ``core_deg``, the rest of sd ``tail_deg``."""
+    rng = np.random.default_rng(seed)
+    sd = np.where(rng.random(n) < share, np.radians(core_deg), np.radians(tail_deg))
+    return np.asarray(rng.normal(0.0, sd))
+
+
+@pytest.mark.parametrize("share", [0.6, 0.3])
+def test_em_gives_back_a_known_core_and_tail_whatever_the_offset(share: float) -> None:
+    import math
+
+    from omniloc.track.calibrate import fit_core_and_tail
+
+    e = _mixture(20_000, share, 0.3, 1.0, seed=11)
+    fit = fit_core_and_tail(e + math.radians(0.5))
+    # The sharper Gaussian is the core, whether it holds more or fewer of the errors.
+    assert fit.core_share == pytest.approx(share, abs=0.03)
+    assert fit.core_sigma == pytest.approx(math.radians(0.3), rel=0.05)
+    assert fit.tail_sigma == pytest.approx(math.radians(1.0), rel=0.05)
+    assert fit.errors == 20_000 and fit.gain > 2 * math.log(20_000)
+    # A constant offset (the camera turned on the robot) is no noise.
+    same = fit_core_and_tail(e)
+    assert same.core_share == pytest.approx(fit.core_share, abs=1e-3)
+    assert same.core_sigma == pytest.approx(fit.core_sigma, rel=1e-3)
+
+
+def test_one_gaussian_gives_no_core() -> None:
+    import math
+
+    from omniloc.track.calibrate import fit_core_and_tail
+
+    e = _mixture(20_000, 0.0, 0.3, 0.7, seed=12) + 0.01
+    fit = fit_core_and_tail(e)
+    assert fit.core_share == 0.0 and fit.core_sigma == 0.0
+    assert fit.tail_sigma == pytest.approx(math.radians(0.7), rel=0.02)
+    assert fit.gain <= 2 * math.log(20_000)
+    # Two Gaussians 15 % apart, so many errors that the mixture pays for itself by BIC: its
+    # sds come out within 20 % of each other, and one Gaussian is kept.
+    close = fit_core_and_tail(_mixture(200_000, 0.5, 0.6, 0.69, seed=13))
+    assert close.gain > 2 * math.log(200_000)
+    assert close.core_share == 0.0 and close.core_sigma == 0.0
+
+
+def test_degenerate_errors_are_refused_or_fitted_as_stated() -> None:
+    import math
+
+    from omniloc.track.calibrate import SD_FLOOR, fit_core_and_tail
+
+    # No spread: one Gaussian at the sd floor, finite likelihoods (no warning: -W error).
+    flat = fit_core_and_tail(np.full(50, 0.01))
+    assert flat.core_share == 0.0 and flat.tail_sigma == SD_FLOOR
+    assert math.isfinite(flat.loglik_single) and math.isfinite(flat.loglik_mixture)
+    # Non-finite errors are left out, nothing else.
+    e = _mixture(2000, 0.6, 0.3, 1.0, seed=14)
+    with_nan = fit_core_and_tail(np.r_[e[:1000], np.nan, np.inf, e[1000:], -np.inf])
+    assert with_nan == fit_core_and_tail(e) and with_nan.errors == 2000
+    with pytest.raises(InputError, match="only 19 finite bearing errors: too few"):
+        fit_core_and_tail(np.r_[e[:19], np.full(30, np.nan)])
+    with pytest.raises(InputError, match="only 0 finite"):
+        fit_core_and_tail([])
+    with pytest.raises(InputError, match="errors must be numbers"):
+        fit_core_and_tail(["a"] * 30)
+
+
+@cache
+def _sharp_core_run() -> tuple[np.ndarray, list[Frame], GroundTruth]:
+    """A simulated run (all around, 0.5 clutter per frame) whose landmarks' bearings have
+    errors of 60 % at 0.3 deg and 40 % at 1.2 deg, and an offset of 0.4 deg."""
+    import math
+
+    import omniloc
+    from omniloc.track import simulate_run
+
+    room = omniloc.demo_room()
+    sensor = omniloc.SensorModel(sigma=1e-6, p_detect=0.7, clutter=0.5)
+    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=300.0, rng=2)
+    rng = np.random.default_rng(5)
+    frames = []
+    for f in run.frames:
+        landmark = np.array([k is not None for k in f.truth or ()], dtype=bool)
+        noise = _mixture(f.bearings.size, 0.6, 0.3, 1.2, seed=int(rng.integers(2**31)))
+        frames.append(Frame(f.t, f.bearings + landmark * (noise + math.radians(0.4))))
+    return room.xy, frames, run.truth
+
+
+def test_a_sensor_with_a_sharp_core_gives_it_back_as_the_tracker_settings() -> None:
+    import math
+
+    from omniloc.track import estimate_frame_sensor, preset, with_settings
+
+    landmarks_xy, frames, truth = _sharp_core_run()
+    fit = estimate_frame_sensor(landmarks_xy, frames, truth)
+    assert fit.matched > 2000
+    # The 3 deg gate cuts the tail a little and lets in some clutter.
+    assert fit.core_share == pytest.approx(0.6, abs=0.08)
+    assert fit.core_sigma == pytest.approx(math.radians(0.3), rel=0.1)
+    assert fit.tail_sigma == pytest.approx(math.radians(1.2), rel=0.15)
+    assert fit.core_sigma < fit.sigma < fit.tail_sigma
+    assert set(fit.settings()) == {"sigma", "p_detect", "clutter", "turn_noise_s"}
+    mixture = fit.mixture_settings()
+    assert mixture == {
+        "sigma": fit.tail_sigma,
+        "core_share": fit.core_share,
+        "core_sigma": fit.core_sigma,
+        "p_detect": fit.p_detect,
+        "clutter": fit.clutter,
+        "turn_noise_s": fit.turn_noise_s,
+    }
+    s, _, c = with_settings(*preset("mrclam"), mixture)
+    assert (s.sigma, c.core_share, c.core_sigma) == (
+        fit.tail_sigma,
+        fit.core_share,
+        fit.core_sigma,
+    )

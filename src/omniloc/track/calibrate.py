@@ -24,7 +24,10 @@ were fitted by hand before this existed; ``docs/tracking.md`` compares the two).
 and the truth (no landmark ids needed): each bearing is taken as the landmark whose bearing
 from the true pose is nearest, within a gate; then the noise (robust spread of those
 errors), how it grows with the turn rate (:func:`turn_noise_fit`), the detection probability
-of a landmark plainly in view, and the clutter per frame.
+of a landmark plainly in view, and the clutter per frame; and the errors as a sharp core and a
+wider tail (:func:`fit_core_and_tail`: two zero-mean Gaussians by EM, kept only where the
+likelihood's gain pays for the two extra parameters), the tracker's ``core_share`` and
+``core_sigma``.
 """
 
 from __future__ import annotations
@@ -48,10 +51,12 @@ from .data import Frame, GroundTruth, Odometry
 from .motion import MotionModel, between, integrate
 
 __all__ = [
+    "CoreTailFit",
     "MotionFit",
     "SensorFit",
     "estimate_frame_sensor",
     "estimate_motion",
+    "fit_core_and_tail",
     "turn_noise_fit",
 ]
 
@@ -381,6 +386,151 @@ def turn_noise_fit(errors: ArrayLike, turn_rate: ArrayLike) -> dict[str, object]
     }
 
 
+#: Fewest finite errors :func:`fit_core_and_tail` fits (as :func:`estimate_frame_sensor`).
+MIN_ERRORS = 20
+#: Smallest sd (rad, 0.2 arcseconds) either Gaussian of :func:`fit_core_and_tail` may take:
+#: no camera is that sharp, and errors without spread (all equal) stay finite.
+SD_FLOOR = 1e-6
+#: The two sds of a mixture must differ by more than this factor, else one Gaussian.
+MIN_SD_RATIO = 1.2
+#: EM stops when the mean log-likelihood per error gains less than this (nats) ...
+EM_TOLERANCE = 1e-9
+#: ... or after this many iterations.
+EM_MAX_ITERATIONS = 1000
+
+
+@dataclass(frozen=True)
+class CoreTailFit:
+    """What :func:`fit_core_and_tail` found, in the tracker's terms.
+
+    Attributes
+    ----------
+    core_share : float
+        Share of the errors in the sharper Gaussian (``TrackerConfig.core_share``); 0 when
+        one Gaussian fits as well.
+    core_sigma : float
+        Its sd (rad; ``TrackerConfig.core_sigma``); 0 with no mixture.
+    tail_sigma : float
+        The wider Gaussian's sd (rad; the sensor's ``sigma`` under the mixture); with no
+        mixture, the one Gaussian's maximum-likelihood sd.
+    loglik_mixture, loglik_single : float
+        Log-likelihood (nats) of the errors under the mixture EM found (even when it was
+        not kept) and under the one Gaussian.
+    errors : int
+        Finite errors fitted.
+    iterations : int
+        EM iterations run (at most :data:`EM_MAX_ITERATIONS`).
+    """
+
+    core_share: float
+    core_sigma: float
+    tail_sigma: float
+    loglik_mixture: float
+    loglik_single: float
+    errors: int
+    iterations: int
+
+    @property
+    def gain(self) -> float:
+        """Twice the log-likelihood the mixture gains over one Gaussian (BIC asks more than
+        ``2 ln(errors)`` for its two extra parameters)."""
+        return 2.0 * (self.loglik_mixture - self.loglik_single)
+
+
+def _log_normal(x2: FloatArray, sd: float) -> FloatArray:
+    """Log density of zero-mean Gaussians of sd ``sd`` at errors whose squares are ``x2``."""
+    return np.asarray(-0.5 * x2 / sd**2 - math.log(sd) - 0.5 * math.log(2 * math.pi))
+
+
+def fit_core_and_tail(errors: ArrayLike) -> CoreTailFit:
+    """Fit bearing errors as a mixture of two zero-mean Gaussians -- a sharp core and a wider
+    tail -- by EM, and keep it only where it explains the errors better than one Gaussian.
+
+    The errors are centred on their median (a constant offset, the camera turned on the
+    robot, is not noise; as :attr:`SensorFit.sigma`); non-finite ones are left out, nothing
+    else (gate them first). EM starts from a share of 0.5 with sds of 0.5 and 2 times the
+    robust sd (1.4826 times the median absolute deviation) and runs until the mean
+    log-likelihood gains less than :data:`EM_TOLERANCE` per error (at most
+    :data:`EM_MAX_ITERATIONS` iterations); neither sd goes below :data:`SD_FLOOR`. The
+    mixture is kept when it pays for its two extra parameters by the Bayesian information
+    criterion, ``2 (loglik_mixture - loglik_single) > 2 ln(n)``, and its sds differ by more
+    than :data:`MIN_SD_RATIO`; else the result has ``core_share`` 0 and the one Gaussian's
+    maximum-likelihood sd as ``tail_sigma``.
+
+    Parameters
+    ----------
+    errors : array_like of float, shape (n,)
+        Bearing errors (rad), e.g. bearing minus the matched landmark's true bearing.
+
+    Returns
+    -------
+    CoreTailFit
+        ``core_share`` and ``core_sigma`` for :class:`~omniloc.track.TrackerConfig`,
+        ``tail_sigma`` for the sensor's ``sigma``.
+
+    Raises
+    ------
+    InputError
+        Fewer than :data:`MIN_ERRORS` finite errors. (Errors without spread are no error:
+        one Gaussian of sd :data:`SD_FLOOR`.)
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(1)
+    >>> e = np.r_[rng.normal(0, 0.005, 6000), rng.normal(0, 0.02, 4000)] + 0.01
+    >>> fit = fit_core_and_tail(e)
+    >>> abs(fit.core_share - 0.6) < 0.03, abs(fit.core_sigma / 0.005 - 1) < 0.05
+    (True, True)
+    >>> abs(fit.tail_sigma / 0.02 - 1) < 0.05, fit.gain > 2 * math.log(fit.errors)
+    (True, True)
+    >>> fit_core_and_tail(rng.normal(0, 0.01, 10000)).core_share
+    0.0
+    """
+    try:
+        e = np.asarray(errors, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"errors must be numbers (rad), got {shorten(errors)}") from None
+    e = e[np.isfinite(e)]
+    n = e.size
+    if n < MIN_ERRORS:
+        raise InputError(
+            f"only {n} finite bearing errors: too few to fit a core and a tail (at least "
+            f"{MIN_ERRORS})"
+        )
+    x2 = (e - np.median(e)) ** 2
+    single = max(math.sqrt(float(np.mean(x2))), SD_FLOOR)
+    loglik_single = float(np.sum(_log_normal(x2, single)))
+    robust = 1.4826 * float(np.median(np.sqrt(x2)))
+    scale = robust if robust > SD_FLOOR else single
+    share = 0.5
+    sd = [max(0.5 * scale, SD_FLOOR), max(2.0 * scale, SD_FLOOR)]
+    loglik = -math.inf
+    iterations = 0
+    while True:
+        a = math.log(share) + _log_normal(x2, sd[0])
+        b = math.log1p(-share) + _log_normal(x2, sd[1])
+        total = np.logaddexp(a, b)
+        new = float(np.sum(total))
+        if iterations >= EM_MAX_ITERATIONS or new - loglik < EM_TOLERANCE * n:
+            loglik = max(new, loglik)
+            break
+        loglik = new
+        iterations += 1
+        r = np.exp(a - total)  # each error's share in the first Gaussian
+        w = (float(np.sum(r)), float(np.sum(1.0 - r)))
+        # A Gaussian left without errors keeps its sd (its share goes to 0).
+        share = min(max(w[0] / n, 1e-12), 1.0 - 1e-12)
+        for k, (weights, mass) in enumerate(((r, w[0]), (1.0 - r, w[1]))):
+            if mass > 0:
+                sd[k] = max(math.sqrt(float(np.sum(weights * x2)) / mass), SD_FLOOR)
+    core, tail = (0, 1) if sd[0] <= sd[1] else (1, 0)
+    core_share = share if core == 0 else 1.0 - share
+    keep = 2.0 * (loglik - loglik_single) > 2.0 * math.log(n) and sd[tail] > MIN_SD_RATIO * sd[core]
+    if not keep:
+        return CoreTailFit(0.0, 0.0, single, loglik, loglik_single, n, iterations)
+    return CoreTailFit(core_share, sd[core], sd[tail], loglik, loglik_single, n, iterations)
+
+
 @dataclass(frozen=True)
 class SensorFit:
     """What :func:`estimate_frame_sensor` found.
@@ -412,6 +562,14 @@ class SensorFit:
         among the tracker's :meth:`settings`.
     frames, matched, bearings : int
         Frames with a true pose, bearings taken as landmarks, all their bearings.
+    core_share, core_sigma, tail_sigma : float
+        The same errors as a sharp core and a wider tail (:func:`fit_core_and_tail`): the
+        share of the errors in the sharper of two zero-mean Gaussians, its sd (rad) and the
+        wider one's sd (rad) -- the tracker's ``core_share``, ``core_sigma`` and the sensor's
+        ``sigma`` under :meth:`mixture_settings`. ``core_share`` 0 (and ``core_sigma`` 0)
+        where one Gaussian fits as well (the simulator's noise); ``tail_sigma`` is then that
+        Gaussian's maximum-likelihood sd, larger than :attr:`sigma` where the errors have a
+        tail. Not among the tracker's :meth:`settings`.
     """
 
     sigma: float
@@ -422,11 +580,30 @@ class SensorFit:
     matched: int
     bearings: int
     clutter_by_detections: tuple[float, ...] = ()
+    core_share: float = 0.0
+    core_sigma: float = 0.0
+    tail_sigma: float = 0.0
 
     def settings(self) -> dict[str, float]:
         """As settings for :func:`~omniloc.track.with_settings` (``omniloc track --config``)."""
         return {
             "sigma": self.sigma,
+            "p_detect": self.p_detect,
+            "clutter": self.clutter,
+            "turn_noise_s": self.turn_noise_s,
+        }
+
+    def mixture_settings(self) -> dict[str, float]:
+        """As :meth:`settings`, with the bearing errors as a sharp core and a wider tail: the
+        tail's sd as ``sigma``, and ``core_share`` and ``core_sigma``. Where no core was found
+        (``core_share`` 0), :meth:`settings` and ``core_share`` 0 (the preset's mixture off).
+        """
+        if not self.core_share > 0:
+            return {**self.settings(), "core_share": 0.0}
+        return {
+            "sigma": self.tail_sigma,
+            "core_share": self.core_share,
+            "core_sigma": self.core_sigma,
             "p_detect": self.p_detect,
             "clutter": self.clutter,
             "turn_noise_s": self.turn_noise_s,
@@ -445,7 +622,8 @@ def estimate_frame_sensor(
 ) -> SensorFit:
     """Fit the bearing sensor's noise, its growth with the turn rate, the detection
     probability and the clutter from frames of bearings and a ground-truth track (see the
-    module's documentation).
+    module's documentation), and the same errors as a sharp core and a wider tail
+    (:func:`fit_core_and_tail`).
 
     Parameters
     ----------
@@ -545,6 +723,7 @@ def estimate_frame_sensor(
     sigma = 1.4826 * float(np.median(np.abs(err - np.median(err))))
     turn = turn_noise_fit(err, np.array(rates))
     tn = float(turn["turn_noise_s"])  # type: ignore[arg-type]
+    mix = fit_core_and_tail(err)
     return SensorFit(
         sigma=sigma,
         turn_noise_s=tn if math.isfinite(tn) else 0.0,
@@ -554,4 +733,7 @@ def estimate_frame_sensor(
         matched=len(errors),
         bearings=total,
         clutter_by_detections=clutter_by_detections(*np.array(per_frame).reshape(-1, 2).T),
+        core_share=mix.core_share,
+        core_sigma=mix.core_sigma,
+        tail_sigma=mix.tail_sigma,
     )
