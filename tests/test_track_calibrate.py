@@ -185,6 +185,35 @@ def test_a_simulated_sensor_gives_back_its_noise_detection_and_clutter() -> None
         estimate_frame_sensor(room, "frames.csv", run.truth)  # type: ignore[arg-type]
 
 
+def _write_recording(
+    folder: Path, landmarks_xy: np.ndarray, frames: list[Frame], truth: GroundTruth
+) -> tuple[Path, Path, Path]:
+    """The map, the frames and the true track as fit-sensor's CSV files in ``folder``."""
+    lm = folder / "map.csv"
+    lm.write_text(
+        "id,x,y\n" + "".join(f"{k},{x!r},{y!r}\n" for k, (x, y) in enumerate(landmarks_xy.tolist()))
+    )
+    fr = folder / "frames.csv"
+    fr.write_text(
+        "t,bearing\n" + "".join(f"{f.t!r},{b!r}\n" for f in frames for b in f.bearings.tolist())
+    )
+    gt = folder / "gt.csv"
+    gt.write_text(
+        "t,x,y,theta\n"
+        + "".join(
+            f"{a!r},{b!r},{c!r},{d!r}\n"
+            for a, b, c, d in zip(
+                truth.t.tolist(),
+                truth.x.tolist(),
+                truth.y.tolist(),
+                truth.theta.tolist(),
+                strict=True,
+            )
+        )
+    )
+    return lm, fr, gt
+
+
 def test_fit_sensor_on_the_command_line_writes_settings_for_track(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -197,25 +226,7 @@ def test_fit_sensor_on_the_command_line_writes_settings_for_track(
     room = omniloc.demo_room()
     sensor = omniloc.SensorModel(sigma=math.radians(0.5), p_detect=0.8, clutter=0.3)
     run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=60.0, rng=3)
-    lm = tmp_path / "map.csv"
-    lm.write_text(
-        "id,x,y\n" + "".join(f"{k},{x!r},{y!r}\n" for k, (x, y) in enumerate(room.xy.tolist()))
-    )
-    fr = tmp_path / "frames.csv"
-    fr.write_text(
-        "t,bearing\n" + "".join(f"{f.t!r},{b!r}\n" for f in run.frames for b in f.bearings.tolist())
-    )
-    gt = tmp_path / "gt.csv"
-    tr = run.truth
-    gt.write_text(
-        "t,x,y,theta\n"
-        + "".join(
-            f"{a!r},{b!r},{c!r},{d!r}\n"
-            for a, b, c, d in zip(
-                tr.t.tolist(), tr.x.tolist(), tr.y.tolist(), tr.theta.tolist(), strict=True
-            )
-        )
-    )
+    lm, fr, gt = _write_recording(tmp_path, room.xy, run.frames, run.truth)
     out = tmp_path / "sensor.json"
     argv = ["fit-sensor", "--map", str(lm), "--frames", str(fr), "--groundtruth", str(gt)]
     assert main([*argv, "--out", str(out)]) == 0
@@ -228,6 +239,16 @@ def test_fit_sensor_on_the_command_line_writes_settings_for_track(
     assert "clutter_by_detections" not in load_settings(out)
     s, _, c = with_settings(*preset("generic"), load_settings(out))
     assert s.p_detect == pytest.approx(0.8, abs=0.07) and c.turn_noise_s >= 0.0
+    # One Gaussian fits these errors: said so, and --mixture writes the same with the
+    # preset's core off.
+    assert "  core and tail  one Gaussian fits as well (no sharp core)" in text.splitlines()
+    single = load_settings(out)
+    assert set(single) == {"sigma", "p_detect", "clutter", "turn_noise_s"}
+    assert main([*argv, "--mixture", "--out", str(out)]) == 0
+    capsys.readouterr()
+    assert load_settings(out) == {**single, "core_share": 0.0}
+    _, _, c = with_settings(*preset("mrclam"), load_settings(out))
+    assert c.core_share == 0.0
     # A truth of another time: one line, status 1.
     gt.write_text("t,x,y,theta\n1e6,0,0,0\n1000001,0,0,0\n")
     assert main(argv) == 1
@@ -371,3 +392,40 @@ def test_a_sensor_with_a_sharp_core_gives_it_back_as_the_tracker_settings() -> N
         fit.core_share,
         fit.core_sigma,
     )
+
+
+def test_fit_sensor_on_the_command_line_prints_and_writes_a_sharp_core(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import math
+    import re
+
+    from omniloc.cli import main
+    from omniloc.track import load_settings, preset, with_settings
+
+    lm, fr, gt = _write_recording(tmp_path, *_sharp_core_run())
+    out = tmp_path / "sensor.json"
+    argv = ["fit-sensor", "--map", str(lm), "--frames", str(fr), "--groundtruth", str(gt)]
+    assert main([*argv, "--mixture", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    line = next(x for x in text.splitlines() if x.startswith("  core and tail  "))
+    m = re.fullmatch(
+        r"  core and tail  (\d+) % at ([\d.]+) deg, (\d+) % at ([\d.]+) deg \(EM; omniloc track "
+        r"--set core_share=([\d.]+) --set core_sigma=([\d.]+) --set sigma=([\d.]+)\)",
+        line,
+    )
+    assert m is not None, line
+    core, core_deg, tail, tail_deg = (float(v) for v in m.group(1, 2, 3, 4))
+    assert core + tail == 100 and abs(core - 60) <= 8
+    assert core_deg == pytest.approx(0.3, abs=0.03) and tail_deg == pytest.approx(1.2, rel=0.15)
+    settings = load_settings(out)
+    assert set(settings) == {
+        "sigma", "core_share", "core_sigma", "p_detect", "clutter", "turn_noise_s"
+    }  # fmt: skip
+    # The --set values printed are the file's, rounded.
+    assert float(m.group(5)) == pytest.approx(settings["core_share"], abs=0.005)
+    assert float(m.group(6)) == pytest.approx(settings["core_sigma"], abs=5e-5)
+    assert float(m.group(7)) == pytest.approx(settings["sigma"], abs=5e-5)
+    s, _, c = with_settings(*preset("mrclam"), settings)
+    assert c.core_sigma == pytest.approx(math.radians(core_deg), abs=1e-4)
+    assert s.sigma == settings["sigma"] and c.core_share == settings["core_share"]

@@ -282,6 +282,14 @@ def _build_parser() -> argparse.ArgumentParser:
     fs.add_argument(
         "--gate", type=_positive, default=3.0, help="a bearing within this of a landmark, deg"
     )
+    fs.add_argument(
+        "--mixture",
+        action="store_true",
+        help="--out writes the errors as a sharp core and a wider tail (sigma, core_share, "
+        "core_sigma) instead of one robust sigma. On MRCLAM the mixture localizes more frames "
+        "but is wrong more often on robot 1: core_share 0.2 gave 1,352 localized frames with "
+        "16 wrong against the preset's 872 and 3 (robot 1 wrong in 1.0 %% of its frames)",
+    )
     _add_settings_out(fs)
     return parser
 
@@ -890,8 +898,18 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
         f"  by landmarks reported (1, 2, ...): {table} (single frames, where clutter comes "
         f"with the landmarks: omniloc localize --clutter-by-detections {table})"
     )
+    if fit.core_share > 0:
+        print(
+            f"  core and tail  {100 * fit.core_share:.0f} % at {np.rad2deg(fit.core_sigma):.2f} "
+            f"deg, {100 * (1 - fit.core_share):.0f} % at {np.rad2deg(fit.tail_sigma):.2f} deg "
+            f"(EM; omniloc track --set core_share={fit.core_share:.2f} "
+            f"--set core_sigma={fit.core_sigma:.4f} --set sigma={fit.tail_sigma:.4f})"
+        )
+    else:
+        print("  core and tail  one Gaussian fits as well (no sharp core)")
     if args.out is not None:
-        write_text(args.out, json.dumps(fit.settings(), indent=1) + "\n", InputError)
+        settings = fit.mixture_settings() if args.mixture else fit.settings()
+        write_text(args.out, json.dumps(settings, indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")
     return 0
 
