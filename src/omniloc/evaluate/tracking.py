@@ -47,7 +47,7 @@ from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from ..angles import wrap
 from ..errors import InputError
@@ -93,8 +93,8 @@ WEIGHT_BINS = 10
 #: The 50 % and 99 % quantiles of the chi-square distribution with 3 degrees of freedom:
 #: the normalised estimation error squared of a pose (x, y, theta) under a consistent
 #: covariance is below them in 50 % and 99 % of the frames.
-CHI2_3DOF_50 = float(chi2.ppf(0.5, 3))
-CHI2_3DOF_99 = float(chi2.ppf(0.99, 3))
+CHI2_3DOF_50 = float(2.0 * gammaincinv(1.5, 0.5))  # chi-square(3) quantiles
+CHI2_3DOF_99 = float(2.0 * gammaincinv(1.5, 0.99))
 
 
 class LocalizerOverTime(Protocol):

@@ -48,7 +48,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from .._kernels import evidence as _evidence
 from .._kernels import geometry as geo
@@ -94,7 +94,7 @@ SAME_POSE_CHI2 = 1.0
 #: 99.99 %, 3 degrees of freedom). A bearing given to either of two landmarks on nearly one ray
 #: gives two such poses a few centimetres apart: one answer, not an ambiguity.
 SAME_PLACE = (0.1, float(np.deg2rad(1.0)))
-SAME_PLACE_CHI2 = float(chi2.ppf(0.9999, 3))
+SAME_PLACE_CHI2 = float(2.0 * gammaincinv(1.5, 0.9999))  # chi-square(3) quantile
 
 #: ``ambiguous`` unless the best solution holds at least this share of the posterior.
 DECISIVE = 0.95

@@ -40,7 +40,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
-from scipy.stats import chi2
+from scipy.special import gammaincinv
 
 from ..angles import wrap
 from ..errors import InputError
@@ -319,7 +319,7 @@ def estimate_motion(
     logp = fit(use, np.log(np.full(len(NOISE_FIELDS), 1e-3)))
     S = np.einsum("p,npij->nij", np.exp(logp), Qp) + floor
     q = np.einsum("ni,ni->n", r, np.linalg.solve(S, r[:, :, None])[:, :, 0])
-    use = q <= chi2.ppf(0.999, 3)
+    use = q <= 2.0 * gammaincinv(1.5, 0.999)  # the chi-square(3) quantile
     logp = fit(use, logp)
     noise = {f: float(v) for f, v in zip(NOISE_FIELDS, np.exp(logp), strict=True)}
     # Values the likelihood cannot tell from zero come out as tiny ones: call them zero.
