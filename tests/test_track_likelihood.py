@@ -346,3 +346,40 @@ def test_a_sharp_core_rewards_a_precise_fit_more_than_one_wide_gaussian() -> Non
     assert lm[1] == pytest.approx(ratio(e1, mixed), rel=1e-9)
     assert lp[0] - lp[1] == pytest.approx(ratio(e0, plain) - ratio(e1, plain), rel=1e-9)
     assert lm[0] - lm[1] > 1.5 > 2 * (lp[0] - lp[1])
+
+
+def test_a_core_that_only_weighs_leaves_the_update_to_the_tail() -> None:
+    # One landmark in view, a bearing 0.1 deg off: with core_update False the frame's ratio
+    # is the mixture's (as with the core in the update), but the pose moves and its
+    # covariance shrinks as with the tail's variance alone; with the core in the update the
+    # covariance shrinks more.
+    L = np.array([[4.0, 1.0]])
+    mu = np.array([[0.0, 0.0, 0.2]])
+    P = np.diag([1e-4, 1e-4, 1e-5])[None]
+    z = np.array([_bearing(mu[0], L[0]) + np.deg2rad(0.1)])
+    plain = dataclasses.replace(_model(), log_kappa=math.log(1e-9))  # no clutter to speak of
+    sharp = dataclasses.replace(plain, core_share=0.57, core_sigma2=np.deg2rad(0.33) ** 2)
+    weighs = dataclasses.replace(sharp, core_update=False)
+    mu_p, P_p, lr_p = frame_update(mu, P, z, L, plain)[:3]
+    _, P_s, lr_s = frame_update(mu, P, z, L, sharp)[:3]
+    mu_w, P_w, lr_w = frame_update(mu, P, z, L, weighs)[:3]
+    np.testing.assert_allclose(lr_w, lr_s, rtol=1e-12)
+    assert abs(lr_w[0] - lr_p[0]) > 0.3  # the weights are the mixture's, not the tail's
+    np.testing.assert_allclose(mu_w, mu_p, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(P_w, P_p, rtol=1e-6, atol=1e-12)
+    # The sharp update pins the landmark's bearing harder: its predicted variance after it.
+    d = L[0] - mu[0, :2]
+    J = np.array([d[1], -d[0], -(d @ d)]) / (d @ d)
+    assert J @ P_s[0] @ J < 0.85 * (J @ P_w[0] @ J)
+
+
+def test_core_update_is_a_boolean_setting() -> None:
+    from omniloc.errors import InputError
+    from omniloc.track import TrackerConfig, preset, with_settings
+
+    _, _, c = with_settings(*preset("mrclam"), {"core_share": 0.2, "core_update": False})
+    assert c.core_update is False and c.core_share == 0.2
+    assert TrackerConfig().core_update is True
+    for bad in (0, 1.0, "false", None):
+        with pytest.raises(InputError, match="core_update must be true or false"):
+            TrackerConfig(core_update=bad)  # type: ignore[arg-type]

@@ -166,6 +166,7 @@ def frame_update_kernel(
     fresh: float,
     core_share: float,
     core_sigma2: float,
+    core_update: bool,
     obj_b: FloatArray,
     obj_w: FloatArray,
     obj_var: float,
@@ -187,8 +188,9 @@ def frame_update_kernel(
     A bearing's error is Gaussian with variance ``sigma2`` or, with ``core_share`` > 0, the
     mixture ``(1 - core_share) N(0, sigma2) + core_share N(0, core_sigma2)`` (a camera whose
     errors have a sharp core and a heavier tail); each landmark's reading is then two, one
-    per component, each moving the pose by its own Kalman gain. ``core_share`` 0: exactly the
-    single Gaussian."""
+    per component, each moving the pose by its own Kalman gain (``core_update`` True) or
+    both together by the gain of variance ``sigma2`` (False: the core weighs, the update is
+    the tail's). ``core_share`` 0: exactly the single Gaussian."""
     mu = mu.copy()
     P = P.copy()
     H = mu.shape[0]
@@ -211,7 +213,7 @@ def frame_update_kernel(
     ac = np.zeros(N)
     nu = np.empty(N)
     wide = 1.0 - core_share
-    components = 2 if core_share > 0.0 else 1
+    components = 2 if core_share > 0.0 and core_update else 1
     PJ = np.empty(3)
     mean = np.empty(3)
     M = np.empty((3, 3))
@@ -275,7 +277,7 @@ def frame_update_kernel(
             for n in range(N):
                 for comp in range(components):
                     if comp == 0:
-                        b = a[n] / total
+                        b = (a[n] if components == 2 else a[n] + ac[n]) / total
                         S = var[n] + sigma2
                     else:
                         b = ac[n] / total

@@ -123,6 +123,10 @@ class FrameModel:
     core_share, core_sigma2 : float
         A bearing's error is ``(1 - core_share) N(0, sigma2) + core_share N(0,
         core_sigma2)`` (0: the single Gaussian).
+    core_update : bool
+        With a sharp core: its readings move the pose by their own Kalman gain (True) or
+        only weigh it, the update taking a landmark's two readings together with the
+        variance ``sigma2`` (False).
     """
 
     sigma2: float
@@ -135,6 +139,7 @@ class FrameModel:
     object_var: float = 0.0
     core_share: float = 0.0
     core_sigma2: float = 0.0
+    core_update: bool = True
 
     @classmethod
     def of(cls, sensor: SensorModel, *, p_detect: float = 0.5, clutter: float = 0.5) -> FrameModel:
@@ -276,6 +281,7 @@ def _kernel(
         model.fresh,
         model.core_share,
         model.core_sigma2,
+        model.core_update,
         ob,
     )
     var = model.object_var if ob.size else 1.0

@@ -110,6 +110,7 @@ _PROBABILITIES = {
     "elsewhere_inject",
 }
 _SHARES = {"fit_explained", "core_share"}
+_BOOLS = {"core_update"}
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
 VALUE_MAX = 1e6
@@ -229,7 +230,15 @@ class TrackerConfig:
         bearings has the error sd ``core_sigma`` (radians), the rest the sensor's sigma
         (the mixture of two Gaussians, in every hypothesis, replay and particle). MRCLAM's
         errors at the true poses fit 57 % at 0.33 deg and 43 % at 1.03 deg (15,000
-        bearings, two components by EM). 0 (default): the sensor's sigma alone.
+        bearings, two components by EM; ``omniloc fit-sensor`` fits them). 0 (default): the
+        sensor's sigma alone.
+    core_update : bool
+        With a sharp core: whether its reading also moves each hypothesis by its own, sharper
+        Kalman gain (True, the default: the mixture in the update as in the weights) or only
+        weighs the hypotheses, the update taking both readings of a landmark together with
+        the tail's variance (False: the hypotheses' covariances shrink no faster than with
+        the sensor's sigma alone). MRCLAM's bearing errors repeat from frame to frame, and a
+        sharp update there leaves covariances too small (docs/tracking.md).
     covariance_inflation : float
         Factor (>= 1) on the covariances the tracker reports and decides ``localized`` by (the
         probability of being within the tolerances), not on its filters' own: for data
@@ -311,6 +320,7 @@ class TrackerConfig:
     turn_noise_s: float = 0.0
     core_share: float = 0.0
     core_sigma: float = float(np.deg2rad(0.33))
+    core_update: bool = True
     covariance_inflation: float = 1.0
     search_miss: float | None = None
     replay_s: float = 4.0
@@ -337,6 +347,11 @@ class TrackerConfig:
                 if not 0.0 < miss < 1.0:
                     raise InputError(f"search_miss must lie strictly between 0 and 1, got {v!r}")
                 object.__setattr__(self, f.name, miss)
+                continue
+            if f.name in _BOOLS:
+                if not isinstance(v, (bool, np.bool_)):
+                    raise InputError(f"{f.name} must be true or false, got {shorten(v)}")
+                object.__setattr__(self, f.name, bool(v))
                 continue
             if f.name == "region":
                 if v is None:
@@ -511,7 +526,12 @@ class Tracker:
         self._L = np.ascontiguousarray(self.landmarks.xy, dtype=np.float64)
         self._model = FrameModel.of(self.sensor)
         if c.core_share > 0:
-            self._model = replace(self._model, core_share=c.core_share, core_sigma2=c.core_sigma**2)
+            self._model = replace(
+                self._model,
+                core_share=c.core_share,
+                core_sigma2=c.core_sigma**2,
+                core_update=c.core_update,
+            )
         if c.clutter_persistence > 0:
             self._model = replace(
                 self._model,
