@@ -429,3 +429,73 @@ def test_fit_sensor_on_the_command_line_prints_and_writes_a_sharp_core(
     s, _, c = with_settings(*preset("mrclam"), settings)
     assert c.core_sigma == pytest.approx(math.radians(core_deg), abs=1e-4)
     assert s.sigma == settings["sigma"] and c.core_share == settings["core_share"]
+
+
+def test_several_recordings_are_fitted_together() -> None:
+    # Two runs of one sensor over the same clock: each frame is scored against its own
+    # run's truth, and the counts add up.
+    import math
+
+    import omniloc
+    from omniloc.track import estimate_frame_sensor, simulate_run
+
+    room = omniloc.demo_room()
+    sensor = omniloc.SensorModel(
+        sigma=math.radians(0.5), fov=math.radians(120.0), p_detect=0.7, clutter=0.5
+    )
+    runs = [
+        simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=60.0, rng=5),
+        simulate_run(room, sensor, omniloc.Pose(2.0, 4.0, -1.0), duration_s=90.0, rng=6),
+    ]
+    fov = math.radians(120.0)
+    a, b = (estimate_frame_sensor(room, r.frames, r.truth, fov=fov) for r in runs)
+    both = estimate_frame_sensor(room, [r.frames for r in runs], [r.truth for r in runs], fov=fov)
+    assert (both.frames, both.matched, both.bearings) == (
+        a.frames + b.frames,
+        a.matched + b.matched,
+        a.bearings + b.bearings,
+    )
+    assert both.clutter == pytest.approx(
+        (a.clutter * a.frames + b.clutter * b.frames) / (a.frames + b.frames), rel=1e-12
+    )
+    assert min(a.p_detect, b.p_detect) <= both.p_detect <= max(a.p_detect, b.p_detect)
+    # The first run's frames scored against the second run's truth are a different fit.
+    crossed = estimate_frame_sensor(
+        room, [runs[0].frames, runs[1].frames], [runs[1].truth, runs[1].truth], fov=fov
+    )
+    assert crossed.matched < both.matched
+    with pytest.raises(InputError, match="as many"):
+        estimate_frame_sensor(room, runs[0].frames, [r.truth for r in runs])
+    with pytest.raises(InputError, match="recording 2"):
+        estimate_frame_sensor(room, [runs[0].frames, "x"], [r.truth for r in runs])
+    with pytest.raises(InputError, match="empty"):
+        estimate_frame_sensor(room, [], [])
+    with pytest.raises(InputError, match="GroundTruth or a list"):
+        estimate_frame_sensor(room, runs[0].frames, "gt.csv")  # type: ignore[arg-type]
+
+
+def test_fit_sensor_fits_several_runs_on_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import math
+
+    import omniloc
+    from omniloc.cli import main
+    from omniloc.track import simulate_run
+
+    room = omniloc.demo_room()
+    sensor = omniloc.SensorModel(sigma=math.radians(0.5), p_detect=0.8, clutter=0.3)
+    argv = ["fit-sensor"]
+    total = 0
+    for k, seed in enumerate((3, 4)):
+        run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=30.0, rng=seed)
+        folder = tmp_path / f"run{k}"
+        folder.mkdir()
+        lm, fr, gt = _write_recording(folder, room.xy, run.frames, run.truth)
+        argv += ["--map", str(lm)] if k == 0 else []
+        argv += ["--frames", str(fr), "--groundtruth", str(gt)]
+        total += len(run.frames)
+    assert main(argv) == 0
+    assert capsys.readouterr().out.startswith(f"{total} frames with a true pose")
+    assert main(argv[:-2]) == 1  # two frames files, one track
+    assert "2 --frames and 1 --groundtruth" in capsys.readouterr().err

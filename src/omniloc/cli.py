@@ -271,10 +271,16 @@ def _build_parser() -> argparse.ArgumentParser:
         "--frames",
         required=True,
         type=Path,
-        help="frames: CSV t,bearing or MRCLAM robotR_frames.csv (landmark ids not used)",
+        action="append",
+        help="frames: CSV t,bearing or MRCLAM robotR_frames.csv (landmark ids not used); "
+        "repeat it with --groundtruth to fit several runs of one sensor together",
     )
     fs.add_argument(
-        "--groundtruth", required=True, type=Path, help="true track of the same run: t,x,y,theta"
+        "--groundtruth",
+        required=True,
+        type=Path,
+        action="append",
+        help="true track of the same run: t,x,y,theta (one per --frames, in their order)",
     )
     fs.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
     fs.add_argument("--fov", type=_fov_deg, help="full field of view, deg (default: all around)")
@@ -875,10 +881,17 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
     from .maps import LandmarkMap
     from .track import estimate_frame_sensor, load_frames, load_groundtruth
 
+    if len(args.frames) != len(args.groundtruth):
+        raise InputError(
+            f"{len(args.frames)} --frames and {len(args.groundtruth)} --groundtruth: give one "
+            "ground-truth track per frames file, in the same order"
+        )
+    frames = [load_frames(path, degrees=args.degrees) for path in args.frames]
+    truths = [load_groundtruth(path) for path in args.groundtruth]
     fit = estimate_frame_sensor(
         LandmarkMap.load(args.map),
-        load_frames(args.frames, degrees=args.degrees),
-        load_groundtruth(args.groundtruth),
+        frames[0] if len(frames) == 1 else frames,
+        truths[0] if len(truths) == 1 else truths,
         fov=None if args.fov is None else float(np.deg2rad(args.fov)),
         max_range=args.max_range,
         gate=float(np.deg2rad(args.gate)),

@@ -610,10 +610,47 @@ class SensorFit:
         }
 
 
+def _frame_list(frames: object, what: str) -> list[Frame]:
+    """``frames`` as a list of Frame, or an InputError naming ``what``."""
+    items: list[object]
+    try:
+        items = [frames] if isinstance(frames, (str, bytes)) else list(frames)  # type: ignore[call-overload]
+    except TypeError:
+        items = [frames]
+    if not all(isinstance(f, Frame) for f in items):
+        raise InputError(f"{what} must be a sequence of Frame (see omniloc.track.load_frames)")
+    return [f for f in items if isinstance(f, Frame)]
+
+
+def _recordings(
+    frames: Sequence[Frame] | Sequence[Sequence[Frame]],
+    truth: GroundTruth | Sequence[GroundTruth],
+) -> list[tuple[list[Frame], GroundTruth]]:
+    """One recording (frames, truth) or several, as a list of pairs."""
+    if isinstance(truth, GroundTruth):
+        return [(_frame_list(frames, "frames"), truth)]
+    if not isinstance(truth, (list, tuple)) or not all(isinstance(g, GroundTruth) for g in truth):
+        raise InputError(
+            f"truth must be a GroundTruth or a list of them (one per recording), got "
+            f"{type(truth).__name__}"
+        )
+    if not isinstance(frames, (list, tuple)) or len(frames) != len(truth):
+        raise InputError(
+            f"with {len(truth)} ground-truth tracks, frames must be a list of as many "
+            "recordings' frames (each a sequence of Frame)"
+        )
+    if not truth:
+        raise InputError("no recording given: truth is an empty list")
+    return [
+        (_frame_list(f, f"frames of recording {i + 1}"), g)
+        for i, (f, g) in enumerate(zip(frames, truth, strict=True))
+    ]
+
+
 def estimate_frame_sensor(
     landmarks: LandmarkMap | ArrayLike,
-    frames: Sequence[Frame],
-    truth: GroundTruth,
+    frames: Sequence[Frame] | Sequence[Sequence[Frame]],
+    truth: GroundTruth | Sequence[GroundTruth],
     *,
     fov: float | None = None,
     max_range: float | None = None,
@@ -628,11 +665,13 @@ def estimate_frame_sensor(
     Parameters
     ----------
     landmarks : LandmarkMap or array_like, shape (N, 2)
-    frames : sequence of Frame
-        The recording's frames (their landmark ids, if any, are not used).
-    truth : GroundTruth
+    frames : sequence of Frame, or a list of them
+        The recording's frames (their landmark ids, if any, are not used); for several
+        recordings of one sensor fitted together, a list of each one's frames.
+    truth : GroundTruth, or a list of them
         The true track over (part of) the same time; frames outside it, or where it has a gap
-        longer than ``max_gap_s``, are left out.
+        longer than ``max_gap_s``, are left out. Several recordings: one track each, in the
+        order of ``frames``.
     fov : float, optional
         Full field of view (rad); None: all around.
     max_range : float, optional
@@ -650,16 +689,7 @@ def estimate_frame_sensor(
         Fewer than 20 bearings taken as landmarks, or an argument out of range.
     """
     lm = as_landmark_map(landmarks)
-    if not isinstance(truth, GroundTruth):
-        raise InputError(f"truth must be a GroundTruth, got {type(truth).__name__}")
-    items: list[object]
-    try:
-        items = [frames] if isinstance(frames, (str, bytes)) else list(frames)
-    except TypeError:
-        items = [frames]
-    if not all(isinstance(f, Frame) for f in items):
-        raise InputError("frames must be a sequence of Frame (see omniloc.track.load_frames)")
-    frames = [f for f in items if isinstance(f, Frame)]
+    pairs = _recordings(frames, truth)
     _positive("gate", gate, math.pi)
     _positive("max_gap_s", max_gap_s, MAX_STRETCH_S)
     if fov is not None:
@@ -668,15 +698,27 @@ def estimate_frame_sensor(
         _positive("max_range", max_range, 1e9)
     L = lm.xy
     half = None if fov is None else 0.5 * float(fov)
-    t = np.array([f.t for f in frames], dtype=np.float64)
-    poses, gaps = truth.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
-    before, _ = truth.at(t - 0.1) if t.size else (np.zeros((0, 3)), None)
-    after, _ = truth.at(t + 0.1) if t.size else (np.zeros((0, 3)), None)
+    # Each recording's frames with its own truth, then all of them as one.
+    every: list[Frame] = []
+    at: list[FloatArray] = []
+    gap_list: list[FloatArray] = []
+    at_before: list[FloatArray] = []
+    at_after: list[FloatArray] = []
+    for fr, tr in pairs:
+        t = np.array([f.t for f in fr], dtype=np.float64)
+        every += fr
+        p, g = tr.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
+        at.append(p)
+        gap_list.append(g)
+        at_before.append(tr.at(t - 0.1)[0] if t.size else np.zeros((0, 3)))
+        at_after.append(tr.at(t + 0.1)[0] if t.size else np.zeros((0, 3)))
+    poses, gaps = np.concatenate(at), np.concatenate(gap_list)
+    before, after = np.concatenate(at_before), np.concatenate(at_after)
     errors: list[float] = []
     rates: list[float] = []
     seen = visible = unmatched = used = total = 0
     per_frame: list[tuple[int, int]] = []  # (landmarks reported, clutter) of each frame used
-    for k, f in enumerate(frames):
+    for k, f in enumerate(every):
         x = poses[k]
         if not (np.isfinite(x).all() and gaps[k] <= max_gap_s):
             continue
