@@ -242,6 +242,7 @@ def test_fit_sensor_on_the_command_line_writes_settings_for_track(
     # One Gaussian fits these errors: said so, and --mixture writes the same with the
     # preset's core off.
     assert "  core and tail  one Gaussian fits as well (no sharp core)" in text.splitlines()
+    assert any(line.startswith("  by bearing    ") for line in text.splitlines())
     single = load_settings(out)
     assert set(single) == {"sigma", "p_detect", "clutter", "turn_noise_s"}
     assert main([*argv, "--mixture", "--out", str(out)]) == 0
@@ -499,3 +500,32 @@ def test_fit_sensor_fits_several_runs_on_the_command_line(
     assert capsys.readouterr().out.startswith(f"{total} frames with a true pose")
     assert main(argv[:-2]) == 1  # two frames files, one track
     assert "2 --frames and 1 --groundtruth" in capsys.readouterr().err
+
+
+def test_a_camera_whose_error_grows_with_the_bearing_shows_it_by_bearing() -> None:
+    # A 360-degree camera whose bearings read 1 % wide: the median error by bearing grows
+    # with the bearing (0.1 deg per 10 deg, 1.8 deg at the back: inside the 3-deg gate);
+    # the same run read as it is shows none.
+    import math
+
+    import omniloc
+    from omniloc.track import Frame, estimate_frame_sensor, simulate_run
+    from omniloc.track.calibrate import BIAS_BIN, bias_by_bearing
+
+    room = omniloc.demo_room()
+    sensor = omniloc.SensorModel(sigma=math.radians(0.3), p_detect=0.8, clutter=0.0)
+    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=300.0, rng=7)
+    plain = estimate_frame_sensor(room, run.frames, run.truth)
+    wide = [Frame(f.t, 1.01 * f.bearings) for f in run.frames]
+    fit = estimate_frame_sensor(room, wide, run.truth)
+    assert len(plain.bias_by_bearing) >= 10 and len(fit.bias_by_bearing) >= 10
+    assert max(abs(m) for _, _, m, _ in plain.bias_by_bearing) < math.radians(0.1)
+    centre = np.array([0.5 * (lo + hi) for lo, hi, _, _ in fit.bias_by_bearing])
+    median = np.array([m for _, _, m, _ in fit.bias_by_bearing])
+    slope = np.polyfit(centre, median, 1)[0]
+    assert slope == pytest.approx(0.01, abs=0.0015)
+    for lo, hi, _, n in fit.bias_by_bearing:
+        assert hi - lo == pytest.approx(BIAS_BIN) and n >= 20
+    with pytest.raises(InputError, match="one bearing per error"):
+        bias_by_bearing([0.1, 0.2], [0.0])
+    assert bias_by_bearing([], []) == ()

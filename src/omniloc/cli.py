@@ -921,6 +921,15 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
         )
     else:
         print("  core and tail  one Gaussian fits as well (no sharp core)")
+    if fit.bias_by_bearing:
+        bins = ", ".join(
+            f"{np.rad2deg(lo):+.0f}..{np.rad2deg(hi):+.0f} {np.rad2deg(m):+.2f}"
+            for lo, hi, m, _ in fit.bias_by_bearing
+        )
+        print(
+            f"  by bearing    {bins} deg (median error where the landmark was seen, around "
+            "the median: a pattern is a camera calibration off, which no setting takes in)"
+        )
     if args.out is not None:
         settings = fit.mixture_settings() if args.mixture else fit.settings()
         write_text(args.out, json.dumps(settings, indent=1) + "\n", InputError)

@@ -54,6 +54,7 @@ __all__ = [
     "CoreTailFit",
     "MotionFit",
     "SensorFit",
+    "bias_by_bearing",
     "estimate_frame_sensor",
     "estimate_motion",
     "fit_core_and_tail",
@@ -570,6 +571,12 @@ class SensorFit:
         where one Gaussian fits as well (the simulator's noise); ``tail_sigma`` is then that
         Gaussian's maximum-likelihood sd, larger than :attr:`sigma` where the errors have a
         tail. Not among the tracker's :meth:`settings`.
+    bias_by_bearing : tuple of (float, float, float, int)
+        The errors' median by where the landmark was in view (:func:`bias_by_bearing`:
+        bins of :data:`BIAS_BIN` from the forward axis, each ``(start, end, median, count)``,
+        radians), around the errors' median: a camera whose error depends on the bearing
+        (a lens or mirror calibration off) shows a pattern here that no setting of the
+        tracker's models, all independent of the bearing, can take in. Diagnostic only.
     """
 
     sigma: float
@@ -583,6 +590,7 @@ class SensorFit:
     core_share: float = 0.0
     core_sigma: float = 0.0
     tail_sigma: float = 0.0
+    bias_by_bearing: tuple[tuple[float, float, float, int], ...] = ()
 
     def settings(self) -> dict[str, float]:
         """As settings for :func:`~omniloc.track.with_settings` (``omniloc track --config``)."""
@@ -608,6 +616,50 @@ class SensorFit:
             "clutter": self.clutter,
             "turn_noise_s": self.turn_noise_s,
         }
+
+
+#: Width of the bins of :func:`bias_by_bearing` (10 deg) ...
+BIAS_BIN = math.radians(10.0)
+#: ... and the fewest errors a bin reports a median for.
+BIAS_MIN_COUNT = 20
+
+
+def bias_by_bearing(
+    bearings: ArrayLike, errors: ArrayLike
+) -> tuple[tuple[float, float, float, int], ...]:
+    """Median bearing error by where the landmark was seen: bins of :data:`BIAS_BIN` (the
+    first starting at 0, the forward axis, so that forward and the bins' edges are the same
+    for every camera), in order of bearing, each ``(start, end, median, count)`` in radians;
+    bins with fewer than :data:`BIAS_MIN_COUNT` errors are left out.
+
+    Examples
+    --------
+    >>> b = np.radians(np.r_[np.full(30, -5.0), np.full(30, 15.0)])
+    >>> e = np.radians(np.r_[np.full(30, 0.1), np.full(30, -0.4)])
+    >>> bins = bias_by_bearing(b, e)
+    >>> [(round(math.degrees(s)), round(math.degrees(m), 2), n) for s, _, m, n in bins]
+    [(-10, 0.1, 30), (10, -0.4, 30)]
+    """
+    b = np.asarray(bearings, dtype=np.float64).reshape(-1)
+    e = np.asarray(errors, dtype=np.float64).reshape(-1)
+    if b.shape != e.shape:
+        raise InputError(f"{b.size} bearings for {e.size} errors: one bearing per error")
+    keep = np.isfinite(b) & np.isfinite(e)
+    b, e = b[keep], e[keep]
+    k = np.floor(b / BIAS_BIN).astype(np.int64)
+    out = []
+    for i in np.unique(k):
+        m = k == i
+        if m.sum() >= BIAS_MIN_COUNT:
+            out.append(
+                (
+                    float(i * BIAS_BIN),
+                    float((i + 1) * BIAS_BIN),
+                    float(np.median(e[m])),
+                    int(m.sum()),
+                )
+            )
+    return tuple(out)
 
 
 def _frame_list(frames: object, what: str) -> list[Frame]:
@@ -716,6 +768,7 @@ def estimate_frame_sensor(
     before, after = np.concatenate(at_before), np.concatenate(at_after)
     errors: list[float] = []
     rates: list[float] = []
+    where: list[float] = []  # the bearing of each error
     seen = visible = unmatched = used = total = 0
     per_frame: list[tuple[int, int]] = []  # (landmarks reported, clutter) of each frame used
     for k, f in enumerate(every):
@@ -744,6 +797,7 @@ def estimate_frame_sensor(
                 taken[cand[j]] = True
                 errors.append(float(e[j]))
                 rates.append(rate)
+                where.append(float(b))
             else:
                 unmatched += 1
         per_frame.append((int(taken.sum()), unmatched - unmatched0))
@@ -778,4 +832,5 @@ def estimate_frame_sensor(
         core_share=mix.core_share,
         core_sigma=mix.core_sigma,
         tail_sigma=mix.tail_sigma,
+        bias_by_bearing=bias_by_bearing(np.array(where), err - np.median(err)),
     )
