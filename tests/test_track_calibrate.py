@@ -529,3 +529,5 @@ def test_a_camera_whose_error_grows_with_the_bearing_shows_it_by_bearing() -> No
     with pytest.raises(InputError, match="one bearing per error"):
         bias_by_bearing([0.1, 0.2], [0.0])
     assert bias_by_bearing([], []) == ()
+    with pytest.raises(InputError, match="must be numbers"):
+        bias_by_bearing(["a"], [0.0])

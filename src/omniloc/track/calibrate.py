@@ -640,8 +640,14 @@ def bias_by_bearing(
     >>> [(round(math.degrees(s)), round(math.degrees(m), 2), n) for s, _, m, n in bins]
     [(-10, 0.1, 30), (10, -0.4, 30)]
     """
-    b = np.asarray(bearings, dtype=np.float64).reshape(-1)
-    e = np.asarray(errors, dtype=np.float64).reshape(-1)
+    try:
+        b = np.asarray(bearings, dtype=np.float64).reshape(-1)
+        e = np.asarray(errors, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(
+            f"bearings and errors must be numbers (rad), got {shorten(bearings)} and "
+            f"{shorten(errors)}"
+        ) from None
     if b.shape != e.shape:
         raise InputError(f"{b.size} bearings for {e.size} errors: one bearing per error")
     keep = np.isfinite(b) & np.isfinite(e)
