@@ -531,3 +531,7 @@ def test_a_camera_whose_error_grows_with_the_bearing_shows_it_by_bearing() -> No
     assert bias_by_bearing([], []) == ()
     with pytest.raises(InputError, match="must be numbers"):
         bias_by_bearing(["a"], [0.0])
+    # Bearings are angles: 2 pi + 0.05 is 0.05; a huge one is wrapped too (to a bin of its
+    # own, too thin to report), a NaN left out, and neither warns.
+    far = bias_by_bearing(np.r_[np.full(20, 2 * math.pi + 0.05), 1e300, np.nan], np.zeros(22))
+    assert [(lo, n) for lo, _, _, n in far] == [(0.0, 20)]

@@ -629,8 +629,9 @@ def bias_by_bearing(
 ) -> tuple[tuple[float, float, float, int], ...]:
     """Median bearing error by where the landmark was seen: bins of :data:`BIAS_BIN` (the
     first starting at 0, the forward axis, so that forward and the bins' edges are the same
-    for every camera), in order of bearing, each ``(start, end, median, count)`` in radians;
-    bins with fewer than :data:`BIAS_MIN_COUNT` errors are left out.
+    for every camera; bearings wrapped to [-pi, pi), non-finite pairs left out), in order of
+    bearing, each ``(start, end, median, count)`` in radians; bins with fewer than
+    :data:`BIAS_MIN_COUNT` errors are left out.
 
     Examples
     --------
@@ -651,7 +652,7 @@ def bias_by_bearing(
     if b.shape != e.shape:
         raise InputError(f"{b.size} bearings for {e.size} errors: one bearing per error")
     keep = np.isfinite(b) & np.isfinite(e)
-    b, e = b[keep], e[keep]
+    b, e = np.asarray(wrap(b[keep]), dtype=np.float64), e[keep]
     k = np.floor(b / BIAS_BIN).astype(np.int64)
     out = []
     for i in np.unique(k):
