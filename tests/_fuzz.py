@@ -1458,6 +1458,7 @@ def _settings_targets() -> list[Target]:
         preset,
     )
     from omniloc.track import with_settings as ws
+    from omniloc.track.calibrate import bias_by_bearing, fit_core_and_tail
 
     fields = ("setting", "settings", "must", "sigma", "min_age_s", "region", "v_scale", "fov")
     t = np.arange(0.0, 60.0, 0.1)
@@ -1507,7 +1508,15 @@ def _settings_targets() -> list[Target]:
                     ("frames", "too few"),
                     (("None", None), ("a string", "frames.csv"), ("empty", []), ("ints", [1, 2])),
                 ),
-                "truth": Arg(("truth", "GroundTruth", "too few"), (("None", None), ("list", [1]))),
+                "truth": Arg(
+                    ("truth", "GroundTruth", "too few", "recording"),
+                    (
+                        ("None", None),
+                        ("list", [1]),
+                        ("two tracks", [still, still]),
+                        ("no tracks", []),
+                    ),
+                ),
                 "landmarks": Arg(("landmark", "map", "positions"), (("nan", [[float("nan"), 0]]),)),
                 **{
                     k: Arg(
@@ -1516,6 +1525,47 @@ def _settings_targets() -> list[Target]:
                     )
                     for k in ("fov", "max_range", "gate", "max_gap_s")
                 },
+            },
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "fit_core_and_tail",
+            lambda kw: fit_core_and_tail(**kw),
+            lambda: {"errors": np.linspace(-0.02, 0.02, 50)},
+            {
+                "errors": Arg(
+                    ("errors", "too few", "numbers"),
+                    (
+                        ("None", None),
+                        ("a string", "errors"),
+                        ("empty", []),
+                        ("nan", [float("nan")] * 30),
+                        ("equal", [0.01] * 30),
+                        ("1e300", [1e300] * 15 + [0.0] * 15),
+                        ("2-D", [[0.01, -0.01]] * 15),
+                        ("complex", [1j] * 30),
+                    ),
+                )
+            },
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "bias_by_bearing",
+            lambda kw: bias_by_bearing(**kw),
+            lambda: {"bearings": np.linspace(-1.0, 1.0, 60), "errors": np.zeros(60)},
+            {
+                k: Arg(
+                    ("bearing", "error", "numbers"),
+                    (
+                        ("None", None),
+                        ("a string", "x"),
+                        ("shorter", [0.1]),
+                        ("nan", [float("nan")] * 60),
+                        ("1e300", [1e300] * 60),
+                        ("2-D", np.zeros((30, 2))),
+                    ),
+                )
+                for k in ("bearings", "errors")
             },
             check=lambda kw, v: None,
         ),

@@ -447,9 +447,9 @@ def fit_core_and_tail(errors: ArrayLike) -> CoreTailFit:
     """Fit bearing errors as a mixture of two zero-mean Gaussians -- a sharp core and a wider
     tail -- by EM, and keep it only where it explains the errors better than one Gaussian.
 
-    The errors are centred on their median (a constant offset, the camera turned on the
-    robot, is not noise; as :attr:`SensorFit.sigma`); non-finite ones are left out, nothing
-    else (gate them first). EM starts from a share of 0.5 with sds of 0.5 and 2 times the
+    The errors are wrapped to [-pi, pi) and centred on their median (a constant offset, the
+    camera turned on the robot, is not noise; as :attr:`SensorFit.sigma`); non-finite ones
+    are left out, nothing else (gate them first). EM starts from a share of 0.5 with sds of 0.5 and 2 times the
     robust sd (1.4826 times the median absolute deviation) and runs until the mean
     log-likelihood gains less than :data:`EM_TOLERANCE` per error (at most
     :data:`EM_MAX_ITERATIONS` iterations); neither sd goes below :data:`SD_FLOOR`. The
@@ -491,7 +491,7 @@ def fit_core_and_tail(errors: ArrayLike) -> CoreTailFit:
         e = np.asarray(errors, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError, OverflowError):
         raise InputError(f"errors must be numbers (rad), got {shorten(errors)}") from None
-    e = e[np.isfinite(e)]
+    e = np.asarray(wrap(e[np.isfinite(e)]), dtype=np.float64)  # angles: wrapped
     n = e.size
     if n < MIN_ERRORS:
         raise InputError(
