@@ -449,9 +449,9 @@ def fit_core_and_tail(errors: ArrayLike) -> CoreTailFit:
 
     The errors are wrapped to [-pi, pi) and centred on their median (a constant offset, the
     camera turned on the robot, is not noise; as :attr:`SensorFit.sigma`); non-finite ones
-    are left out, nothing else (gate them first). EM starts from a share of 0.5 with sds of 0.5 and 2 times the
-    robust sd (1.4826 times the median absolute deviation) and runs until the mean
-    log-likelihood gains less than :data:`EM_TOLERANCE` per error (at most
+    are left out, nothing else (gate them first). EM starts from a share of 0.5 with sds of
+    0.5 and 2 times the robust sd (1.4826 times the median absolute deviation) and runs
+    until the mean log-likelihood gains less than :data:`EM_TOLERANCE` per error (at most
     :data:`EM_MAX_ITERATIONS` iterations); neither sd goes below :data:`SD_FLOOR`. The
     mixture is kept when it pays for its two extra parameters by the Bayesian information
     criterion, ``2 (loglik_mixture - loglik_single) > 2 ln(n)``, and its sds differ by more
