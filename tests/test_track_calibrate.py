@@ -383,15 +383,17 @@ def test_a_sensor_with_a_sharp_core_gives_it_back_as_the_tracker_settings() -> N
         "sigma": fit.tail_sigma,
         "core_share": fit.core_share,
         "core_sigma": fit.core_sigma,
+        "core_update": False,
         "p_detect": fit.p_detect,
         "clutter": fit.clutter,
         "turn_noise_s": fit.turn_noise_s,
     }
     s, _, c = with_settings(*preset("mrclam"), mixture)
-    assert (s.sigma, c.core_share, c.core_sigma) == (
+    assert (s.sigma, c.core_share, c.core_sigma, c.core_update) == (
         fit.tail_sigma,
         fit.core_share,
         fit.core_sigma,
+        False,
     )
 
 
@@ -412,7 +414,8 @@ def test_fit_sensor_on_the_command_line_prints_and_writes_a_sharp_core(
     line = next(x for x in text.splitlines() if x.startswith("  core and tail  "))
     m = re.fullmatch(
         r"  core and tail  (\d+) % at ([\d.]+) deg, (\d+) % at ([\d.]+) deg \(EM; omniloc track "
-        r"--set core_share=([\d.]+) --set core_sigma=([\d.]+) --set sigma=([\d.]+)\)",
+        r"--set core_share=([\d.]+) --set core_sigma=([\d.]+) --set sigma=([\d.]+) "
+        r"--set core_update=false\)",
         line,
     )
     assert m is not None, line
@@ -421,7 +424,8 @@ def test_fit_sensor_on_the_command_line_prints_and_writes_a_sharp_core(
     assert core_deg == pytest.approx(0.3, abs=0.03) and tail_deg == pytest.approx(1.2, rel=0.15)
     settings = load_settings(out)
     assert set(settings) == {
-        "sigma", "core_share", "core_sigma", "p_detect", "clutter", "turn_noise_s"
+        "sigma", "core_share", "core_sigma", "core_update", "p_detect", "clutter",
+        "turn_noise_s"
     }  # fmt: skip
     # The --set values printed are the file's, rounded.
     assert float(m.group(5)) == pytest.approx(settings["core_share"], abs=0.005)
@@ -430,6 +434,7 @@ def test_fit_sensor_on_the_command_line_prints_and_writes_a_sharp_core(
     s, _, c = with_settings(*preset("mrclam"), settings)
     assert c.core_sigma == pytest.approx(math.radians(core_deg), abs=1e-4)
     assert s.sigma == settings["sigma"] and c.core_share == settings["core_share"]
+    assert settings["core_update"] is False and c.core_update is False
 
 
 def test_several_recordings_are_fitted_together() -> None:

@@ -644,6 +644,9 @@ def test_a_sharp_core_reaches_the_frame_model_and_widens_with_the_turn() -> None
     turning = tr._frame_model(0.5)
     assert turning.core_sigma2 == pytest.approx(sd_c**2 + (0.5 * sd_t) ** 2)
     assert turning.sigma2 == pytest.approx(tr._model.sigma2 + (0.5 * sd_t) ** 2)
+    assert tr._model.core_update is True
+    weighs = Tracker(GRID, SENSOR, MOTION, TrackerConfig(core_share=0.4, core_update=False))
+    assert weighs._model.core_update is False and weighs._frame_model(0.5).core_update is False
     plain = Tracker(GRID, SENSOR, MOTION, TrackerConfig(turn_noise_s=sd_t))
     assert plain._model.core_share == 0.0 and plain._frame_model(0.5).core_sigma2 == 0.0
 

@@ -601,10 +601,13 @@ class SensorFit:
             "turn_noise_s": self.turn_noise_s,
         }
 
-    def mixture_settings(self) -> dict[str, float]:
+    def mixture_settings(self) -> dict[str, float | bool]:
         """As :meth:`settings`, with the bearing errors as a sharp core and a wider tail: the
-        tail's sd as ``sigma``, and ``core_share`` and ``core_sigma``. Where no core was found
-        (``core_share`` 0), :meth:`settings` and ``core_share`` 0 (the preset's mixture off).
+        tail's sd as ``sigma``, ``core_share`` and ``core_sigma``, and ``core_update`` false
+        (the core weighs the hypotheses but does not narrow them: a recording's errors
+        usually repeat from frame to frame, and on MRCLAM the core in the update made the
+        tracker confidently wrong four times as often; docs/tracking.md). Where no core was
+        found (``core_share`` 0), :meth:`settings` and ``core_share`` 0 (the mixture off).
         """
         if not self.core_share > 0:
             return {**self.settings(), "core_share": 0.0}
@@ -612,6 +615,7 @@ class SensorFit:
             "sigma": self.tail_sigma,
             "core_share": self.core_share,
             "core_sigma": self.core_sigma,
+            "core_update": False,
             "p_detect": self.p_detect,
             "clutter": self.clutter,
             "turn_noise_s": self.turn_noise_s,
@@ -811,7 +815,7 @@ def estimate_frame_sensor(
         plain = near & ((np.abs(h) <= half - gate) if half is not None else True)
         visible += int(plain.sum())
         seen += int((plain & taken).sum())
-    if len(errors) < 20:
+    if len(errors) < MIN_ERRORS:
         raise InputError(
             f"only {len(errors)} bearings within {math.degrees(gate):.1f} deg of a landmark "
             "seen from the true pose: too few to fit the sensor (do the frames, the map and "
