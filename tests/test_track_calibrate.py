@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from omniloc.errors import InputError
 from omniloc.track import Frame, GroundTruth, MotionModel, Odometry, estimate_motion
@@ -320,6 +322,32 @@ def test_one_gaussian_gives_no_core() -> None:
     close = fit_core_and_tail(_mixture(200_000, 0.5, 0.6, 0.69, seed=13))
     assert close.gain > 2 * math.log(200_000)
     assert close.core_share == 0.0 and close.core_sigma == 0.0
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    share=st.floats(0.0, 1.0),
+    core_deg=st.floats(1e-6, 5.0),
+    ratio=st.floats(0.2, 20.0),
+    n=st.integers(1, 3000),
+    seed=st.integers(0, 2**31),
+    scale=st.floats(1e-6, 1.0),
+    ties=st.booleans(),
+)
+def test_em_keeps_its_sharper_gaussian_sharper(
+    share: float, core_deg: float, ratio: float, n: int, seed: int, scale: float, ties: bool
+) -> None:
+    from omniloc.track.calibrate import _two_gaussians_em
+
+    # fit_core_and_tail reads EM's first Gaussian as the core without sorting: whatever the
+    # errors (a mixture either way round, repeated values) and the starting scale (at least
+    # the sd floor, as the fit's always is: the two start apart), EM must end with it no
+    # wider than the second (to rounding, where every error is as large: equal sds).
+    e = _mixture(n, share, core_deg, core_deg * ratio, seed=seed)
+    if ties:
+        e = np.round(e, 3)
+    first, sd, loglik, _ = _two_gaussians_em(e**2, scale)
+    assert sd[0] <= sd[1] * (1.0 + 1e-12) and 0.0 < first < 1.0 and np.isfinite(loglik)
 
 
 def test_degenerate_errors_are_refused_or_fitted_as_stated() -> None:

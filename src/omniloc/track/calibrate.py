@@ -503,6 +503,26 @@ def fit_core_and_tail(errors: ArrayLike) -> CoreTailFit:
     loglik_single = float(np.sum(_log_normal(x2, single)))
     robust = 1.4826 * float(np.median(np.sqrt(x2)))
     scale = robust if robust > SD_FLOOR else single
+    share, sd, loglik, iterations = _two_gaussians_em(x2, scale)
+    keep = 2.0 * (loglik - loglik_single) > 2.0 * math.log(n) and sd[1] > MIN_SD_RATIO * sd[0]
+    if not keep:
+        return CoreTailFit(0.0, 0.0, single, loglik, loglik_single, n, iterations)
+    return CoreTailFit(share, sd[0], sd[1], loglik, loglik_single, n, iterations)
+
+
+def _two_gaussians_em(x2: FloatArray, scale: float) -> tuple[float, list[float], float, int]:
+    """EM for two zero-mean Gaussians on errors whose squares are ``x2``, started at sds of
+    half and twice ``scale`` (at least :data:`SD_FLOOR`) with equal shares; returns the
+    first's share, the two sds, the log-likelihood and the iterations.
+
+    The first Gaussian starts sharper and stays sharper (so it is the core, unsorted): with
+    ``sd[0] < sd[1]`` an error's share ``r`` in the first falls as its size grows (the ratio
+    of the two densities does), so the new ``sd[0]**2`` -- the mean of the squares weighted
+    by ``r`` -- is at most the new ``sd[1]**2``, weighted by ``1 - r`` (Chebyshev's sum
+    inequality). Started equal (``scale`` below the floor) they would part by rounding,
+    either way round.
+    """
+    n = x2.size
     share = 0.5
     sd = [max(0.5 * scale, SD_FLOOR), max(2.0 * scale, SD_FLOOR)]
     loglik = -math.inf
@@ -524,12 +544,7 @@ def fit_core_and_tail(errors: ArrayLike) -> CoreTailFit:
         for k, (weights, mass) in enumerate(((r, w[0]), (1.0 - r, w[1]))):
             if mass > 0:
                 sd[k] = max(math.sqrt(float(np.sum(weights * x2)) / mass), SD_FLOOR)
-    core, tail = (0, 1) if sd[0] <= sd[1] else (1, 0)
-    core_share = share if core == 0 else 1.0 - share
-    keep = 2.0 * (loglik - loglik_single) > 2.0 * math.log(n) and sd[tail] > MIN_SD_RATIO * sd[core]
-    if not keep:
-        return CoreTailFit(0.0, 0.0, single, loglik, loglik_single, n, iterations)
-    return CoreTailFit(core_share, sd[core], sd[tail], loglik, loglik_single, n, iterations)
+    return share, sd, loglik, iterations
 
 
 @dataclass(frozen=True)
