@@ -34,7 +34,9 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
-from omniloc import LandmarkMap, Pose, symmetric_map  # noqa: E402
+import dataclasses  # noqa: E402
+
+from omniloc import Pose  # noqa: E402
 from omniloc.evaluate.tracking import (  # noqa: E402
     Segment,
     Stream,
@@ -43,17 +45,15 @@ from omniloc.evaluate.tracking import (  # noqa: E402
     score_run,
 )
 from omniloc.sensor import SensorModel  # noqa: E402
-from omniloc.track import MotionModel, Tracker, simulate_run  # noqa: E402
+from omniloc.track import Tracker, simulate_run  # noqa: E402
+from omniloc.track.simulate import EXAMPLE_MAP, EXAMPLE_MOTION, EXAMPLE_SENSOR  # noqa: E402
 
-GRID = LandmarkMap(np.vstack([symmetric_map("grid", size=12.0).xy, [[14.0, 2.0]]]))
-MOTION = MotionModel(
-    along_per_m=0.002, across_per_m=2e-4, turn_per_rad=0.004, turn_per_m=0.002, turn_per_s=1e-6
-)
-SCENARIOS = {
-    "grid-360": SensorModel(sigma=math.radians(0.5), max_range=5.0, p_detect=0.9, clutter=0.3),
-    "grid-180": SensorModel(
-        sigma=math.radians(0.5), fov=math.pi, max_range=5.0, p_detect=0.9, clutter=0.3
-    ),
+# The scenario of omniloc's example recording (omniloc.track.simulate.example_run).
+GRID = EXAMPLE_MAP
+MOTION = EXAMPLE_MOTION
+SCENARIOS: dict[str, SensorModel] = {
+    "grid-360": EXAMPLE_SENSOR,
+    "grid-180": dataclasses.replace(EXAMPLE_SENSOR, fov=math.pi),
 }
 DURATION_S = 60.0
 JUMP_S = 30.0

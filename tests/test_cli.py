@@ -180,6 +180,12 @@ def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
     assert out.count("| yes |") == 4
     for m in (4, 5, 6, 7):
         assert (tmp_path / f"solutions-{m}-observations.png").stat().st_size > 10_000
+    # Over time: the example recording's time line, wake-up to recovery, and its figure.
+    lines = out[out.index("Over time (omniloc.track)") :].splitlines()
+    states = [ln.split()[2] for ln in lines[1:] if ln.startswith("  ") and " s  " in ln]
+    assert states == ["ambiguous", "localized", "ambiguous", "KIDNAPPED", "ambiguous", "localized"]
+    assert "localized in 207 of 240 frames, right (0.3 m, 5 deg) in 207 of them" in out
+    assert (tmp_path / "track.png").stat().st_size > 10_000
 
 
 def test_version(capsys) -> None:

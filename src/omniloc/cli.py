@@ -636,7 +636,57 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         print("Vision front end (rendered conic-mirror image -> bearings):")
         print("  " + vision_demo(out).replace("\n", "\n  "))
         _demo_image_to_pose()
+    _demo_over_time(out)
     return 0
+
+
+def _demo_over_time(out: Path) -> None:
+    """The tracker on the example recording: its time line, and a figure."""
+    from .evaluate.tracking import errors_against
+    from .plot.track import plot_track
+    from .track import track
+    from .track.simulate import example_run
+
+    ex = example_run()
+    run = track(
+        ex.landmarks,
+        ex.run.odometry,
+        ex.run.frames,
+        sensor=ex.sensor,
+        motion=ex.motion,
+    )
+    est = run.estimates
+    ok, d_pos, d_hdg = errors_against(ex.run.truth, est)
+    print()
+    print(
+        "Over time (omniloc.track): a robot wakes up on a grid that one frame cannot tell from "
+        f"its half turn and is carried off at {ex.run.kidnap_t:.0f} s "
+        "(examples/grid-run; omniloc track on its files prints the same):"
+    )
+    last = None
+    for k, e in enumerate(est):
+        if (e.state, e.kidnapped) == last:
+            continue
+        last = (e.state, e.kidnapped)
+        off = f"{d_pos[k]:.2f} m and {d_hdg[k]:.1f} deg off"
+        if e.pose is None:
+            off = "no pose"
+        elif e.localized:
+            off = f"{'right' if ok[k] else 'WRONG'}: {off}"
+        else:
+            off = f"its best place {off}"
+        state = "KIDNAPPED" if e.kidnapped else e.state.value
+        print(f"  {e.t:5.1f} s  {state:<10} ({off}): {e.reason}")
+    loc = np.array([e.localized for e in est])
+    span = est[-1].t - est[0].t
+    print(
+        f"  localized in {loc.sum()} of {len(est)} frames, right (0.3 m, 5 deg) in "
+        f"{ok[loc].sum()} of them, position RMSE {np.sqrt(np.mean(d_pos[loc] ** 2)):.3f} m; "
+        f"{span:.0f} s of recording in {run.cpu_s:.1f} s of CPU"
+    )
+    path = out / "track.png"
+    plot_track(ex.landmarks, est, path, truth=ex.run.truth, title="the example recording")
+    print(f"  figure: {path}")
 
 
 def _demo_image_to_pose() -> None:

@@ -13,7 +13,8 @@
 * :mod:`.presets` -- tuned parameters (``generic``, ``mrclam``), and single values changed by
   name (:func:`with_settings`);
 * :mod:`.data` -- odometry, frames of bearings and ground-truth tracks, and their files;
-  :mod:`.io` -- TUM trajectories and JSON lines; :mod:`.records` -- what a localizer over
+  :mod:`.io` -- TUM trajectories, JSON lines and recordings written back to files;
+  :mod:`.records` -- what a localizer over
   time reports; :mod:`.simulate` -- simulated recordings.
 
 The package is callable: ``omniloc.track(map, odometry, frames, ...)`` is :func:`track`.
@@ -27,7 +28,14 @@ from typing import Any
 
 from .calibrate import MotionFit, SensorFit, estimate_frame_sensor, estimate_motion
 from .data import Frame, GroundTruth, Odometry, load_frames, load_groundtruth, load_odometry
-from .io import read_tum, write_json_lines, write_tum
+from .io import (
+    read_tum,
+    write_frames,
+    write_groundtruth,
+    write_json_lines,
+    write_odometry,
+    write_tum,
+)
 from .motion import MotionModel
 from .offline import TrackRun, track
 from .presets import Preset, load_settings, preset, settings_names, with_settings
@@ -62,7 +70,10 @@ __all__ = [
     "simulate_run",
     "track",
     "with_settings",
+    "write_frames",
+    "write_groundtruth",
     "write_json_lines",
+    "write_odometry",
     "write_tum",
 ]
 

@@ -9,8 +9,9 @@ odometry
     (a logger's duplicates) the last one holds.
 frames
     Either the generic ``t,bearing`` (one row per bearing, radians, or degrees with
-    ``degrees=True`` or a ``bearing_deg`` column; rows with equal ``t`` form one frame; a frame
-    may be empty only in the MRCLAM format), or the ``robotR_frames.csv`` files of MRCLAM as
+    ``degrees=True`` or a ``bearing_deg`` column; rows with equal ``t`` form one frame; a row
+    whose bearing is empty is a frame in which nothing was seen, which tells the tracker as
+    much as one with bearings), or the ``robotR_frames.csv`` files of MRCLAM as
     they are (the ``landmarks`` and ``robot_detections`` columns, ``id:bearing:range;...``;
     the ids are dropped: every detection, robots included, is a bearing of the frame).
 ground truth
@@ -339,14 +340,20 @@ def load_frames(
         )
     if col == "bearing_rad" and degrees:
         raise InputError(f"{src}:1: the column says radians (bearing_rad) but degrees=True")
-    t, b = _columns(src, header, rows, ("t", col))
+    # A row with an empty bearing is a frame without bearings (nothing seen at that time).
+    k = header.index(col)
+    seen = np.array([r[k].strip() != "" for _, r in rows], dtype=bool)
+    (t,) = _columns(src, header, rows, ("t",))
+    (b,) = _columns(src, header, [r for r, ok in zip(rows, seen, strict=True) if ok], (col,))
     _check_times(src, t, strict=False, lines=[n for n, _ in rows])
     if degrees or col == "bearing_deg":
         b = np.deg2rad(b)
+    # Each bearing's place among the rows that have one: frame s..e holds b[at[s]:at[e]].
+    at = np.concatenate([[0], np.cumsum(seen)])
     frames = []
     starts = np.flatnonzero(np.concatenate([[True], np.diff(t) > 0]))
     for s, e in zip(starts, [*starts[1:], t.size], strict=True):
-        frames.append(Frame(float(t[s]), b[s:e]))
+        frames.append(Frame(float(t[s]), b[at[s] : at[e]]))
     return frames
 
 

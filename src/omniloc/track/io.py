@@ -1,4 +1,5 @@
-"""Writing what the tracker reported: a TUM trajectory and JSON lines.
+"""Writing what the tracker reported (a TUM trajectory, JSON lines) and recordings in the
+files :mod:`omniloc.track.data` reads (odometry, frames, ground truth).
 
 TUM trajectory format (Sturm et al., 2012; what ``evo_ape tum`` reads): one pose per line,
 ``t x y z qx qy qz qw``, space separated, metres and a unit quaternion; a planar pose has
@@ -9,6 +10,12 @@ poses the tracker vouches for).
 JSON lines: one object per frame, :meth:`~omniloc.track.TrackEstimate.as_dict` (``t``,
 ``state``, ``reason``, ``kidnapped`` and, unless lost, ``x``, ``y``, ``theta``,
 ``covariance`` and ``hypotheses``).
+
+Recordings: :func:`write_odometry`, :func:`write_frames` and :func:`write_groundtruth` write
+what :func:`~omniloc.track.load_odometry`, :func:`~omniloc.track.load_frames` and
+:func:`~omniloc.track.load_groundtruth` read back exactly (every number in its shortest form
+that reads back as the same float), e.g. a :func:`~omniloc.track.simulate_run` to try the
+tracker's command line on.
 """
 
 from __future__ import annotations
@@ -25,9 +32,18 @@ from numpy.typing import NDArray
 from ..angles import wrap
 from ..errors import InputError
 from ..io import PathLike, write_text
+from .data import Frame, GroundTruth, Odometry
 from .records import TrackEstimate, TrackState
 
-__all__ = ["read_tum", "tum_lines", "write_json_lines", "write_tum"]
+__all__ = [
+    "read_tum",
+    "tum_lines",
+    "write_frames",
+    "write_groundtruth",
+    "write_json_lines",
+    "write_odometry",
+    "write_tum",
+]
 
 
 def tum_lines(
@@ -105,3 +121,76 @@ def write_json_lines(out: PathLike | IO[str], estimates: Iterable[TrackEstimate]
     else:
         out.write(text)
     return len(lines)
+
+
+def _csv(path: PathLike, header: str, rows: Iterable[Sequence[float | str]]) -> int:
+    """Write a CSV file of a header and rows of numbers (repr: they read back exactly) or
+    text; returns the number of rows."""
+    lines = [header]
+    for row in rows:
+        lines.append(",".join(v if isinstance(v, str) else repr(float(v)) for v in row))
+    write_text(path, "\n".join(lines) + "\n", InputError)
+    return len(lines) - 1
+
+
+def write_odometry(path: PathLike, odometry: Odometry) -> int:
+    """Write odometry as ``t,v,w`` (what :func:`~omniloc.track.load_odometry` reads); returns
+    the number of rows.
+
+    Raises
+    ------
+    InputError
+        Not an :class:`~omniloc.track.Odometry`, or the file cannot be written.
+    """
+    if not isinstance(odometry, Odometry):
+        raise InputError(f"write_odometry needs an Odometry, got {type(odometry).__name__}")
+    return _csv(path, "t,v,w", zip(odometry.t, odometry.v, odometry.w, strict=True))
+
+
+def write_groundtruth(path: PathLike, truth: GroundTruth) -> int:
+    """Write a ground-truth track as ``t,x,y,theta,gap`` (what
+    :func:`~omniloc.track.load_groundtruth` reads); returns the number of rows.
+
+    Raises
+    ------
+    InputError
+        Not a :class:`~omniloc.track.GroundTruth`, or the file cannot be written.
+    """
+    if not isinstance(truth, GroundTruth):
+        raise InputError(f"write_groundtruth needs a GroundTruth, got {type(truth).__name__}")
+    gap = truth.gap if truth.gap is not None else np.zeros_like(truth.t)
+    return _csv(
+        path, "t,x,y,theta,gap", zip(truth.t, truth.x, truth.y, truth.theta, gap, strict=True)
+    )
+
+
+def write_frames(path: PathLike, frames: Iterable[Frame]) -> int:
+    """Write frames as the generic ``t,bearing`` file (radians, one row per bearing; a frame
+    without bearings as a row with an empty bearing), what :func:`~omniloc.track.load_frames`
+    reads; returns the number of frames. Landmark ids (:attr:`Frame.truth`) are not written.
+
+    Raises
+    ------
+    InputError
+        An item that is not a :class:`~omniloc.track.Frame`, frames out of time order, two
+        frames at one time (they would read back as one), or the file cannot be written.
+    """
+    rows: list[tuple[float, float | str]] = []
+    last = -math.inf
+    n = 0
+    for k, f in enumerate(frames):
+        if not isinstance(f, Frame):
+            raise InputError(f"write_frames: item {k} is a {type(f).__name__}, not a Frame")
+        if not f.t > last:
+            raise InputError(
+                f"write_frames: frame {k} at t={f.t!r} does not come after the one before "
+                f"(t={last!r}); frames must be in strictly increasing time order"
+            )
+        last = f.t
+        n += 1
+        if f.bearings.size:
+            rows.extend((f.t, float(b)) for b in f.bearings)
+        else:
+            rows.append((f.t, ""))
+    _csv(path, "t,bearing", rows)
+    return n

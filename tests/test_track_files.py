@@ -1,0 +1,151 @@
+"""Recordings written to files and read back: odometry, frames (empty ones too), ground truth;
+the example recording in ``examples/grid-run`` and ``omniloc track`` on it."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from omniloc.cli import main
+from omniloc.errors import InputError
+from omniloc.track import (
+    Frame,
+    GroundTruth,
+    Odometry,
+    load_frames,
+    load_groundtruth,
+    load_odometry,
+    write_frames,
+    write_groundtruth,
+    write_odometry,
+)
+from omniloc.track.simulate import example_run
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+finite = st.floats(-1e6, 1e6, allow_nan=False, allow_infinity=False)
+angle = st.floats(-math.pi, math.pi, allow_nan=False, exclude_max=True)
+
+
+@st.composite
+def _times(draw: st.DrawFn, n: int) -> np.ndarray:
+    """``n`` strictly increasing times."""
+    t0 = draw(st.floats(-1e6, 1e6))
+    steps = draw(st.lists(st.floats(1e-3, 100.0), min_size=n, max_size=n))
+    return np.asarray(t0 + np.cumsum(steps))
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), n=st.integers(1, 30))
+def test_odometry_and_ground_truth_read_back_exactly(
+    tmp_path_factory: pytest.TempPathFactory, data: st.DataObject, n: int
+) -> None:
+    folder = tmp_path_factory.mktemp("rec")
+    t = data.draw(_times(n))
+    v, w = (np.array(data.draw(st.lists(finite, min_size=n, max_size=n))) for _ in range(2))
+    odo = Odometry(t, v, w)
+    assert write_odometry(folder / "o.csv", odo) == n
+    back = load_odometry(folder / "o.csv")
+    assert np.array_equal(back.t, odo.t) and np.array_equal(back.v, odo.v)
+    assert np.array_equal(back.w, odo.w)
+    if n < 2:
+        return
+    xy = [np.array(data.draw(st.lists(finite, min_size=n, max_size=n))) for _ in range(2)]
+    th = np.array(data.draw(st.lists(angle, min_size=n, max_size=n)))
+    gap = np.array(data.draw(st.lists(st.floats(0.0, 10.0), min_size=n, max_size=n)))
+    truth = GroundTruth(t, xy[0], xy[1], th, gap)
+    assert write_groundtruth(folder / "g.csv", truth) == n
+    g = load_groundtruth(folder / "g.csv")
+    for k in ("t", "x", "y", "theta", "gap"):
+        assert np.array_equal(getattr(g, k), getattr(truth, k)), k
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), n=st.integers(1, 12))
+def test_frames_read_back_exactly_empty_ones_too(
+    tmp_path_factory: pytest.TempPathFactory, data: st.DataObject, n: int
+) -> None:
+    path = tmp_path_factory.mktemp("rec") / "f.csv"
+    t = data.draw(_times(n))
+    frames = [Frame(float(tt), data.draw(st.lists(angle, max_size=5))) for tt in t]
+    assert write_frames(path, frames) == n
+    back = load_frames(path)
+    assert [f.t for f in back] == [f.t for f in frames]
+    for a, b in zip(back, frames, strict=True):
+        assert np.array_equal(a.bearings, b.bearings)
+
+
+def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: Path) -> None:
+    path = tmp_path / "f.csv"
+    path.write_text("t,bearing_deg\n0.5,10\n0.5,-20\n1.0,\n1.5,30\n2.0, \n2.0,45\n")
+    frames = load_frames(path)
+    assert [f.t for f in frames] == [0.5, 1.0, 1.5, 2.0]
+    assert [f.bearings.size for f in frames] == [2, 0, 1, 1]
+    assert np.allclose(np.rad2deg(frames[0].bearings), [10, -20])
+    assert np.allclose(np.rad2deg(frames[3].bearings), [45])
+    # A bearing that is there but not a number is still an error, named.
+    path.write_text("t,bearing\n0.5,0.1\n1.0,north\n")
+    with pytest.raises(InputError, match=r"f\.csv:3: bearing is not a number: 'north'"):
+        load_frames(path)
+
+
+def test_bad_recordings_are_refused_by_name(tmp_path: Path) -> None:
+    with pytest.raises(InputError, match="write_odometry needs an Odometry, got list"):
+        write_odometry(tmp_path / "o.csv", [])  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="write_groundtruth needs a GroundTruth, got dict"):
+        write_groundtruth(tmp_path / "g.csv", {})  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="item 1 is a float, not a Frame"):
+        write_frames(tmp_path / "f.csv", [Frame(0.0, [0.1]), 0.5])  # type: ignore[list-item]
+    # Two frames at one time would read back as one.
+    with pytest.raises(InputError, match=r"frame 1 at t=1\.0 does not come after"):
+        write_frames(tmp_path / "f.csv", [Frame(1.0, [0.1]), Frame(1.0, [0.2])])
+    with pytest.raises(InputError, match="cannot"):
+        write_frames(tmp_path / "no" / "such" / "f.csv", [Frame(1.0, [0.1])])
+
+
+def test_the_example_files_are_what_the_library_simulates(tmp_path: Path) -> None:
+    # examples/grid-run is written by examples/make_grid_run.py from example_run(): the
+    # files in the repository must be what the library simulates today, byte for byte
+    # (after a change to the simulation, run the script again).
+    sys.path.insert(0, str(EXAMPLES))
+    try:
+        import make_grid_run
+    finally:
+        sys.path.remove(str(EXAMPLES))
+    assert make_grid_run.main(["--out", str(tmp_path)]) == 0
+    for name in ("landmarks.csv", "odometry.csv", "frames.csv", "groundtruth.csv"):
+        assert (tmp_path / name).read_bytes() == (EXAMPLES / "grid-run" / name).read_bytes(), name
+    settings = json.loads((EXAMPLES / "grid-run" / "settings.json").read_text())
+    assert settings == json.loads((tmp_path / "settings.json").read_text())
+    # And the files are the demo's recording, bit for bit.
+    run = example_run().run
+    odo = load_odometry(EXAMPLES / "grid-run" / "odometry.csv")
+    assert np.array_equal(odo.v, run.odometry.v) and np.array_equal(odo.t, run.odometry.t)
+    frames = load_frames(EXAMPLES / "grid-run" / "frames.csv")
+    assert len(frames) == len(run.frames)
+    pairs = zip(frames, run.frames, strict=True)
+    assert all(np.array_equal(a.bearings, b.bearings) for a, b in pairs)
+
+
+def test_track_on_the_example_wakes_up_is_kidnapped_and_recovers(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The README's example: the command and what it prints.
+    d = EXAMPLES / "grid-run"
+    argv = ["-q", "track", "--map", str(d / "landmarks.csv"), "--odometry"]
+    argv += [str(d / "odometry.csv"), "--frames", str(d / "frames.csv"), "--config"]
+    argv += [str(d / "settings.json"), "--groundtruth", str(d / "groundtruth.csv")]
+    assert main([*argv, "--out", str(tmp_path / "t.tum")]) == 0
+    out = capsys.readouterr().out
+    assert "localized 86.2 %, ambiguous 13.8 %, lost 0.0 %" in out
+    assert "first localized at t = 3.125 s" in out
+    assert "kidnapping flagged at t = 30.4\n" in out
+    assert "within 0.3 m / 5 deg 100.0 % of localized frames; position RMSE 0.011 m" in out
+    assert len((tmp_path / "t.tum").read_text().splitlines()) == 207
