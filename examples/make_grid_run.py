@@ -5,8 +5,9 @@ Run:  python examples/make_grid_run.py [--out FOLDER] [--seed S]
 
 Writes ``landmarks.csv`` (the map), ``odometry.csv`` (``t,v,w``), ``frames.csv``
 (``t,bearing``, radians, landmark ids not written), ``groundtruth.csv``
-(``t,x,y,theta,gap``, at 10 Hz) and ``settings.json`` (the sensor and odometry noise the frames were
-simulated with, for ``omniloc track --config``). The recording is
+(``t,x,y,theta,gap``, at 10 Hz), ``groundtruth.tum`` (the truth at the frames' times in
+TUM format, the reference for ``evo_ape tum``) and ``settings.json`` (the sensor and
+odometry noise the frames were simulated with, for ``omniloc track --config``). The recording is
 :func:`omniloc.track.simulate.example_run`: the same numbers as the demo's, bit for bit.
 """
 
@@ -16,7 +17,13 @@ import argparse
 import json
 from pathlib import Path
 
-from omniloc.track import GroundTruth, write_frames, write_groundtruth, write_odometry
+from omniloc.track import (
+    GroundTruth,
+    write_frames,
+    write_groundtruth,
+    write_odometry,
+    write_tum_truth,
+)
 from omniloc.track.simulate import example_run
 
 HERE = Path(__file__).resolve().parent
@@ -38,6 +45,8 @@ def main(argv: list[str] | None = None) -> int:
         args.out / "groundtruth.csv",
         GroundTruth(tr.t[::5], tr.x[::5], tr.y[::5], tr.theta[::5]),
     )
+    # The truth at the frames' times, as TUM: evo_ape's reference for omniloc track --out.
+    write_tum_truth(args.out / "groundtruth.tum", tr, [f.t for f in ex.run.frames])
     s, m = ex.sensor, ex.motion
     settings = {
         "sigma": s.sigma,
@@ -48,7 +57,10 @@ def main(argv: list[str] | None = None) -> int:
         **{k: getattr(m, k) for k in ("turn_per_m", "turn_per_s")},
     }
     (args.out / "settings.json").write_text(json.dumps(settings, indent=1) + "\n")
-    print(f"wrote {args.out}: landmarks, odometry, frames, groundtruth (.csv), settings.json")
+    print(
+        f"wrote {args.out}: landmarks, odometry, frames, groundtruth (.csv), groundtruth.tum, "
+        "settings.json"
+    )
     return 0
 
 

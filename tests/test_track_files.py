@@ -25,7 +25,9 @@ from omniloc.track import (
     write_frames,
     write_groundtruth,
     write_odometry,
+    write_tum_truth,
 )
+from omniloc.track.io import read_tum
 from omniloc.track.simulate import example_run
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -96,6 +98,24 @@ def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: 
         load_frames(path)
 
 
+def test_the_truth_as_tum_is_the_track_at_the_times_asked(tmp_path: Path) -> None:
+    t = np.linspace(0.0, 10.0, 11)
+    truth = GroundTruth(t, t * 0.5, -t, np.linspace(-3.0, 3.0, 11))
+    asked = [-1.0, 0.25, 4.5, 9.99, 10.5]
+    assert write_tum_truth(tmp_path / "g.tum", truth, asked) == 3  # two outside the span
+    back = read_tum(tmp_path / "g.tum")
+    want, _ = truth.at(np.array([0.25, 4.5, 9.99]))
+    assert np.allclose(back[:, 0], [0.25, 4.5, 9.99])
+    assert np.allclose(back[:, 1:3], want[:, :2], atol=1e-6)
+    assert np.allclose(np.angle(np.exp(1j * (back[:, 3] - want[:, 2]))), 0.0, atol=1e-8)
+    with pytest.raises(InputError, match="write_tum_truth needs a GroundTruth"):
+        write_tum_truth(tmp_path / "g.tum", t, [1.0])  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="times must be finite"):
+        write_tum_truth(tmp_path / "g.tum", truth, [1.0, np.nan])
+    with pytest.raises(InputError, match="times must be numbers"):
+        write_tum_truth(tmp_path / "g.tum", truth, ["soon"])
+
+
 def test_bad_recordings_are_refused_by_name(tmp_path: Path) -> None:
     with pytest.raises(InputError, match="write_odometry needs an Odometry, got list"):
         write_odometry(tmp_path / "o.csv", [])  # type: ignore[arg-type]
@@ -120,7 +140,13 @@ def test_the_example_files_are_what_the_library_simulates(tmp_path: Path) -> Non
     finally:
         sys.path.remove(str(EXAMPLES))
     assert make_grid_run.main(["--out", str(tmp_path)]) == 0
-    for name in ("landmarks.csv", "odometry.csv", "frames.csv", "groundtruth.csv"):
+    for name in (
+        "landmarks.csv",
+        "odometry.csv",
+        "frames.csv",
+        "groundtruth.csv",
+        "groundtruth.tum",
+    ):
         assert (tmp_path / name).read_bytes() == (EXAMPLES / "grid-run" / name).read_bytes(), name
     settings = json.loads((EXAMPLES / "grid-run" / "settings.json").read_text())
     assert settings == json.loads((tmp_path / "settings.json").read_text())
@@ -149,3 +175,23 @@ def test_track_on_the_example_wakes_up_is_kidnapped_and_recovers(
     assert "kidnapping flagged at t = 30.4\n" in out
     assert "within 0.3 m / 5 deg 100.0 % of localized frames; position RMSE 0.011 m" in out
     assert len((tmp_path / "t.tum").read_text().splitlines()) == 207
+
+
+def test_evo_on_the_example_gives_the_readme_figure(tmp_path: Path) -> None:
+    # evo_ape tum examples/grid-run/groundtruth.tum track.tum (the README): evo's APE,
+    # without alignment, equals the RMSE omniloc track prints (0.011 m).
+    evo_file = pytest.importorskip("evo.tools.file_interface")
+    from evo.core import metrics, sync
+
+    d = EXAMPLES / "grid-run"
+    argv = ["-q", "track", "--map", str(d / "landmarks.csv"), "--odometry"]
+    argv += [str(d / "odometry.csv"), "--frames", str(d / "frames.csv"), "--config"]
+    argv += [str(d / "settings.json"), "--out", str(tmp_path / "t.tum")]
+    assert main(argv) == 0
+    ref = evo_file.read_tum_trajectory_file(str(d / "groundtruth.tum"))
+    est = evo_file.read_tum_trajectory_file(str(tmp_path / "t.tum"))
+    ref, est = sync.associate_trajectories(ref, est)
+    assert est.num_poses == 207
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((ref, est))
+    assert ape.get_statistic(metrics.StatisticsType.rmse) == pytest.approx(0.011213, abs=1e-6)

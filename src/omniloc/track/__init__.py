@@ -35,6 +35,7 @@ from .io import (
     write_json_lines,
     write_odometry,
     write_tum,
+    write_tum_truth,
 )
 from .motion import MotionModel
 from .offline import TrackRun, track
@@ -75,6 +76,7 @@ __all__ = [
     "write_json_lines",
     "write_odometry",
     "write_tum",
+    "write_tum_truth",
 ]
 
 

@@ -27,11 +27,11 @@ from collections.abc import Iterable, Sequence
 from typing import IO
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..angles import wrap
 from ..errors import InputError
-from ..io import PathLike, write_text
+from ..io import PathLike, shorten, write_text
 from .data import Frame, GroundTruth, Odometry
 from .records import TrackEstimate, TrackState
 
@@ -43,6 +43,7 @@ __all__ = [
     "write_json_lines",
     "write_odometry",
     "write_tum",
+    "write_tum_truth",
 ]
 
 
@@ -52,16 +53,20 @@ def tum_lines(
 ) -> list[str]:
     """The TUM lines of the estimates whose state is in ``states`` (see the module)."""
     keep = {TrackState(s) for s in states}
-    out = []
-    for e in estimates:
-        if e.state not in keep or e.pose is None:
-            continue
-        half = 0.5 * e.pose.theta
-        out.append(
-            f"{e.t:.6f} {e.pose.x:.6f} {e.pose.y:.6f} 0.000000 0.000000 0.000000 "
-            f"{math.sin(half):.9f} {math.cos(half):.9f}"
-        )
-    return out
+    return [
+        _tum_line(e.t, e.pose.x, e.pose.y, e.pose.theta)
+        for e in estimates
+        if e.state in keep and e.pose is not None
+    ]
+
+
+def _tum_line(t: float, x: float, y: float, theta: float) -> str:
+    """One planar pose as a TUM line (see the module)."""
+    half = 0.5 * theta
+    return (
+        f"{t:.6f} {x:.6f} {y:.6f} 0.000000 0.000000 0.000000 "
+        f"{math.sin(half):.9f} {math.cos(half):.9f}"
+    )
 
 
 def write_tum(
@@ -77,6 +82,36 @@ def write_tum(
         The file cannot be written (the message names it).
     """
     lines = tum_lines(estimates, states)
+    write_text(path, "".join(line + "\n" for line in lines), InputError)
+    return len(lines)
+
+
+def write_tum_truth(path: PathLike, truth: GroundTruth, times: ArrayLike) -> int:
+    """Write a ground-truth track at ``times`` (interpolated, :meth:`GroundTruth.at`) as a
+    TUM trajectory, the reference for ``evo_ape tum`` against :func:`write_tum`'s output:
+    at the frames' times every estimate has a reference pose at its own time stamp. Times
+    outside the track's span are left out. Returns the number of poses written.
+
+    Raises
+    ------
+    InputError
+        Not a :class:`~omniloc.track.GroundTruth`, times that are not finite numbers, or the
+        file cannot be written.
+    """
+    if not isinstance(truth, GroundTruth):
+        raise InputError(f"write_tum_truth needs a GroundTruth, got {type(truth).__name__}")
+    try:
+        tq = np.asarray(times, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"times must be numbers (s), got {shorten(times)}") from None
+    if not np.isfinite(tq).all():
+        raise InputError(f"times must be finite, got {shorten(times)}")
+    poses, _ = truth.at(tq)
+    inside = np.isfinite(poses).all(axis=1)
+    lines = [
+        _tum_line(float(t), float(p[0]), float(p[1]), float(p[2]))
+        for t, p in zip(tq[inside], poses[inside], strict=True)
+    ]
     write_text(path, "".join(line + "\n" for line in lines), InputError)
     return len(lines)
 
