@@ -1683,6 +1683,100 @@ def _tracker_targets() -> list[Target]:
     ]
 
 
+def _writer_targets() -> list[Target]:
+    """Recordings written back to files (``omniloc.track.write_*``)."""
+    from omniloc.track import (
+        Frame,
+        GroundTruth,
+        Odometry,
+        write_frames,
+        write_groundtruth,
+        write_odometry,
+        write_tum_truth,
+    )
+
+    def odo() -> Odometry:
+        return Odometry([0.0, 1.0], [0.1, 0.2], [0.0, 0.1])
+
+    def truth() -> GroundTruth:
+        return GroundTruth([0.0, 1.0], [0.0, 0.1], [0.0, 0.0], [0.0, 0.1])
+
+    paths: Pool = (
+        ("under a file", Lazy(lambda f: _a_file(f) / "out.csv", needs_dir=True)),
+        ("a directory", Lazy(lambda f: f, needs_dir=True)),
+        ("no folder", in_dir("missing/out.csv")),
+        ("NUL", "bad\x00.csv"),
+        ("int", 5),
+        ("None", None),
+    )
+    things: Pool = (
+        ("None", None),
+        ("string", "odometry.csv"),
+        ("list", [0.0, 1.0]),
+        ("dict", {"t": [0.0]}),
+    )
+    frame_lists: Pool = (
+        ("not frames", [0.1, 0.2]),
+        ("a frame and a number", [Frame(0.0, [0.1]), 1.0]),
+        ("out of order", [Frame(1.0, [0.1]), Frame(0.5, [0.2])]),
+        ("two at one time", [Frame(1.0, [0.1]), Frame(1.0, [0.2])]),
+        ("None", None),
+        ("int", 3),
+    )
+    times: Pool = (
+        ("nan", [0.5, float("nan")]),
+        ("strings", ["a"]),
+        ("None", None),
+        ("complex", [1j]),
+        ("huge", [1e300]),
+        ("2-D", [[0.5, 0.7]]),
+    )
+    path_names = ("path", "file", "folder", "directory", "cannot write")
+    return [
+        Target(
+            "write_odometry",
+            lambda kw: write_odometry(**kw),
+            lambda: {"path": in_dir("o.csv"), "odometry": Lazy(odo)},
+            {
+                "path": Arg(path_names, paths),
+                "odometry": Arg(("odometry", "Odometry"), things),
+            },
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "write_groundtruth",
+            lambda kw: write_groundtruth(**kw),
+            lambda: {"path": in_dir("g.csv"), "truth": Lazy(truth)},
+            {
+                "path": Arg(path_names, paths),
+                "truth": Arg(("GroundTruth", "ground truth"), things),
+            },
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "write_frames",
+            lambda kw: write_frames(**kw),
+            lambda: {"path": in_dir("f.csv"), "frames": [Frame(0.0, [0.1]), Frame(0.5, [])]},
+            {
+                "path": Arg(path_names, paths),
+                "frames": Arg(("frame", "Frame", "time", "iterable"), frame_lists),
+            },
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "write_tum_truth",
+            lambda kw: write_tum_truth(**kw),
+            lambda: {"path": in_dir("g.tum"), "truth": Lazy(truth), "times": [0.5]},
+            {
+                "path": Arg(path_names, paths),
+                "truth": Arg(("GroundTruth",), things),
+                "times": Arg(("times",), times),
+            },
+            check=lambda kw, v: None,
+        ),
+    ]
+
+
 def _plot_targets() -> list[Target]:
     from omniloc.plot import plot_localization
 
@@ -1797,6 +1891,7 @@ def all_targets() -> dict[str, Target]:
         + _vision_targets()
         + _simulate_targets()
         + _track_targets()
+        + _writer_targets()
         + _tracker_targets()
         + _settings_targets()
         + _plot_targets()

@@ -121,6 +121,8 @@ def test_bad_recordings_are_refused_by_name(tmp_path: Path) -> None:
         write_odometry(tmp_path / "o.csv", [])  # type: ignore[arg-type]
     with pytest.raises(InputError, match="write_groundtruth needs a GroundTruth, got dict"):
         write_groundtruth(tmp_path / "g.csv", {})  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="write_frames needs an iterable of Frame, got int"):
+        write_frames(tmp_path / "f.csv", 3)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="item 1 is a float, not a Frame"):
         write_frames(tmp_path / "f.csv", [Frame(0.0, [0.1]), 0.5])  # type: ignore[list-item]
     # Two frames at one time would read back as one.

@@ -207,13 +207,20 @@ def write_frames(path: PathLike, frames: Iterable[Frame]) -> int:
     Raises
     ------
     InputError
-        An item that is not a :class:`~omniloc.track.Frame`, frames out of time order, two
-        frames at one time (they would read back as one), or the file cannot be written.
+        Not an iterable, an item that is not a :class:`~omniloc.track.Frame`, frames out of
+        time order, two frames at one time (they would read back as one), or the file cannot
+        be written.
     """
+    try:
+        items = list(frames)
+    except TypeError:
+        raise InputError(
+            f"write_frames needs an iterable of Frame, got {type(frames).__name__}"
+        ) from None
     rows: list[tuple[float, float | str]] = []
     last = -math.inf
     n = 0
-    for k, f in enumerate(frames):
+    for k, f in enumerate(items):
         if not isinstance(f, Frame):
             raise InputError(f"write_frames: item {k} is a {type(f).__name__}, not a Frame")
         if not f.t > last:
