@@ -106,16 +106,9 @@ def test_on_mrclam_the_fit_agrees_with_the_preset() -> None:
     assert fit.model.v_scale == pytest.approx(preset.v_scale, abs=0.02)
 
 
-def test_fit_motion_on_the_command_line_writes_settings_for_track(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    import json
-
-    from omniloc.cli import main
-    from omniloc.track import load_settings, preset, with_settings
-
-    odometry, truth = _recording(300.0, seed=4)
-    odo = tmp_path / "odo.csv"
+def _write_run(folder: Path, odometry: Odometry, truth: GroundTruth) -> tuple[Path, Path]:
+    """The odometry and the true track as fit-motion's CSV files in ``folder``."""
+    odo = folder / "odo.csv"
     odo.write_text(
         "t,v,w\n"
         + "".join(
@@ -125,7 +118,7 @@ def test_fit_motion_on_the_command_line_writes_settings_for_track(
             )
         )
     )
-    gt = tmp_path / "gt.csv"
+    gt = folder / "gt.csv"
     gt.write_text(
         "t,x,y,theta\n"
         + "".join(
@@ -139,11 +132,24 @@ def test_fit_motion_on_the_command_line_writes_settings_for_track(
             )
         )
     )
+    return odo, gt
+
+
+def test_fit_motion_on_the_command_line_writes_settings_for_track(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from omniloc.cli import main
+    from omniloc.track import load_settings, preset, with_settings
+
+    odo, gt = _write_run(tmp_path, *_recording(300.0, seed=4))
     out = tmp_path / "motion.json"
     argv = ["fit-motion", "--odometry", str(odo), "--groundtruth", str(gt), "--out", str(out)]
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "s after their time stamps" in text and str(out) in text
+    assert "runs pooled" not in text
     settings = load_settings(out)
     assert settings["delay_s"] == pytest.approx(TRUE.delay_s, abs=0.03)
     assert json.loads(out.read_text()) == settings
@@ -225,6 +231,33 @@ def test_runs_that_do_not_pair_up_are_refused_by_name() -> None:
     too_long = r"only 2 stretches of 100 s \(stretch_s\) .* \(run 1: 1, run 2: 1\)"
     with pytest.raises(InputError, match=too_long):
         estimate_motion([o, o], [g, g], stretch_s=[100.0], delays=[0.2])
+
+
+def test_fit_motion_pairs_several_runs_on_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omniloc.cli import main
+    from omniloc.track import load_settings
+
+    out = tmp_path / "motion.json"
+    argv = ["fit-motion", "--out", str(out)]
+    for k, (seconds, seed) in enumerate(((300.0, 4), (120.0, 6))):
+        folder = tmp_path / f"run{k}"
+        folder.mkdir()
+        odo, gt = _write_run(folder, *_recording(seconds, seed=seed))
+        argv += ["--odometry", str(odo), "--groundtruth", str(gt)]
+    assert main(argv) == 0
+    first, second = capsys.readouterr().out.splitlines()[:2]
+    assert first.startswith("2 runs pooled")
+    a, b = (int(n) for n in first.split(": ")[-1].split(", "))
+    assert a > 2 * b > 0  # in the order given: the 300-s run first
+    fitted, left_out = (int(w) for w in second.replace("(", " ").split() if w.isdigit())
+    assert fitted + left_out == a + b
+    settings = load_settings(out)
+    assert settings["delay_s"] == pytest.approx(TRUE.delay_s, abs=0.03)
+    assert settings["v_scale"] == pytest.approx(TRUE.v_scale, rel=0.02)
+    assert main(argv[:-2]) == 1  # two odometry files, one track
+    assert "2 --odometry and 1 --groundtruth" in capsys.readouterr().err
 
 
 def test_a_simulated_sensor_gives_back_its_noise_detection_and_clutter() -> None:
