@@ -1469,6 +1469,11 @@ def _settings_targets() -> list[Target]:
     frames = [Frame(0.1 * k, z) for k in range(10)]
     p = ROOM_POSE
     still = GroundTruth([0.0, 2.0], [p.x, p.x], [p.y, p.y], [p.theta, p.theta])
+    # A second run of the robot, later on the same clock; a short and a far-away track.
+    odo_later = Odometry(t + 100.0, odo.v, odo.w)
+    good_later = GroundTruth(t + 100.0, good.x, good.y, good.theta)
+    short = GroundTruth(t[:20], t[:20], t[:20], t[:20])
+    far = GroundTruth(t + 1e6, t, t, t)
     return [
         Target(
             "with_settings",
@@ -1574,23 +1579,73 @@ def _settings_targets() -> list[Target]:
             lambda kw: estimate_motion(**kw),
             lambda: {"odometry": odo, "truth": good},
             {
-                "odometry": Arg(("Odometry",), (("None", None), ("list", [1, 2]))),
+                "odometry": Arg(
+                    ("Odometry",),
+                    (
+                        ("None", None),
+                        ("list", [1, 2]),
+                        ("two runs", [odo, odo]),
+                        ("a list of one", [odo]),
+                    ),
+                ),
                 "truth": Arg(
                     ("GroundTruth", "overlap", "truth"),
                     (
                         ("None", None),
-                        ("short", GroundTruth(t[:20], t[:20], t[:20], t[:20])),
-                        ("far away in time", GroundTruth(t + 1e6, t, t, t)),
+                        ("short", short),
+                        ("far away in time", far),
+                        ("a list of one", [good]),
                     ),
                 ),
                 "stretch_s": Arg(
-                    ("stretch_s",), (("nan", [float("nan")]), ("empty", []), ("words", "ab"))
+                    ("stretch_s",),
+                    (
+                        ("nan", [float("nan")]),
+                        ("empty", []),
+                        ("words", "ab"),
+                        ("longer than the run", [100.0]),
+                    ),
                 ),
                 "delays": Arg(("delays",), (("inf", [float("inf")]), ("2-D", [[0.1]]))),
                 "max_gap_s": Arg(("max_gap_s",), (("zero", 0.0), ("nan", float("nan")))),
                 "delay_stretch_s": Arg(
                     ("delay_stretch_s", "overlap"), (("huge", 1e300), ("negative", -1.0))
                 ),
+            },
+            check=lambda kw, v: _finite(np.array([v.model.delay_s, v.model.v_scale]), "model"),
+            limit_s=60.0,
+        ),
+        Target(
+            "estimate_motion runs",
+            lambda kw: estimate_motion(**kw),
+            lambda: {"odometry": [odo, odo_later], "truth": [good, good_later]},
+            {
+                "odometry": Arg(
+                    ("Odometry",),
+                    (
+                        ("one run", [odo]),
+                        ("empty", []),
+                        ("a track among them", [odo, good]),
+                        ("None among them", [odo, None]),
+                        ("not a list", odo),
+                        ("a tuple", (odo, odo_later)),
+                        ("a dict", {"a": odo, "b": odo_later}),
+                    ),
+                ),
+                "truth": Arg(
+                    ("GroundTruth", "overlap", "truth"),
+                    (
+                        ("one track", [good]),
+                        ("empty", []),
+                        ("odometry among them", [good, odo]),
+                        ("in the other order", [good_later, good]),
+                        ("one far away in time", [good, far]),
+                        ("both far away in time", [far, far]),
+                        ("one short", [good, short]),
+                        ("not a list", good),
+                    ),
+                ),
+                "stretch_s": Arg(("stretch_s",), (("longer than the runs", [100.0]),)),
             },
             check=lambda kw, v: _finite(np.array([v.model.delay_s, v.model.v_scale]), "model"),
             limit_s=60.0,
@@ -1983,15 +2038,22 @@ def cli_argv(target: CliTarget, option: str, value: Any, folder: Path) -> list[s
     for flag, v in target.base:
         if flag == option or (flag is None and option == "<positional>"):
             v, replaced = value, True
-        if flag is not None:
-            argv.append(flag)
-        if v is not None:
-            argv.append(str(resolve(v, folder)))
+        argv += _given(flag, v, folder)
     if not replaced:
-        argv.append(option)
-        if value is not None:
-            argv.append(str(resolve(value, folder)))
+        argv += _given(option, value, folder)
     return [target.name, *argv]
+
+
+def _given(flag: str | None, value: Any, folder: Path) -> list[str]:
+    """``flag value`` as argv; a tuple of values gives the flag once for each (an option
+    that may be repeated)."""
+    out: list[str] = []
+    for v in value if isinstance(value, tuple) else (value,):
+        if flag is not None:
+            out.append(flag)
+        if v is not None:
+            out.append(str(resolve(v, folder)))
+    return out
 
 
 #: The numeric options of ``omniloc localize``.
@@ -2131,15 +2193,19 @@ def cli_targets() -> dict[str, CliTarget]:
     fit_gt = "t,x,y,theta\n" + "".join(
         f"{t!r},{2 * math.sin(0.1 * t)!r},{2 - 2 * math.cos(0.1 * t)!r},{0.1 * t!r}\n" for t in tt
     )
+    fit_odo_file, fit_gt_file = file_with("odo.csv", fit_odo), file_with("gt.csv", fit_gt)
     fit_motion = CliTarget(
         "fit-motion",
-        (
-            ("--odometry", file_with("odo.csv", fit_odo)),
-            ("--groundtruth", file_with("gt.csv", fit_gt)),
-        ),
+        (("--odometry", fit_odo_file), ("--groundtruth", fit_gt_file)),
         {
-            "--odometry": ODOMETRY_FILES,
-            "--groundtruth": GROUNDTRUTH_FILES,
+            "--odometry": (
+                *ODOMETRY_FILES,
+                ("two for one track", (fit_odo_file, fit_odo_file)),
+            ),
+            "--groundtruth": (
+                *GROUNDTRUTH_FILES,
+                ("two for one run", (fit_gt_file, fit_gt_file)),
+            ),
             "--out": (
                 ("a directory", Lazy(lambda f: f, needs_dir=True)),
                 ("under a file", Lazy(lambda f: _a_file(f) / "s.json", needs_dir=True)),

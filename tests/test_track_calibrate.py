@@ -12,7 +12,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from omniloc.errors import InputError
-from omniloc.track import Frame, GroundTruth, MotionModel, Odometry, estimate_motion
+from omniloc.track import (
+    Frame,
+    GroundTruth,
+    MotionFit,
+    MotionModel,
+    Odometry,
+    estimate_motion,
+)
 from omniloc.track.motion import compose, integrate
 
 TRUE = MotionModel(
@@ -52,16 +59,20 @@ def _recording(seconds: float = 900.0, seed: int = 3) -> tuple[Odometry, GroundT
     return odometry, GroundTruth(tt, poses[:, 0], poses[:, 1], poses[:, 2])
 
 
-def test_a_simulated_run_gives_back_its_model() -> None:
-    fit = estimate_motion(*_recording())
+def _close_to_the_truth(fit: MotionFit) -> None:
+    """Latency to the grid's step, scale within 1 %, the noise values the simulated motion
+    exercises most within a third, and hardly any stretch left out."""
     m = fit.model
     assert m.delay_s == pytest.approx(TRUE.delay_s, abs=0.011)
     assert m.v_scale == pytest.approx(TRUE.v_scale, rel=0.01)
-    # The noise values the run's motion exercises most, within a third.
     for name in ("along_per_m", "turn_per_rad", "turn_per_s"):
         assert getattr(m, name) == pytest.approx(getattr(TRUE, name), rel=0.35), name
     assert fit.stretches > 1000 and fit.left_out < 0.02 * fit.stretches
     assert fit.delays[np.argmin(fit.delay_cost)] == m.delay_s
+
+
+def test_a_simulated_run_gives_back_its_model() -> None:
+    _close_to_the_truth(estimate_motion(*_recording()))
 
 
 def test_too_little_overlap_is_refused() -> None:
@@ -75,6 +86,10 @@ def test_too_little_overlap_is_refused() -> None:
         estimate_motion(odometry, truth, delays=[float("nan")])
     with pytest.raises(InputError, match="Odometry and a GroundTruth"):
         estimate_motion(truth, odometry)  # type: ignore[arg-type]
+    # A truth with gaps everywhere (it was numpy's "mean of empty slice", then "never moves").
+    gapped = GroundTruth(truth.t, truth.x, truth.y, truth.theta, gap=np.full(truth.t.size, 5.0))
+    with pytest.raises(InputError, match=r"no stretch of 2\.0 s without a gap in the truth"):
+        estimate_motion(odometry, gapped)
 
 
 MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
@@ -93,16 +108,9 @@ def test_on_mrclam_the_fit_agrees_with_the_preset() -> None:
     assert fit.model.v_scale == pytest.approx(preset.v_scale, abs=0.02)
 
 
-def test_fit_motion_on_the_command_line_writes_settings_for_track(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    import json
-
-    from omniloc.cli import main
-    from omniloc.track import load_settings, preset, with_settings
-
-    odometry, truth = _recording(300.0, seed=4)
-    odo = tmp_path / "odo.csv"
+def _write_run(folder: Path, odometry: Odometry, truth: GroundTruth) -> tuple[Path, Path]:
+    """The odometry and the true track as fit-motion's CSV files in ``folder``."""
+    odo = folder / "odo.csv"
     odo.write_text(
         "t,v,w\n"
         + "".join(
@@ -112,7 +120,7 @@ def test_fit_motion_on_the_command_line_writes_settings_for_track(
             )
         )
     )
-    gt = tmp_path / "gt.csv"
+    gt = folder / "gt.csv"
     gt.write_text(
         "t,x,y,theta\n"
         + "".join(
@@ -126,11 +134,24 @@ def test_fit_motion_on_the_command_line_writes_settings_for_track(
             )
         )
     )
+    return odo, gt
+
+
+def test_fit_motion_on_the_command_line_writes_settings_for_track(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from omniloc.cli import main
+    from omniloc.track import load_settings, preset, with_settings
+
+    odo, gt = _write_run(tmp_path, *_recording(300.0, seed=4))
     out = tmp_path / "motion.json"
     argv = ["fit-motion", "--odometry", str(odo), "--groundtruth", str(gt), "--out", str(out)]
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "s after their time stamps" in text and str(out) in text
+    assert "runs pooled" not in text
     settings = load_settings(out)
     assert settings["delay_s"] == pytest.approx(TRUE.delay_s, abs=0.03)
     assert json.loads(out.read_text()) == settings
@@ -141,6 +162,104 @@ def test_fit_motion_on_the_command_line_writes_settings_for_track(
     assert main(argv) == 1
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "too little" in err
+
+
+def _equal_fits(a: MotionFit, b: MotionFit) -> bool:
+    """The same fit to the last bit (the model, the delays tried and their costs, counts)."""
+    return (
+        a.model == b.model
+        and np.array_equal(a.delays, b.delays)
+        and np.array_equal(a.delay_cost, b.delay_cost)
+        and (a.stretches, a.left_out) == (b.stretches, b.left_out)
+    )
+
+
+def test_several_runs_pooled_give_back_their_model() -> None:
+    # Two runs on the same clock (both from t = 0): each stretch must be cut from its own
+    # run, or the odometry of one meets the truth of the other. Together as long as the
+    # one run above, and as close.
+    runs = [_recording(450.0, seed=7), _recording(450.0, seed=8)]
+    fit = estimate_motion([o for o, _ in runs], [g for _, g in runs])
+    _close_to_the_truth(fit)
+    assert len(fit.stretches_by_run) == 2 and min(fit.stretches_by_run) > 500
+
+
+def test_pooled_stretches_are_each_runs_added_up() -> None:
+    # The stretches without a gap (before the second pass) depend on the runs and the
+    # settings, not on the fitted model: the pool's are each run's, added up (the second
+    # pass judges the pool, so its split may differ). Two delays keep the fits quick.
+    runs = [_recording(300.0, seed=4), _recording(120.0, seed=6)]
+    alone = [estimate_motion(o, g, delays=[0.0, 0.2]) for o, g in runs]
+    fit = estimate_motion([o for o, _ in runs], [g for _, g in runs], delays=[0.0, 0.2])
+    assert fit.stretches_by_run == tuple(a.stretches + a.left_out for a in alone)
+    assert fit.stretches + fit.left_out == sum(fit.stretches_by_run)
+    assert fit.stretches_by_run[0] > 2 * fit.stretches_by_run[1] > 0  # in the order given
+
+
+def test_one_run_in_a_list_is_that_run_and_a_run_without_overlap_adds_nothing() -> None:
+    odometry, truth = _recording(120.0, seed=6)
+    bare = estimate_motion(odometry, truth)
+    assert bare.stretches_by_run == (bare.stretches + bare.left_out,)
+    assert _equal_fits(estimate_motion([odometry], [truth]), bare)
+    # A second run whose truth is a day later than its odometry gives no stretch: the fit
+    # is the first run's, to the last bit (tuples do as lists).
+    later = GroundTruth(truth.t + 86400.0, truth.x, truth.y, truth.theta)
+    fit = estimate_motion((odometry, odometry), (truth, later))
+    assert _equal_fits(fit, bare) and fit.stretches_by_run == (*bare.stretches_by_run, 0)
+
+
+def test_runs_that_do_not_pair_up_are_refused_by_name() -> None:
+    odometry, truth = _recording()
+    with pytest.raises(InputError, match="2 Odometry and 1 GroundTruth given"):
+        estimate_motion([odometry, odometry], [truth])
+    with pytest.raises(InputError, match="empty"):
+        estimate_motion([], [])
+    with pytest.raises(InputError, match="odometry of run 2 must be an Odometry, got GroundTruth"):
+        estimate_motion([odometry, truth], [truth, truth])  # type: ignore[list-item]
+    with pytest.raises(InputError, match="truth of run 1 must be a GroundTruth, got str"):
+        estimate_motion([odometry], ["gt.csv"])  # type: ignore[list-item]
+    with pytest.raises(InputError, match="both be lists"):
+        estimate_motion(odometry, [truth])
+    with pytest.raises(InputError, match="both be lists"):
+        estimate_motion([odometry], truth)
+    # Too little overlap is judged on the pool, and the message gives each run's count.
+    short = GroundTruth(truth.t[:50], truth.x[:50], truth.y[:50], truth.theta[:50])
+    far = GroundTruth(truth.t + 1e6, truth.x, truth.y, truth.theta)
+    by_run = r"too little .* 2 stretches of 2.0 s \(run 1: 2, run 2: 0\)"
+    with pytest.raises(InputError, match=by_run):
+        estimate_motion([odometry, odometry], [short, far])
+    # Stretches too long for the runs: refused, naming stretch_s and each run's count.
+    o, g = _recording(120.0, seed=6)
+    too_long = r"only 2 stretches of 100 s \(stretch_s\) .* \(run 1: 1, run 2: 1\)"
+    with pytest.raises(InputError, match=too_long):
+        estimate_motion([o, o], [g, g], stretch_s=[100.0], delays=[0.2])
+
+
+def test_fit_motion_pairs_several_runs_on_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omniloc.cli import main
+    from omniloc.track import load_settings
+
+    out = tmp_path / "motion.json"
+    argv = ["fit-motion", "--out", str(out)]
+    for k, (seconds, seed) in enumerate(((300.0, 4), (120.0, 6))):
+        folder = tmp_path / f"run{k}"
+        folder.mkdir()
+        odo, gt = _write_run(folder, *_recording(seconds, seed=seed))
+        argv += ["--odometry", str(odo), "--groundtruth", str(gt)]
+    assert main(argv) == 0
+    first, second = capsys.readouterr().out.splitlines()[:2]
+    assert first.startswith("2 runs pooled")
+    a, b = (int(n) for n in first.split(": ")[-1].split(", "))
+    assert a > 2 * b > 0  # in the order given: the 300-s run first
+    fitted, left_out = (int(w) for w in second.replace("(", " ").split() if w.isdigit())
+    assert fitted + left_out == a + b
+    settings = load_settings(out)
+    assert settings["delay_s"] == pytest.approx(TRUE.delay_s, abs=0.03)
+    assert settings["v_scale"] == pytest.approx(TRUE.v_scale, rel=0.02)
+    assert main(argv[:-2]) == 1  # two odometry files, one track
+    assert "2 --odometry and 1 --groundtruth" in capsys.readouterr().err
 
 
 def test_a_simulated_sensor_gives_back_its_noise_detection_and_clutter() -> None:

@@ -257,9 +257,20 @@ def _build_parser() -> argparse.ArgumentParser:
         "fit-motion",
         help="fit the motion model to odometry and a ground-truth track (settings for track)",
     )
-    f.add_argument("--odometry", required=True, type=Path, help="odometry CSV: t,v,w")
     f.add_argument(
-        "--groundtruth", required=True, type=Path, help="true track of the same run: t,x,y,theta"
+        "--odometry",
+        required=True,
+        type=Path,
+        action="append",
+        help="odometry CSV: t,v,w; repeat it with --groundtruth to fit several runs of one "
+        "robot together",
+    )
+    f.add_argument(
+        "--groundtruth",
+        required=True,
+        type=Path,
+        action="append",
+        help="true track of the same run: t,x,y,theta (one per --odometry, in their order)",
     )
     _add_settings_out(f)
     fs = sub.add_parser(
@@ -906,8 +917,25 @@ def _cmd_fit_motion(args: argparse.Namespace) -> int:
     from .io import write_text
     from .track import estimate_motion, load_groundtruth, load_odometry
 
-    fit = estimate_motion(load_odometry(args.odometry), load_groundtruth(args.groundtruth))
+    if len(args.odometry) != len(args.groundtruth):
+        raise InputError(
+            f"{len(args.odometry)} --odometry and {len(args.groundtruth)} --groundtruth: give "
+            "one ground-truth track per odometry file, in the same order"
+        )
+    odometry = [load_odometry(path) for path in args.odometry]
+    truths = [load_groundtruth(path) for path in args.groundtruth]
+    fit = estimate_motion(
+        odometry[0] if len(odometry) == 1 else odometry,
+        truths[0] if len(truths) == 1 else truths,
+    )
     values = {f.name: getattr(fit.model, f.name) for f in dataclasses.fields(fit.model)}
+    if len(odometry) > 1:
+        counts = ", ".join(str(n) for n in fit.stretches_by_run)
+        none = " (0: that run's odometry and truth share too little time)"
+        print(
+            f"{len(odometry)} runs pooled; the stretches each gave, in their order (before "
+            f"outliers were left out): {counts}{none if 0 in fit.stretches_by_run else ''}"
+        )
     print(
         f"fitted on {fit.stretches} stretches ({fit.left_out} left out as outliers): "
         f"the odometry's rows describe the motion {values['delay_s']:+.2f} s after their time "

@@ -20,6 +20,10 @@ were fitted by hand before this existed; ``docs/tracking.md`` compares the two).
    standing for the truth's own noise. A second pass leaves out the stretches whose error is
    beyond the 99.9 % chi-square bound (the truth's glitches, a wheel that slipped once).
 
+Several runs of one robot are fitted together by pooling their stretches, each cut from its
+own run (:func:`estimate_motion` takes a list of each run's odometry and a list of their
+tracks).
+
 :func:`estimate_frame_sensor` does the same for the bearing sensor from frames of bearings
 and the truth (no landmark ids needed): each bearing is taken as the landmark whose bearing
 from the true pose is nearest, within a gate; then the noise (robust spread of those
@@ -97,6 +101,10 @@ class MotionFit:
         Stretches the noise was fitted on (after the second pass).
     left_out : int
         Stretches the second pass left out.
+    stretches_by_run : tuple of int
+        Stretches each run gave the noise fit (those without a gap in the truth, before the
+        second pass; ``stretches + left_out`` in all), in the order the runs were given: a
+        run that gave none did not count.
     """
 
     model: MotionModel
@@ -104,6 +112,7 @@ class MotionFit:
     delay_cost: FloatArray
     stretches: int
     left_out: int
+    stretches_by_run: tuple[int, ...] = ()
 
 
 def _seconds(values: ArrayLike, name: str, what: str) -> FloatArray:
@@ -170,26 +179,65 @@ def _errors(true: FloatArray, pred: FloatArray) -> FloatArray:
 
 
 def _delay_costs(
-    odometry: Odometry,
-    truth: GroundTruth,
-    a: FloatArray,
+    runs: list[tuple[Odometry, FloatArray, FloatArray]],
     length: float,
     delays: FloatArray,
     model: MotionModel,
-    max_gap_s: float,
 ) -> FloatArray:
-    true = _true_motion(truth, a, a + length, max_gap_s)
-    ok = np.isfinite(true).all(axis=1)
+    """At each delay, the mean squared error (metres and radians alike) of the relative
+    motions over every run's stretches ``[a, a + length]`` (each run as ``(odometry, a,
+    true motion)``), pooled."""
     cost = np.empty(delays.size)
     for i, d in enumerate(delays):
-        pred, _ = _predicted(odometry, a[ok], a[ok] + length, replace(model, delay_s=float(d)))
-        cost[i] = float(np.mean(np.sum(_errors(true[ok], pred) ** 2, axis=1)))
+        m = replace(model, delay_s=float(d))
+        squared = [
+            np.sum(_errors(true, _predicted(odometry, a, a + length, m)[0]) ** 2, axis=1)
+            for odometry, a, true in runs
+        ]
+        cost[i] = float(np.mean(np.concatenate(squared)))
     return cost
 
 
+def _runs(
+    odometry: Odometry | Sequence[Odometry], truth: GroundTruth | Sequence[GroundTruth]
+) -> list[tuple[Odometry, GroundTruth]]:
+    """One run (odometry, truth) or several (a list of each), as a list of pairs."""
+    if isinstance(odometry, Odometry) and isinstance(truth, GroundTruth):
+        return [(odometry, truth)]
+    if not isinstance(odometry, (list, tuple)) or not isinstance(truth, (list, tuple)):
+        got = f"got {type(odometry).__name__} and {type(truth).__name__}"
+        if isinstance(odometry, (list, tuple)) or isinstance(truth, (list, tuple)):
+            raise InputError(
+                "for several runs, odometry and truth must both be lists (one GroundTruth per "
+                f"Odometry, in the same order), {got}"
+            )
+        raise InputError(
+            f"estimate_motion needs an Odometry and a GroundTruth (or a list of each), {got}"
+        )
+    if len(odometry) != len(truth):
+        raise InputError(
+            f"{len(odometry)} Odometry and {len(truth)} GroundTruth given: give one "
+            "GroundTruth per Odometry (one pair per run), in the same order"
+        )
+    if not odometry:
+        raise InputError("no run given: odometry and truth are empty lists")
+    for k, (o, g) in enumerate(zip(odometry, truth, strict=True)):
+        if not isinstance(o, Odometry):
+            raise InputError(f"odometry of run {k + 1} must be an Odometry, got {type(o).__name__}")
+        if not isinstance(g, GroundTruth):
+            raise InputError(f"truth of run {k + 1} must be a GroundTruth, got {type(g).__name__}")
+    return list(zip(odometry, truth, strict=True))
+
+
+def _by_run(counts: Sequence[int]) -> str:
+    """``counts`` of each run, for a message: "run 1: 3, run 2: 0" (the first ten)."""
+    text = ", ".join(f"run {k + 1}: {c}" for k, c in enumerate(counts[:10]))
+    return text + (f", ... ({len(counts)} runs)" if len(counts) > 10 else "")
+
+
 def estimate_motion(
-    odometry: Odometry,
-    truth: GroundTruth,
+    odometry: Odometry | Sequence[Odometry],
+    truth: GroundTruth | Sequence[GroundTruth],
     *,
     stretch_s: ArrayLike = (0.5, 1.0, 2.0, 5.0, 10.0),
     delays: ArrayLike | None = None,
@@ -197,13 +245,17 @@ def estimate_motion(
     max_gap_s: float = 0.5,
 ) -> MotionFit:
     """Fit a :class:`~omniloc.track.MotionModel` to odometry and a ground-truth track of the
-    same run (see the module's documentation for the method).
+    same run, or to several runs of one robot together (see the module's documentation for
+    the method).
 
     Parameters
     ----------
-    odometry : Odometry
-    truth : GroundTruth
-        The true track over (part of) the same time.
+    odometry : Odometry, or a list of them
+        One run's odometry; for several runs fitted together, a list (or tuple) of each
+        run's.
+    truth : GroundTruth, or a list of them
+        The true track over (part of) the same time; several runs: one track each, in the
+        order of ``odometry``.
     stretch_s : array_like of float
         Lengths (s) of the stretches the noise is fitted on (each length's stretches do not
         overlap); several lengths tell noise per second from noise per metre.
@@ -223,10 +275,21 @@ def estimate_motion(
     ------
     InputError
         The odometry and the truth overlap too little for the fit (fewer than
-        MIN_STRETCHES stretches), or an argument out of range.
+        MIN_STRETCHES stretches, all runs together), lists of runs of unequal length, empty
+        or holding anything but Odometry (GroundTruth), or an argument out of range.
+
+    Notes
+    -----
+    Several runs: each run's stretches are cut from its own odometry and truth, over the
+    span both cover less the largest delay of the grid at either end (so a stretch never
+    spans two runs, and the runs' clocks may overlap or not: no time is shifted); then all
+    the stretches are pooled for the latency, the scale and the noise, as one run's would
+    be. A run too short for any stretch of a length gives none of that length (and a run
+    whose odometry and truth do not overlap, none at all: see
+    :attr:`MotionFit.stretches_by_run`); only the pool must reach MIN_STRETCHES. One run
+    given as a list of one gives the same fit as given bare.
     """
-    if not isinstance(odometry, Odometry) or not isinstance(truth, GroundTruth):
-        raise InputError("estimate_motion needs an Odometry and a GroundTruth")
+    pairs = _runs(odometry, truth)
     lengths = _seconds(stretch_s, "stretch_s", "positive lengths")
     if not (lengths > 0).all():
         raise InputError(f"stretch_s must be positive lengths in seconds, got {shorten(stretch_s)}")
@@ -242,65 +305,92 @@ def estimate_motion(
     _positive("max_gap_s", max_gap_s, MAX_STRETCH_S)
     if float(lengths.max()) > MAX_STRETCH_S:
         raise InputError(f"stretch_s must be at most {MAX_STRETCH_S:g} s, got {shorten(stretch_s)}")
-    # The span both cover, leaving room for any delay of the grid.
-    lo = max(float(odometry.t[0]), float(truth.t[0])) + float(np.abs(grid).max())
-    hi = min(float(odometry.t[-1]), float(truth.t[-1])) - float(np.abs(grid).max())
-    a = _stretches(lo, hi, delay_stretch_s, 0.5 * delay_stretch_s)
-    if a.size < MIN_STRETCHES:
+    # Each run's span that both cover, leaving room for any delay of the grid.
+    margin = float(np.abs(grid).max())
+    spans = [
+        (max(float(o.t[0]), float(g.t[0])) + margin, min(float(o.t[-1]), float(g.t[-1])) - margin)
+        for o, g in pairs
+    ]
+    starts = [_stretches(lo, hi, delay_stretch_s, 0.5 * delay_stretch_s) for lo, hi in spans]
+    if sum(a.size for a in starts) < MIN_STRETCHES:
+        lo, hi = spans[0]
         raise InputError(
             f"the odometry and the truth overlap for {max(hi - lo, 0.0):.1f} s: too little to "
             f"fit a motion model (at least {MIN_STRETCHES} stretches of {delay_stretch_s} s)"
+            if len(pairs) == 1
+            else f"the odometry and the truth of the {len(pairs)} runs overlap too little to "
+            f"fit a motion model: {sum(a.size for a in starts)} stretches of {delay_stretch_s} "
+            f"s ({_by_run([a.size for a in starts])}), at least {MIN_STRETCHES} needed in all"
+        )
+    # The truth's relative motion over each run's stretches, those without a gap.
+    runs = []
+    for (o, g), a in zip(pairs, starts, strict=True):
+        true = _true_motion(g, a, a + delay_stretch_s, max_gap_s)
+        ok = np.isfinite(true).all(axis=1)
+        runs.append((o, a[ok], true[ok]))
+    if not any(a.size for _, a, _ in runs):
+        raise InputError(
+            f"no stretch of {delay_stretch_s} s without a gap in the truth (longer than "
+            f"max_gap_s = {max_gap_s:g} s) to fit the latency on"
         )
     model = MotionModel()
 
     def best_delay(model: MotionModel) -> tuple[FloatArray, FloatArray]:
-        cost = _delay_costs(odometry, truth, a, delay_stretch_s, grid, model, max_gap_s)
+        cost = _delay_costs(runs, delay_stretch_s, grid, model)
         if not refine:
             return grid, cost
         near = float(grid[int(np.argmin(cost))])
         fine = np.round(np.arange(near - 0.04, near + 0.0401, 0.01), 10)
         fine = fine[~np.isin(fine, grid)]
         both = np.concatenate([grid, fine])
-        cost = np.concatenate(
-            [cost, _delay_costs(odometry, truth, a, delay_stretch_s, fine, model, max_gap_s)]
-        )
+        cost = np.concatenate([cost, _delay_costs(runs, delay_stretch_s, fine, model)])
         order = np.argsort(both)
         return both[order], cost[order]
 
     tried, cost = best_delay(model)
     model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
     # Scale: the truth's displacements against the odometry's (at scale 1).
-    true = _true_motion(truth, a, a + delay_stretch_s, max_gap_s)
-    ok = np.isfinite(true).all(axis=1)
-    pred, _ = _predicted(odometry, a[ok], a[ok] + delay_stretch_s, model)
+    true = np.concatenate([t for _, _, t in runs])
+    pred = np.concatenate([_predicted(o, a, a + delay_stretch_s, model)[0] for o, a, _ in runs])
     # The true displacement along the predicted one (its length would be biased upwards
     # by the noise across it).
-    along = float(np.sum(true[ok, :2] * pred[:, :2]))
+    along = float(np.sum(true[:, :2] * pred[:, :2]))
     squared = float(np.sum(pred[:, :2] ** 2))
     if not squared > 0:
         raise InputError("the odometry never moves in the span it shares with the truth")
     model = replace(model, v_scale=along / squared)
     tried, cost = best_delay(model)
     model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
-    # Noise: errors over stretches of each length, and the covariance of each noise value.
-    errs, parts = [], []
-    for length in lengths:
-        s = _stretches(lo, hi, float(length), float(length))
-        true = _true_motion(truth, s, s + length, max_gap_s)
-        ok = np.isfinite(true).all(axis=1)
-        pred, pieces = _predicted(odometry, s[ok], s[ok] + length, model)
-        errs.append(_errors(true[ok], pred))
-        unit = []
-        for j in range(len(NOISE_FIELDS)):
-            m = replace(model, **{f: float(i == j) for i, f in enumerate(NOISE_FIELDS)})
-            unit.append(np.stack([integrate(dt, v, w, m)[1] for dt, v, w in pieces]))
-        parts.append(np.stack(unit, axis=1))  # (n, 6, 3, 3)
+    # Noise: errors over each run's stretches of each length, and the covariance of each
+    # noise value.
+    errs, parts, by_run = [], [], []
+    for (o, g), (lo, hi) in zip(pairs, spans, strict=True):
+        count = 0
+        for length in lengths:
+            s = _stretches(lo, hi, float(length), float(length))
+            true = _true_motion(g, s, s + length, max_gap_s)
+            ok = np.isfinite(true).all(axis=1)
+            if not ok.any():
+                continue
+            pred, pieces = _predicted(o, s[ok], s[ok] + length, model)
+            errs.append(_errors(true[ok], pred))
+            unit = []
+            for j in range(len(NOISE_FIELDS)):
+                m = replace(model, **{f: float(i == j) for i, f in enumerate(NOISE_FIELDS)})
+                unit.append(np.stack([integrate(dt, v, w, m)[1] for dt, v, w in pieces]))
+            parts.append(np.stack(unit, axis=1))  # (n, 6, 3, 3)
+            count += int(ok.sum())
+        by_run.append(count)
+    if sum(by_run) < MIN_STRETCHES:
+        raise InputError(
+            f"only {sum(by_run)} stretches of "
+            + ", ".join(f"{x:g}" for x in lengths[:8])
+            + (", ..." if lengths.size > 8 else "")
+            + " s (stretch_s) without a gap in the truth: too few to fit the noise"
+            + (f" ({_by_run(by_run)})" if len(pairs) > 1 else "")
+        )
     r = np.concatenate(errs)
     Qp = np.concatenate(parts)
-    if r.shape[0] < MIN_STRETCHES:
-        raise InputError(
-            f"only {r.shape[0]} stretches without a gap in the truth: too few to fit the noise"
-        )
     floor = np.diag(TRUTH_FLOOR)
 
     def nll(logp: FloatArray, use: NDArray[np.bool_]) -> float:
@@ -326,7 +416,7 @@ def estimate_motion(
     # Values the likelihood cannot tell from zero come out as tiny ones: call them zero.
     noise = {f: (v if v > 1e-9 else 0.0) for f, v in noise.items()}
     model = replace(model, **noise)
-    return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()))
+    return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()), tuple(by_run))
 
 
 #: Turn-rate bins (rad/s) of :func:`turn_noise_fit`.
