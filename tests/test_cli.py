@@ -228,3 +228,29 @@ def test_localize_takes_the_clutter_by_detections(room_files, capsys) -> None:
     assert main([*args, "--clutter-by-detections", "0.2,x"]) == 1
     err = capsys.readouterr().err
     assert "--clutter-by-detections" in err and len(err.strip().splitlines()) == 1
+
+
+def test_python_dash_m_runs_the_command_line() -> None:
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-m", "omniloc", "--version"], capture_output=True, text=True, check=False
+    )
+    assert out.returncode == 0 and out.stdout.startswith("omniloc"), out.stderr
+    bad = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "omniloc",
+            "localize",
+            "--map",
+            "no-such-map.csv",
+            "--bearings",
+            "x",
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert bad.returncode == 1 and "no-such-map.csv" in bad.stderr
