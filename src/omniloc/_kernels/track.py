@@ -14,7 +14,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from .geometry import det3, form3, inv3, wrap_angle
+from .geometry import det3, form3, inv3, wrap_float
 
 __all__ = ["covered_kernel", "frame_update_kernel", "integrate_pieces", "pair_forms"]
 
@@ -126,7 +126,7 @@ def _predict_one(
             if ahead <= 0.0 or abs(dy * c - dx * s) > ahead * tan_out:
                 d[n] = 0.0
                 continue
-        h[n] = wrap_angle(math.atan2(dy, dx) - mu[2])
+        h[n] = wrap_float(math.atan2(dy, dx) - mu[2])
         J[n, 0] = dy / q
         J[n, 1] = -dx / q
         J[n, 2] = -1.0
@@ -248,7 +248,7 @@ def frame_update_kernel(
             base = fresh
             for o in range(K):
                 if obj_w[k, o] > 0.0:
-                    e = wrap_angle(z - obj_b[o])
+                    e = wrap_float(z - obj_b[o])
                     base += obj_w[k, o] * math.exp(-0.5 * e * e / obj_var) * obj_norm
             total = base
             for n in range(N):
@@ -257,7 +257,7 @@ def frame_update_kernel(
                     ac[n] = 0.0
                     continue
                 S = var[n] + sigma2
-                nu[n] = wrap_angle(z - h[n])
+                nu[n] = wrap_float(z - h[n])
                 rho = d[n] / max(1.0 - d[n], 1e-12)
                 if core_share > 0.0:
                     a[n] = _reading(wide, rho, nu[n], S, norm)
@@ -305,7 +305,7 @@ def frame_update_kernel(
                     C[j, i] = v
             for i in range(3):
                 m[i] += mean[i]
-            m[2] = wrap_angle(m[2])
+            m[2] = wrap_float(m[2])
             moved = True
     return mu, P, log_ratio, explained, clutter_post
 
@@ -329,7 +329,7 @@ def covered_kernel(
             d1 = poses[i, 1] - mu[k, 1]
             if d0 * d0 + d1 * d1 > r2:
                 continue
-            d2 = wrap_angle(poses[i, 2] - mu[k, 2])
+            d2 = wrap_float(poses[i, 2] - mu[k, 2])
             G = Pinv[k]
             m2 = (
                 d0 * (G[0, 0] * d0 + G[0, 1] * d1 + G[0, 2] * d2)
