@@ -81,8 +81,28 @@ def integrate_pieces(
 def _reading(share: float, rho: float, nu: float, S: float, norm: float) -> float:
     """One reading's term of a bearing's likelihood ratio: ``share`` of the detection odds
     ``rho`` times the Gaussian density of the innovation ``nu`` with variance ``S`` (over the
-    clutter density: ``norm`` = 1 / (sqrt(2 pi) kappa))."""
-    return share * rho * math.exp(-0.5 * nu * nu / S) / math.sqrt(S) * norm
+    clutter density: ``norm`` = 1 / (sqrt(2 pi) kappa)). Below an exponent of -750 the
+    density is far below the smallest double and ``exp`` returns 0: the same product is
+    formed with that 0, without calling it."""
+    x = -0.5 * nu * nu / S
+    if x < -750.0:
+        return share * rho * 0.0 / math.sqrt(S) * norm
+    return share * rho * math.exp(x) / math.sqrt(S) * norm
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _in_view(e: float, sd: float) -> float:
+    """The probability that a bearing predicted ``e`` radians inside the edge of the view
+    (negative: outside), with standard deviation ``sd``, is in view: ``0.5 erfc(-e / (sd
+    sqrt 2))``. Where ``erfc`` is 0 or 2 to the last bit (its argument beyond 27.5, where
+    its value is below the smallest double, or below -6.5, within 1e-20 of 2), that value
+    is taken without calling it."""
+    x = -(e / sd) / math.sqrt(2.0)
+    if x >= 27.5:
+        return 0.5 * 0.0
+    if x <= -6.5:
+        return 0.5 * 2.0
+    return 0.5 * math.erfc(x)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -143,8 +163,7 @@ def _predict_one(
             e = half_fov - abs(h[n])
             vis = 1.0 if e > 0.0 else (0.5 if e == 0.0 else 0.0)
         else:
-            sd = math.sqrt(var[n]) + 1e-9
-            vis = 0.5 * math.erfc(-((half_fov - abs(h[n])) / sd) / math.sqrt(2.0))
+            vis = _in_view(half_fov - abs(h[n]), math.sqrt(var[n]) + 1e-9)
         d[n] = p_detect * vis
 
 
@@ -222,6 +241,8 @@ def frame_update_kernel(
     # of view (see _predict_one), with a margin of 1e-7 rad beyond the edge.
     edge = half_fov + 1e-7
     tan_out = math.tan(edge) if not update and 0.0 <= half_fov and edge < 1.5 else -1.0
+    last_d = -1.0
+    last_log = 0.0
     for k in range(H):
         m = mu[k]
         C = P[k]
@@ -231,7 +252,13 @@ def frame_update_kernel(
         s = 0.0
         for n in range(N):
             if d[n] > 0.0:
-                s += math.log1p(-min(d[n], 1.0 - 1e-12))
+                # (Exactly known poses give every landmark in view the same d: its log1p is
+                # computed once.)
+                dn = min(d[n], 1.0 - 1e-12)
+                if dn != last_d:
+                    last_d = dn
+                    last_log = math.log1p(-dn)
+                s += last_log
         for o in range(K):
             s -= obj_w[k, o]
         log_ratio[k] = s + fresh_cost
