@@ -51,3 +51,22 @@ def test_wrap_float_is_wrap_angle_bit_for_bit(rng: np.random.Generator) -> None:
     fast = np.array([wrap_float(float(x)) for x in a])
     assert np.array_equal(fast.view(np.int64), compiled.view(np.int64))
     assert np.array_equal(fast.view(np.int64), readable.view(np.int64))
+
+
+def test_wrap_fast_paths_are_the_mod_bit_for_bit(rng: np.random.Generator) -> None:
+    # wrap skips np.mod where it returns its input; the oracle is the plain formula.
+    a = _angle_cases(rng)
+    with np.errstate(invalid="ignore"):
+        ref = np.mod(a + np.pi, 2.0 * np.pi) - np.pi
+    ref = np.where(ref >= np.pi, ref - 2.0 * np.pi, ref)
+    bits = ref.view(np.int64)
+    with np.errstate(invalid="ignore"):
+        scalars = np.array([wrap(float(x)) for x in a])
+        numpy_scalars = np.array([wrap(np.float64(x)) for x in a])
+        inside = np.asarray(wrap(a[np.abs(a) < 3.0]))
+        whole = np.asarray(wrap(a))
+    assert np.array_equal(scalars.view(np.int64), bits)
+    assert np.array_equal(numpy_scalars.view(np.int64), bits)
+    assert np.array_equal(inside.view(np.int64), bits[np.abs(a) < 3.0])
+    assert np.array_equal(whole.view(np.int64), bits)
+    assert isinstance(wrap(0.5), float) and isinstance(wrap(np.float64(0.5)), float)
