@@ -386,12 +386,12 @@ def test_core_update_is_a_boolean_setting() -> None:
 
 
 def test_the_kernels_shortcuts_of_erfc_and_exp_are_bit_for_bit(rng: np.random.Generator) -> None:
-    # _in_view and _reading skip erfc where it is 0 or 2 and exp where it is 0; the plain
+    # _in_view, _reading and _exp skip erfc where it is 0 or 2 and exp where it is 0; the plain
     # formulas they replace, compiled the same way, are the oracle, over the thresholds
     # and far beyond.
     from numba import njit
 
-    from omniloc._kernels.track import _in_view, _reading
+    from omniloc._kernels.track import _exp, _in_view, _reading
 
     @njit(error_model="numpy")
     def plain_in_view(e: float, sd: float) -> float:
@@ -400,6 +400,10 @@ def test_the_kernels_shortcuts_of_erfc_and_exp_are_bit_for_bit(rng: np.random.Ge
     @njit(error_model="numpy")
     def plain_reading(share: float, rho: float, nu: float, S: float, norm: float) -> float:
         return share * rho * math.exp(-0.5 * nu * nu / S) / math.sqrt(S) * norm
+
+    @njit(error_model="numpy")
+    def plain_exp(x: float) -> float:
+        return math.exp(x)
 
     def same(a: float, b: float) -> bool:
         return np.float64(a).tobytes() == np.float64(b).tobytes()
@@ -418,3 +422,5 @@ def test_the_kernels_shortcuts_of_erfc_and_exp_are_bit_for_bit(rng: np.random.Ge
     for n, v in zip(nu.tolist(), S.tolist(), strict=True):
         for share, rho, norm_ in ((1.0, 0.5, 30.0), (0.43, 1e-6, 2.0), (0.0, 2.0, 1.0)):
             assert same(_reading(share, rho, n, v, norm_), plain_reading(share, rho, n, v, norm_))
+    for x in np.concatenate([[-750.0, -750.0 - 1e-12, -745.2, -1e300, -np.inf, np.nan], -(nu**2)]):
+        assert same(_exp(float(x)), plain_exp(float(x))), x
