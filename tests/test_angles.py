@@ -26,3 +26,47 @@ def test_wrap_edges() -> None:
 def test_angdiff_and_units() -> None:
     assert np.isclose(angdiff(np.deg2rad(179), np.deg2rad(-179)), np.deg2rad(-2))
     assert np.isclose(rad2deg(deg2rad(123.0)), 123.0)
+
+
+def _angle_cases(rng: np.random.Generator) -> np.ndarray:
+    """Random angles and the edges of wrapping: +-pi and their neighbours, signed zeros,
+    tiny and huge values, infinities and NaN."""
+    pi = np.pi
+    edges = [0.0, -0.0, 1e-300, -1e-300, 1e-20, -1e-20, pi, -pi, 2 * pi, -2 * pi, 3 * pi]
+    edges += [np.nextafter(pi, 0), np.nextafter(pi, 4), np.nextafter(-pi, 0)]
+    edges += [np.nextafter(-pi, -4), np.nextafter(-3 * pi, 0), 1e10, -1e10, 1e300, -1e300]
+    edges += [np.inf, -np.inf, np.nan]
+    near = np.concatenate([pi + rng.normal(0, 1e-15, 200), -pi + rng.normal(0, 1e-15, 200)])
+    return np.concatenate([edges, near, rng.uniform(-10, 10, 5000), rng.normal(0, 1e3, 500)])
+
+
+def test_wrap_float_is_wrap_angle_bit_for_bit(rng: np.random.Generator) -> None:
+    # The compiled kernels' fast wrap of one float against the element-wise wrap it replaces.
+    from omniloc._kernels.geometry import wrap_angle, wrap_float
+
+    a = _angle_cases(rng)
+    compiled = np.array([wrap_angle(float(x)) for x in a])
+    with np.errstate(invalid="ignore"):
+        readable = np.asarray(wrap_angle.py_func(a))
+    fast = np.array([wrap_float(float(x)) for x in a])
+    assert np.array_equal(fast.view(np.int64), compiled.view(np.int64))
+    assert np.array_equal(fast.view(np.int64), readable.view(np.int64))
+
+
+def test_wrap_fast_paths_are_the_mod_bit_for_bit(rng: np.random.Generator) -> None:
+    # wrap skips np.mod where it returns its input; the oracle is the plain formula.
+    a = _angle_cases(rng)
+    with np.errstate(invalid="ignore"):
+        ref = np.mod(a + np.pi, 2.0 * np.pi) - np.pi
+    ref = np.where(ref >= np.pi, ref - 2.0 * np.pi, ref)
+    bits = ref.view(np.int64)
+    with np.errstate(invalid="ignore"):
+        scalars = np.array([wrap(float(x)) for x in a])
+        numpy_scalars = np.array([wrap(np.float64(x)) for x in a])
+        inside = np.asarray(wrap(a[np.abs(a) < 3.0]))
+        whole = np.asarray(wrap(a))
+    assert np.array_equal(scalars.view(np.int64), bits)
+    assert np.array_equal(numpy_scalars.view(np.int64), bits)
+    assert np.array_equal(inside.view(np.int64), bits[np.abs(a) < 3.0])
+    assert np.array_equal(whole.view(np.int64), bits)
+    assert isinstance(wrap(0.5), float) and isinstance(wrap(np.float64(0.5)), float)

@@ -934,3 +934,18 @@ def test_clutter_by_detections_shifts_each_interpretation_by_its_clutter_count()
         for a in common
     ]
     assert np.ptp(shift) < 1e-6  # one normalising constant for all
+
+
+@pytest.mark.parametrize("shape", [(1, 3), (2, 4), (50, 3), (3000, 6), (500, 12)])
+def test_unique_rows_is_numpys_unique(shape: tuple[int, int], rng: np.random.Generator) -> None:
+    # The search's dedup of paths against the numpy call it replaces: rows, order and the
+    # index of each row's first occurrence (paths are landmark rows, -1 for a wildcard).
+    a = rng.integers(-1, 6, shape).astype(np.int64)
+    a = np.concatenate([a, a[rng.integers(0, shape[0], shape[0])], a[:1]])
+    rows, first = hyp_search.unique_rows(a)
+    want_rows, want_first = np.unique(a, axis=0, return_index=True)
+    assert np.array_equal(rows, want_rows) and np.array_equal(first, want_first)
+    extreme = np.array([[2**62, -1, 0], [-(2**62), 5, 1], [2**62, -1, 0], [0, 0, 0]])
+    rows, first = hyp_search.unique_rows(extreme)
+    want_rows, want_first = np.unique(extreme, axis=0, return_index=True)
+    assert np.array_equal(rows, want_rows) and np.array_equal(first, want_first)

@@ -383,3 +383,44 @@ def test_core_update_is_a_boolean_setting() -> None:
     for bad in (0, 1.0, "false", None):
         with pytest.raises(InputError, match="core_update must be true or false"):
             TrackerConfig(core_update=bad)  # type: ignore[arg-type]
+
+
+def test_the_kernels_shortcuts_of_erfc_and_exp_are_bit_for_bit(rng: np.random.Generator) -> None:
+    # _in_view, _reading and _exp skip erfc where it is 0 or 2 and exp where it is 0; the plain
+    # formulas they replace, compiled the same way, are the oracle, over the thresholds
+    # and far beyond.
+    from numba import njit
+
+    from omniloc._kernels.track import _exp, _in_view, _reading
+
+    @njit(error_model="numpy")
+    def plain_in_view(e: float, sd: float) -> float:
+        return 0.5 * math.erfc(-(e / sd) / math.sqrt(2.0))
+
+    @njit(error_model="numpy")
+    def plain_reading(share: float, rho: float, nu: float, S: float, norm: float) -> float:
+        return share * rho * math.exp(-0.5 * nu * nu / S) / math.sqrt(S) * norm
+
+    @njit(error_model="numpy")
+    def plain_exp(x: float) -> float:
+        return math.exp(x)
+
+    def same(a: float, b: float) -> bool:
+        return np.float64(a).tobytes() == np.float64(b).tobytes()
+
+    e = np.concatenate(
+        [rng.uniform(-3, 3, 3000), rng.normal(0, 1e-3, 1000), [0.0, -0.0, np.inf, -np.inf, np.nan]]
+    )
+    sd = np.concatenate([10.0 ** rng.uniform(-9, 1, e.size - 5), [1e-9, 1.0, 1e-3, 1.0, 1.0]])
+    for x, s in zip(e.tolist(), sd.tolist(), strict=True):
+        assert same(_in_view(x, s), plain_in_view(x, s)), (x, s)
+    for arg in (27.5, 27.5 + 1e-12, 27.5 - 1e-12, -6.5, -6.5 - 1e-12, -6.5 + 1e-12, 1e300, -1e300):
+        x = -arg * math.sqrt(2.0)
+        assert same(_in_view(x, 1.0), plain_in_view(x, 1.0)), arg
+    nu = np.concatenate([rng.uniform(-4, 4, 3000), [0.0, np.pi, -np.pi, np.inf, np.nan]])
+    S = np.concatenate([10.0 ** rng.uniform(-8, 0, nu.size - 5), [1e-8, 1e-8, 1e-3, 1.0, 1.0]])
+    for n, v in zip(nu.tolist(), S.tolist(), strict=True):
+        for share, rho, norm_ in ((1.0, 0.5, 30.0), (0.43, 1e-6, 2.0), (0.0, 2.0, 1.0)):
+            assert same(_reading(share, rho, n, v, norm_), plain_reading(share, rho, n, v, norm_))
+    for x in np.concatenate([[-750.0, -750.0 - 1e-12, -745.2, -1e300, -np.inf, np.nan], -(nu**2)]):
+        assert same(_exp(float(x)), plain_exp(float(x))), x

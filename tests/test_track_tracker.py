@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from omniloc import LandmarkMap, Pose, symmetric_map
+from omniloc.angles import wrap
 from omniloc.errors import InputError
 from omniloc.sensor import SensorModel
 from omniloc.track import (
@@ -692,3 +693,37 @@ def test_the_covariance_inflation_scales_what_is_reported_and_decided_not_the_fi
     for bad in (0.0, 0.5, -1.0, float("inf")):
         with pytest.raises(InputError, match="covariance_inflation"):
             TrackerConfig(covariance_inflation=bad)
+
+
+@pytest.mark.parametrize("n_a, n_b", [(1, 1), (7, 1), (30, 30), (50, 60), (3, 0)])
+def test_near_pairs_is_the_numpy_brute_force(n_a: int, n_b: int, rng: np.random.Generator) -> None:
+    # The compiled brute force of _same_pairs against the numpy steps it replaces, on poses
+    # bunched so that every test decides some pairs, headings across +-pi, a singular
+    # covariance and a NaN pose.
+    from omniloc._kernels.track import near_pairs, pair_forms
+
+    def poses(n: int) -> np.ndarray:
+        p = np.column_stack([rng.normal(0, 0.3, n), rng.normal(0, 0.3, n), rng.normal(3.1, 0.1, n)])
+        p[:, 2] = np.asarray(wrap(p[:, 2]))
+        return p
+
+    def covs(n: int) -> np.ndarray:
+        A = rng.normal(0, 0.1, (n, 3, 3))
+        return A @ np.swapaxes(A, 1, 2) + 1e-4 * np.eye(3)
+
+    mu_a, mu_b, P_a, P_b = poses(n_a), poses(n_b), covs(n_a), covs(n_b)
+    if n_a > 5 and n_b:
+        mu_b[0] = mu_a[0]
+        P_a[1] = P_b[0] = 0.0
+        mu_a[2, 1] = np.nan
+    pos2, heading, chi2 = 0.3**2, np.deg2rad(5.0), 9.0
+    gap = mu_a[:, None, :2] - mu_b[None, :, :2]
+    ia, ib = np.nonzero((gap**2).sum(axis=2) <= pos2)
+    d = mu_a[ia] - mu_b[ib]
+    d[:, 2] = np.asarray(wrap(d[:, 2]))
+    keep = np.abs(d[:, 2]) <= heading
+    ia, ib, d = ia[keep].astype(np.int64), ib[keep].astype(np.int64), d[keep]
+    same = pair_forms(np.ascontiguousarray(d), P_a, P_b, ia, ib) <= chi2
+    got_a, got_b = near_pairs(mu_a, P_a, mu_b.reshape(-1, 3), P_b, pos2, heading, chi2)
+    assert np.array_equal(got_a, ia[same]) and np.array_equal(got_b, ib[same])
+    assert n_a * n_b < 900 or 0 < got_a.size < n_a * n_b  # the test decides both ways

@@ -5,6 +5,8 @@ Inside omniloc every angle is in radians. Bearings and headings are wrapped to [
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -33,8 +35,18 @@ def wrap(angle: ArrayLike) -> NDArray[np.float64] | float:
     >>> float(wrap(np.pi))
     -3.141592653589793
     """
+    # Where 0 <= s = angle + pi < 2 pi (nearly always), the mod below returns s exactly and
+    # s - pi is below pi: the same angle is s - pi, without the mod (numpy's, or Python's
+    # float %, the same fmod), bit for bit.
+    if isinstance(angle, float):
+        s = angle + math.pi
+        if 0.0 <= s < TWO_PI:
+            return float(s - math.pi)
     a = np.asarray(angle, dtype=np.float64)
-    out = np.mod(a + np.pi, TWO_PI) - np.pi
+    s = a + np.pi
+    if a.ndim and ((s >= 0.0) & (s < TWO_PI)).all():
+        return s - np.pi
+    out = np.mod(s, TWO_PI) - np.pi
     # np.mod can return exactly 2*pi for tiny negative inputs through rounding.
     out = np.where(out >= np.pi, out - TWO_PI, out)
     if out.ndim == 0:

@@ -91,6 +91,16 @@ class Pose:
     theta: float
 
     def __post_init__(self) -> None:
+        x, y, t = self.x, self.y, self.theta
+        if (
+            type(x) is float
+            and type(y) is float
+            and type(t) is float
+            and math.isfinite(x)
+            and math.isfinite(y)
+            and -math.pi <= t < math.pi
+        ):
+            return  # already what the checks below would make of it (the common case)
         x, y, t = (
             finite_number(v, f"pose {k}")
             for k, v in zip(("x", "y", "theta"), self.as_tuple(), strict=True)

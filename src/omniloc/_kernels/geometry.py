@@ -63,6 +63,7 @@ __all__ = [
     "ratio_from_parts",
     "sums_invertible",
     "wrap_angle",
+    "wrap_float",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -93,9 +94,22 @@ _jit = njit(cache=True, error_model="numpy", nogil=True)
 
 @_jit
 def wrap_angle(a: Any) -> Any:
-    """Wrap to [-pi, pi) (``np.mod`` can round up to exactly pi: that is moved down)."""
+    """Wrap to [-pi, pi) (``np.mod`` can round up to exactly pi: that is moved down).
+    Element-wise on arrays; :func:`wrap_float` gives the same for one float, faster."""
     t = (a + np.pi) % TWO_PI - np.pi
     return t - TWO_PI * (t >= np.pi)
+
+
+@_jit
+def wrap_float(a: float) -> float:
+    """:func:`wrap_angle` of one float, bit for bit, without its ``%`` (a call of libm's
+    ``fmod``, the costliest step of the tracker's frame kernel) where that changes nothing:
+    for ``0 <= s = a + pi < 2 pi``, ``s % (2 pi)`` is ``s`` exactly, and ``s - pi`` is below
+    pi (exact for ``s >= pi / 2``, Sterbenz), so nothing is moved down."""
+    s = a + np.pi
+    if s >= 0.0 and s < TWO_PI:
+        return s - np.pi
+    return wrap_angle(a)  # NaN, infinities and angles outside [-pi, pi)
 
 
 @_jit
@@ -289,7 +303,7 @@ def _normal_equations(
             dx = lx[i] - x
             dy = ly[i] - y
             r2 = dx * dx + dy * dy
-            r = wrap_angle(np.arctan2(dy, dx) - t - bm[i])
+            r = wrap_float(np.arctan2(dy, dx) - t - bm[i])
             sse += r * r
             gx, gy = dy / r2, -dx / r2
             h00, h01, h02, h11, h12, h22 = add_pair(h00, h01, h02, h11, h12, h22, gx, gy)
@@ -356,7 +370,7 @@ def gn_refine(
         x, y, t, sse = nx, ny, nt, nsse
         h00, h01, h02, h11, h12, h22 = n00, n01, n02, n11, n12, n22
         g0, g1, g2 = m0, m1, m2
-    return x, y, wrap_angle(t), sse
+    return x, y, wrap_float(t), sse
 
 
 @_jit

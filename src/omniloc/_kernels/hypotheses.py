@@ -46,7 +46,7 @@ from .geometry import (
     position_from_sums,
     pred_var,
     ratio_from_parts,
-    wrap_angle,
+    wrap_float,
 )
 
 __all__ = [
@@ -582,11 +582,11 @@ def _missed_count(
         if rr > vis.plain_hi or rr < vis.plain_lo:
             continue
         pred = np.arctan2(dy, dx) - pt
-        if abs(wrap_angle(pred)) > vis.half_fov - margin:
+        if abs(wrap_float(pred)) > vis.half_fov - margin:
             continue
         alone = True
         for o in range(beta.shape[0]):
-            if abs(wrap_angle(pred - beta[o])) <= 2.0 * margin:
+            if abs(wrap_float(pred - beta[o])) <= 2.0 * margin:
                 alone = False
                 break
         if alone:
@@ -1127,7 +1127,7 @@ def hypotheses(
                     if k_pre > 0 and budget.stop_first:
                         for r in range(nr - 1, -1, -1):
                             walk.ahead[r] = walk.ahead[r + 1] + int(pre_work[3, r])
-                    pt = wrap_angle(np.arctan2(liy - py, lix - px) - beta[oa])
+                    pt = wrap_float(np.arctan2(liy - py, lix - px) - beta[oa])
                     walk.pose[0, 0], walk.pose[0, 1], walk.pose[0, 2], walk.pose[0, 3] = (
                         px,
                         py,

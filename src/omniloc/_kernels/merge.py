@@ -6,7 +6,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from .geometry import form3, inv3, wrap_angle
+from .geometry import form3, inv3, wrap_float
 
 __all__ = ["merge"]
 
@@ -57,7 +57,7 @@ def merge(
             d1 = poses[k, 1] - yi
             if d0 * d0 + d1 * d1 > reach:
                 continue
-            d2 = wrap_angle(poses[k, 2] - ti)
+            d2 = wrap_float(poses[k, 2] - ti)
             if abs(d0) < 1e-6 and abs(d1) < 1e-6 and abs(d2) < 1e-6:
                 owner[i] = k
                 break

@@ -14,9 +14,15 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from .geometry import det3, form3, inv3, wrap_angle
+from .geometry import det3, form3, inv3, wrap_float
 
-__all__ = ["covered_kernel", "frame_update_kernel", "integrate_pieces", "pair_forms"]
+__all__ = [
+    "covered_kernel",
+    "frame_update_kernel",
+    "integrate_pieces",
+    "near_pairs",
+    "pair_forms",
+]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -78,11 +84,33 @@ def integrate_pieces(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _exp(x: float) -> float:
+    """``math.exp(x)``, bit for bit, without calling it below -750 (where its value, below
+    1e-325, is under the smallest double: it returns 0)."""
+    return 0.0 if x < -750.0 else math.exp(x)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _reading(share: float, rho: float, nu: float, S: float, norm: float) -> float:
     """One reading's term of a bearing's likelihood ratio: ``share`` of the detection odds
     ``rho`` times the Gaussian density of the innovation ``nu`` with variance ``S`` (over the
     clutter density: ``norm`` = 1 / (sqrt(2 pi) kappa))."""
-    return share * rho * math.exp(-0.5 * nu * nu / S) / math.sqrt(S) * norm
+    return share * rho * _exp(-0.5 * nu * nu / S) / math.sqrt(S) * norm
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _in_view(e: float, sd: float) -> float:
+    """The probability that a bearing predicted ``e`` radians inside the edge of the view
+    (negative: outside), with standard deviation ``sd``, is in view: ``0.5 erfc(-e / (sd
+    sqrt 2))``. Where ``erfc`` is 0 or 2 to the last bit (its argument beyond 27.5, where
+    its value is below the smallest double, or below -6.5, within 1e-20 of 2), that value
+    is taken without calling it."""
+    x = -(e / sd) / math.sqrt(2.0)
+    if x >= 27.5:
+        return 0.5 * 0.0
+    if x <= -6.5:
+        return 0.5 * 2.0
+    return 0.5 * math.erfc(x)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -126,7 +154,7 @@ def _predict_one(
             if ahead <= 0.0 or abs(dy * c - dx * s) > ahead * tan_out:
                 d[n] = 0.0
                 continue
-        h[n] = wrap_angle(math.atan2(dy, dx) - mu[2])
+        h[n] = wrap_float(math.atan2(dy, dx) - mu[2])
         J[n, 0] = dy / q
         J[n, 1] = -dx / q
         J[n, 2] = -1.0
@@ -143,8 +171,7 @@ def _predict_one(
             e = half_fov - abs(h[n])
             vis = 1.0 if e > 0.0 else (0.5 if e == 0.0 else 0.0)
         else:
-            sd = math.sqrt(var[n]) + 1e-9
-            vis = 0.5 * math.erfc(-((half_fov - abs(h[n])) / sd) / math.sqrt(2.0))
+            vis = _in_view(half_fov - abs(h[n]), math.sqrt(var[n]) + 1e-9)
         d[n] = p_detect * vis
 
 
@@ -172,10 +199,11 @@ def frame_update_kernel(
     obj_var: float,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """Take one frame of bearings into H Gaussian hypotheses ``(mu, P)`` (copies are
-    returned): the log-likelihood ratio of the frame (H,), the expected number of its
-    bearings that are landmarks (H,), each hypothesis updated by the mixture of each
-    bearing's readings, one bearing at a time (see :mod:`omniloc.track.likelihood`), and
-    each bearing's posterior probability of being clutter (H, k).
+    returned; ``P`` as given when ``update`` is False): the log-likelihood ratio of the
+    frame (H,), the expected number of its bearings that are landmarks (H,), each
+    hypothesis updated by the mixture of each bearing's readings, one bearing at a time
+    (see :mod:`omniloc.track.likelihood`), and each bearing's posterior probability of
+    being clutter (H, k).
     ``update`` False: exactly known poses (particles, ``P`` zero), which no bearing moves --
     the ratio only, from one prediction per pose.
 
@@ -192,7 +220,7 @@ def frame_update_kernel(
     both together by the gain of variance ``sigma2`` (False: the core weighs, the update is
     the tail's). ``core_share`` 0: exactly the single Gaussian."""
     mu = mu.copy()
-    P = P.copy()
+    P = P.copy() if update else P  # (exactly known poses: P is neither changed nor read back)
     H = mu.shape[0]
     N = L.shape[0]
     K = obj_b.shape[0]
@@ -222,6 +250,8 @@ def frame_update_kernel(
     # of view (see _predict_one), with a margin of 1e-7 rad beyond the edge.
     edge = half_fov + 1e-7
     tan_out = math.tan(edge) if not update and 0.0 <= half_fov and edge < 1.5 else -1.0
+    last_d = -1.0
+    last_log = 0.0
     for k in range(H):
         m = mu[k]
         C = P[k]
@@ -231,7 +261,13 @@ def frame_update_kernel(
         s = 0.0
         for n in range(N):
             if d[n] > 0.0:
-                s += math.log1p(-min(d[n], 1.0 - 1e-12))
+                # (Exactly known poses give every landmark in view the same d: its log1p is
+                # computed once.)
+                dn = min(d[n], 1.0 - 1e-12)
+                if dn != last_d:
+                    last_d = dn
+                    last_log = math.log1p(-dn)
+                s += last_log
         for o in range(K):
             s -= obj_w[k, o]
         log_ratio[k] = s + fresh_cost
@@ -248,8 +284,8 @@ def frame_update_kernel(
             base = fresh
             for o in range(K):
                 if obj_w[k, o] > 0.0:
-                    e = wrap_angle(z - obj_b[o])
-                    base += obj_w[k, o] * math.exp(-0.5 * e * e / obj_var) * obj_norm
+                    e = wrap_float(z - obj_b[o])
+                    base += obj_w[k, o] * _exp(-0.5 * e * e / obj_var) * obj_norm
             total = base
             for n in range(N):
                 if d[n] == 0.0:
@@ -257,7 +293,7 @@ def frame_update_kernel(
                     ac[n] = 0.0
                     continue
                 S = var[n] + sigma2
-                nu[n] = wrap_angle(z - h[n])
+                nu[n] = wrap_float(z - h[n])
                 rho = d[n] / max(1.0 - d[n], 1e-12)
                 if core_share > 0.0:
                     a[n] = _reading(wide, rho, nu[n], S, norm)
@@ -305,7 +341,7 @@ def frame_update_kernel(
                     C[j, i] = v
             for i in range(3):
                 m[i] += mean[i]
-            m[2] = wrap_angle(m[2])
+            m[2] = wrap_float(m[2])
             moved = True
     return mu, P, log_ratio, explained, clutter_post
 
@@ -329,7 +365,7 @@ def covered_kernel(
             d1 = poses[i, 1] - mu[k, 1]
             if d0 * d0 + d1 * d1 > r2:
                 continue
-            d2 = wrap_angle(poses[i, 2] - mu[k, 2])
+            d2 = wrap_float(poses[i, 2] - mu[k, 2])
             G = Pinv[k]
             m2 = (
                 d0 * (G[0, 0] * d0 + G[0, 1] * d1 + G[0, 2] * d2)
@@ -342,23 +378,60 @@ def covered_kernel(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _pair_form(A: FloatArray, B: FloatArray, d0: float, d1: float, d2: float) -> float:
+    """``d^T (A + B)^-1 d`` (the sum's upper triangle, by Cramer's rule); inf where the
+    sum's determinant is not positive."""
+    h00 = A[0, 0] + B[0, 0]
+    h01 = A[0, 1] + B[0, 1]
+    h02 = A[0, 2] + B[0, 2]
+    h11 = A[1, 1] + B[1, 1]
+    h12 = A[1, 2] + B[1, 2]
+    h22 = A[2, 2] + B[2, 2]
+    if not det3(h00, h01, h02, h11, h12, h22) > 0.0:
+        return np.inf
+    c00, c01, c02, c11, c12, c22, _ = inv3(h00, h01, h02, h11, h12, h22, 1.0, 0.0)
+    return form3(c00, c01, c02, c11, c12, c22, d0, d1, d2)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def pair_forms(
     d: FloatArray, Pa: FloatArray, Pb: FloatArray, ia: IntArray, ib: IntArray
 ) -> FloatArray:
-    """``d[k]^T (Pa[ia[k]] + Pb[ib[k]])^-1 d[k]`` for each pair ``k`` (the sums' upper
-    triangles, by Cramer's rule); inf where a sum's determinant is not positive."""
+    """``d[k]^T (Pa[ia[k]] + Pb[ib[k]])^-1 d[k]`` for each pair ``k`` (:func:`_pair_form`)."""
     out = np.full(d.shape[0], np.inf)
     for k in range(d.shape[0]):
-        A = Pa[ia[k]]
-        B = Pb[ib[k]]
-        h00 = A[0, 0] + B[0, 0]
-        h01 = A[0, 1] + B[0, 1]
-        h02 = A[0, 2] + B[0, 2]
-        h11 = A[1, 1] + B[1, 1]
-        h12 = A[1, 2] + B[1, 2]
-        h22 = A[2, 2] + B[2, 2]
-        if not det3(h00, h01, h02, h11, h12, h22) > 0.0:
-            continue
-        c00, c01, c02, c11, c12, c22, _ = inv3(h00, h01, h02, h11, h12, h22, 1.0, 0.0)
-        out[k] = form3(c00, c01, c02, c11, c12, c22, d[k, 0], d[k, 1], d[k, 2])
+        out[k] = _pair_form(Pa[ia[k]], Pb[ib[k]], d[k, 0], d[k, 1], d[k, 2])
     return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def near_pairs(
+    mu_a: FloatArray,
+    Pa: FloatArray,
+    mu_b: FloatArray,
+    Pb: FloatArray,
+    max_d2: float,
+    max_heading: float,
+    max_form: float,
+) -> tuple[IntArray, IntArray]:
+    """The pairs ``(a, b)`` of the poses ``mu_a`` (A, 3) and ``mu_b`` (B, 3), ordered by
+    ``a`` then ``b``, that are the same pose: ``dx^2 + dy^2 <= max_d2``, the wrapped heading
+    difference within ``max_heading`` and :func:`_pair_form` of the difference on the
+    summed covariances at most ``max_form``. Every pair is tried (for small sets)."""
+    ia = np.empty(mu_a.shape[0] * mu_b.shape[0], dtype=np.int64)
+    ib = np.empty_like(ia)
+    n = 0
+    for a in range(mu_a.shape[0]):
+        for b in range(mu_b.shape[0]):
+            g0 = mu_a[a, 0] - mu_b[b, 0]
+            g1 = mu_a[a, 1] - mu_b[b, 1]
+            if not g0 * g0 + g1 * g1 <= max_d2:
+                continue
+            g2 = wrap_float(mu_a[a, 2] - mu_b[b, 2])
+            if not abs(g2) <= max_heading:
+                continue
+            if _pair_form(Pa[a], Pb[b], g0, g1, g2) <= max_form:
+                ia[n] = a
+                ib[n] = b
+                n += 1
+    return ia[:n].copy(), ib[:n].copy()

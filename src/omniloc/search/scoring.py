@@ -373,7 +373,7 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     sols = [
         Solution(
             pose=Pose(*rows[i]),
-            assignment=tuple(v if v >= 0 else None for v in pairs[i]),
+            assignment=tuple([v if v >= 0 else None for v in pairs[i]]),
             residual_rms=rms_[i],
             matched=nmatch_[i],
             covariance=cov[i],

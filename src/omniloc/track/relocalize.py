@@ -139,7 +139,7 @@ def search_window(
         return _none(m)
     if not res:
         return Candidates(np.zeros((0, 3)), np.zeros((0, 3, 3)), m, res.complete)
-    poses = np.array([s.pose.as_array() for s in res.solutions])
+    poses = np.array([s.pose.as_tuple() for s in res.solutions], dtype=np.float64)
     assign = np.array(
         [[-1 if a is None else int(a) for a in s.assignment] for s in res.solutions],
         dtype=np.int64,

@@ -70,7 +70,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
-from .._kernels.track import pair_forms
+from .._kernels.track import near_pairs, pair_forms
 from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number, shorten
@@ -439,6 +439,8 @@ def _logsumexp_rows(a: FloatArray) -> FloatArray:
     """ln of the sum of exp over each row of ``a`` (C, K); -inf for a row of -inf. (By hand:
     scipy.special.logsumexp costs more than the sums it does here.)"""
     top = np.max(a, axis=1)
+    if np.isfinite(top).all():  # the common case, in fewer steps (the same numbers)
+        return top + np.log(np.exp(a - top[:, None]).sum(axis=1))
     safe = np.where(np.isfinite(top), top, 0.0)
     with np.errstate(divide="ignore"):
         out = safe + np.log(np.exp(a - safe[:, None]).sum(axis=1))
@@ -830,26 +832,27 @@ class Tracker:
         none = np.zeros(0, dtype=np.int64)
         if mu_a.shape[0] == 0 or mu_b.shape[0] == 0:
             return none, none
+        P_a = np.ascontiguousarray(P_a, dtype=np.float64)
+        P_b = np.ascontiguousarray(P_b, dtype=np.float64)
         if mu_a.shape[0] * mu_b.shape[0] <= _BRUTE_PAIRS:
-            gap = mu_a[:, None, :2] - mu_b[None, :, :2]
-            ia, ib = np.nonzero((gap**2).sum(axis=2) <= c.merge_position_m**2)
-        else:
-            near = cKDTree(mu_a[:, :2]).sparse_distance_matrix(
-                cKDTree(mu_b[:, :2]), c.merge_position_m, output_type="ndarray"
+            return near_pairs(
+                np.ascontiguousarray(mu_a, dtype=np.float64),
+                P_a,
+                np.ascontiguousarray(mu_b, dtype=np.float64),
+                P_b,
+                c.merge_position_m**2,
+                c.merge_heading,
+                c.merge_chi2,
             )
-            ia, ib = near["i"], near["j"]
-        ia, ib = ia.astype(np.int64), ib.astype(np.int64)
+        near = cKDTree(mu_a[:, :2]).sparse_distance_matrix(
+            cKDTree(mu_b[:, :2]), c.merge_position_m, output_type="ndarray"
+        )
+        ia, ib = near["i"].astype(np.int64), near["j"].astype(np.int64)
         d = mu_a[ia] - mu_b[ib]
         d[:, 2] = np.asarray(wrap(d[:, 2]))
         keep = np.abs(d[:, 2]) <= c.merge_heading
         ia, ib, d = ia[keep], ib[keep], d[keep]
-        m2 = pair_forms(
-            np.ascontiguousarray(d),
-            np.ascontiguousarray(P_a, dtype=np.float64),
-            np.ascontiguousarray(P_b, dtype=np.float64),
-            ia,
-            ib,
-        )
+        m2 = pair_forms(np.ascontiguousarray(d), P_a, P_b, ia, ib)
         same = m2 <= c.merge_chi2
         ia, ib = ia[same], ib[same]
         order = np.lexsort((ib, ia))
@@ -862,9 +865,7 @@ class Tracker:
             return
         c = self.config
         order = np.argsort(-self._logw, kind="stable")
-        self._keep(order)
-        keep = self._logw >= math.log(c.prune_weight)
-        self._keep(np.flatnonzero(keep))
+        self._keep(order[self._logw[order] >= math.log(c.prune_weight)])
         H = self.n_hypotheses
         alive = np.ones(H, dtype=bool)
         # Each hypothesis absorbs the weaker ones at its pose that are still alive (pairs of
@@ -874,7 +875,8 @@ class Tracker:
         later = pb > pa
         pa, pb = pa[later], pb[later]
         starts = np.searchsorted(pa, np.arange(H + 1))
-        for i in range(H):
+        # (Only the hypotheses with a pair can absorb: pa is sorted.)
+        for i in np.unique(pa).tolist():
             if not alive[i]:
                 continue
             same = pb[starts[i] : starts[i + 1]]
@@ -1312,7 +1314,8 @@ class Tracker:
         _, P, mass = self._place_estimate(i)
         p_tol = within_tolerance(P, c.tolerance_m, c.tolerance_heading)
         p = mass * p_tol
-        rivals = H - int(self._place(i).sum())
+        place = self._place(i)
+        rivals = H - int(place.sum())
         if out >= c.lost_share:
             return (
                 TrackState.LOST,
@@ -1320,9 +1323,9 @@ class Tracker:
                 "mass on the hypotheses)",
                 i,
             )
-        age = t - float(self._born[self._place(i)].min())
+        age = t - float(self._born[place].min())
         fit = float(self._fit_m[i] / max(self._fit_n[i], 1e-9))
-        conf = int(self._conf[self._place(i)].max())
+        conf = int(self._conf[place].max())
         if p >= c.localized_probability and conf < c.min_confirmations:
             return (
                 TrackState.AMBIGUOUS,
@@ -1374,13 +1377,14 @@ class Tracker:
         if best is None or self.n_hypotheses == 0:
             return TrackEstimate(t, TrackState.LOST, reason=reason, kidnapped=kidnapped)
         order = np.argsort(-self._logw, kind="stable")[: self.config.max_reported]
+        rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
         hyps = tuple(
             Hypothesis(
-                Pose.from_array(self._mu[k]),
+                Pose(*rows[j]),
                 self._P[k] * self.config.covariance_inflation,
                 float(np.exp(self._logw[k])),
             )
-            for k in order
+            for j, k in enumerate(order)
         )
         mu, P, _ = self._place_estimate(best)
         if state is TrackState.LOST:
