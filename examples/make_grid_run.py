@@ -39,14 +39,13 @@ def main(argv: list[str] | None = None) -> int:
     ex.landmarks.to_csv(args.out / "landmarks.csv")
     write_odometry(args.out / "odometry.csv", ex.run.odometry)
     write_frames(args.out / "frames.csv", ex.run.frames)
-    # The true track at 10 Hz (the run's own is at the odometry's 50 Hz; scoring interpolates).
+    # The true track at 10 Hz (the run's own is at the odometry's 50 Hz; scoring interpolates),
+    # and from it the truth at the frames' times as TUM: evo_ape's reference for omniloc track
+    # --out (what omniloc track --groundtruth groundtruth.csv --truth-out writes).
     tr = ex.run.truth
-    write_groundtruth(
-        args.out / "groundtruth.csv",
-        GroundTruth(tr.t[::5], tr.x[::5], tr.y[::5], tr.theta[::5]),
-    )
-    # The truth at the frames' times, as TUM: evo_ape's reference for omniloc track --out.
-    write_tum_truth(args.out / "groundtruth.tum", tr, [f.t for f in ex.run.frames])
+    truth = GroundTruth(tr.t[::5], tr.x[::5], tr.y[::5], tr.theta[::5])
+    write_groundtruth(args.out / "groundtruth.csv", truth)
+    write_tum_truth(args.out / "groundtruth.tum", truth, [f.t for f in ex.run.frames])
     s, m = ex.sensor, ex.motion
     settings = {
         "sigma": s.sigma,

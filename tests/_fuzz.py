@@ -2156,6 +2156,13 @@ def cli_targets() -> dict[str, CliTarget]:
                 ("empty", ""),
             ),
             "--plot": CLI_PLOTS,
+            # (without --groundtruth in the base case: refused for that, or for the path)
+            "--truth-out": (
+                ("a directory", Lazy(lambda f: f, needs_dir=True)),
+                ("under a file", Lazy(lambda f: _a_file(f) / "gt.tum", needs_dir=True)),
+                ("empty", ""),
+                ("fine", in_dir("gt.tum")),
+            ),
             "--preset": (("unknown", "fast"), ("empty", "")),
             **{k: CLI_NUMBERS for k in ("--sigma", "--fov", "--max-range")},
             "--config": (

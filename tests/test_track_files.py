@@ -170,8 +170,11 @@ def test_track_on_the_example_wakes_up_is_kidnapped_and_recovers(
     argv = ["-q", "track", "--map", str(d / "landmarks.csv"), "--odometry"]
     argv += [str(d / "odometry.csv"), "--frames", str(d / "frames.csv"), "--config"]
     argv += [str(d / "settings.json"), "--groundtruth", str(d / "groundtruth.csv")]
-    assert main([*argv, "--out", str(tmp_path / "t.tum")]) == 0
+    gt = tmp_path / "gt.tum"
+    assert main([*argv, "--out", str(tmp_path / "t.tum"), "--truth-out", str(gt)]) == 0
     out = capsys.readouterr().out
+    # --truth-out: the truth at the frames' times, the example's groundtruth.tum itself.
+    assert gt.read_bytes() == (d / "groundtruth.tum").read_bytes()
     assert "localized 86.2 %, ambiguous 13.8 %, lost 0.0 %" in out
     assert "first localized at t = 3.125 s" in out
     assert "kidnapping flagged at t = 30.4\n" in out
@@ -196,4 +199,26 @@ def test_evo_on_the_example_gives_the_readme_figure(tmp_path: Path) -> None:
     assert est.num_poses == 207
     ape = metrics.APE(metrics.PoseRelation.translation_part)
     ape.process_data((ref, est))
-    assert ape.get_statistic(metrics.StatisticsType.rmse) == pytest.approx(0.011213, abs=1e-6)
+    evo_rmse = ape.get_statistic(metrics.StatisticsType.rmse)
+    assert evo_rmse == pytest.approx(0.011208, abs=1e-6)
+    # ... which is ours, against the CSV track the reference was written from.
+    from omniloc.evaluate.tracking import errors_against
+    from omniloc.track import track
+
+    ex = example_run()
+    run = track(ex.landmarks, ex.run.odometry, ex.run.frames, sensor=ex.sensor, motion=ex.motion)
+    _, d_pos, _ = errors_against(load_groundtruth(d / "groundtruth.csv"), run.estimates)
+    loc = np.array([e.localized for e in run.estimates])
+    assert evo_rmse == pytest.approx(float(np.sqrt(np.mean(d_pos[loc] ** 2))), rel=1e-5)
+
+
+def test_truth_out_needs_the_ground_truth(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    d = EXAMPLES / "grid-run"
+    argv = ["-q", "track", "--map", str(d / "landmarks.csv"), "--odometry"]
+    argv += [str(d / "odometry.csv"), "--frames", str(d / "frames.csv")]
+    assert main([*argv, "--truth-out", str(tmp_path / "gt.tum")]) == 1
+    err = capsys.readouterr().err
+    assert "--truth-out writes the ground truth: give it with --groundtruth" in err
+    assert err.count("\n") == 1 and not (tmp_path / "gt.tum").exists()

@@ -386,6 +386,13 @@ def _add_track_parser(sub: Any) -> None:
     )
     t.add_argument("--out", type=_out_path, metavar="TRAJ.tum", help="localized poses, TUM format")
     t.add_argument(
+        "--truth-out",
+        type=_out_path,
+        metavar="GT.tum",
+        help="with --groundtruth: the true poses at the frames' times, TUM format (the "
+        "reference for evo_ape tum GT.tum TRAJ.tum)",
+    )
+    t.add_argument(
         "--json", action="store_true", help="one JSON object per frame on stdout (JSON lines)"
     )
     t.add_argument("--plot", type=_out_path, metavar="OUT.png", help="save a figure of the run")
@@ -830,7 +837,7 @@ def _cmd_track(args: argparse.Namespace) -> int:
         track,
         with_settings,
     )
-    from .track.io import write_json_lines, write_tum
+    from .track.io import write_json_lines, write_tum, write_tum_truth
 
     sensor, motion, config = preset(args.preset)
     settings = _settings(args)
@@ -841,6 +848,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
     frames = load_frames(args.frames, degrees=args.degrees)
     if not frames:
         raise InputError(f"{args.frames}: no frames")
+    if args.truth_out is not None and args.groundtruth is None:
+        raise InputError("--truth-out writes the ground truth: give it with --groundtruth")
     truth = load_groundtruth(args.groundtruth) if args.groundtruth is not None else None
     changes: dict[str, Any] = {}
     if args.sigma is not None:
@@ -868,6 +877,9 @@ def _cmd_track(args: argparse.Namespace) -> int:
     if args.out is not None:
         n = write_tum(args.out, est)
         log.info("%s: %d localized poses (TUM)", args.out, n)
+    if args.truth_out is not None and truth is not None:
+        n = write_tum_truth(args.truth_out, truth, [e.t for e in est])
+        log.info("%s: %d true poses at the frames' times (TUM)", args.truth_out, n)
     if args.plot is not None:
         from .plot.track import plot_track
 
