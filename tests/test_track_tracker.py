@@ -697,10 +697,11 @@ def test_the_covariance_inflation_scales_what_is_reported_and_decided_not_the_fi
 
 @pytest.mark.parametrize("n_a, n_b", [(1, 1), (7, 1), (30, 30), (50, 60), (3, 0)])
 def test_near_pairs_is_the_numpy_brute_force(n_a: int, n_b: int, rng: np.random.Generator) -> None:
-    # The compiled brute force of _same_pairs against the numpy steps it replaces, on poses
-    # bunched so that every test decides some pairs, headings across +-pi, a singular
-    # covariance and a NaN pose.
-    from omniloc._kernels.track import near_pairs, pair_forms
+    # The compiled same-pose test of _same_pairs against numpy on poses bunched so that every
+    # test decides some pairs, headings across +-pi, a singular covariance and a NaN pose;
+    # and its two branches (every pair for small sets, a k-d tree's candidates for large
+    # ones) give the same pairs.
+    from omniloc._kernels.track import near_pairs, same_of_pairs
 
     def poses(n: int) -> np.ndarray:
         p = np.column_stack([rng.normal(0, 0.3, n), rng.normal(0, 0.3, n), rng.normal(3.1, 0.1, n)])
@@ -719,11 +720,31 @@ def test_near_pairs_is_the_numpy_brute_force(n_a: int, n_b: int, rng: np.random.
     pos2, heading, chi2 = 0.3**2, np.deg2rad(5.0), 9.0
     gap = mu_a[:, None, :2] - mu_b[None, :, :2]
     ia, ib = np.nonzero((gap**2).sum(axis=2) <= pos2)
+    ia, ib = ia.astype(np.int64), ib.astype(np.int64)
     d = mu_a[ia] - mu_b[ib]
     d[:, 2] = np.asarray(wrap(d[:, 2]))
-    keep = np.abs(d[:, 2]) <= heading
-    ia, ib, d = ia[keep].astype(np.int64), ib[keep].astype(np.int64), d[keep]
-    same = pair_forms(np.ascontiguousarray(d), P_a, P_b, ia, ib) <= chi2
-    got_a, got_b = near_pairs(mu_a, P_a, mu_b.reshape(-1, 3), P_b, pos2, heading, chi2)
+    S = P_a[ia] + P_b[ib]
+    ok = np.linalg.det(S) > 0
+    form = np.full(ia.size, np.inf)
+    form[ok] = np.einsum("ni,ni->n", d[ok], np.linalg.solve(S[ok], d[ok][:, :, None])[:, :, 0])
+    same = (np.abs(d[:, 2]) <= heading) & (form <= chi2)
+    mu_b = mu_b.reshape(-1, 3)
+    got_a, got_b = near_pairs(mu_a, P_a, mu_b, P_b, pos2, heading, chi2)
     assert np.array_equal(got_a, ia[same]) and np.array_equal(got_b, ib[same])
     assert n_a * n_b < 900 or 0 < got_a.size < n_a * n_b  # the test decides both ways
+    assert np.array_equal(same_of_pairs(mu_a, P_a, mu_b, P_b, ia, ib, heading, chi2), same)
+    # The tracker's two branches, every pair tried or the k-d tree's candidates (its default
+    # thresholds are the test's), give the same pairs.
+    tr = Tracker(symmetric_map(), None, None, TrackerConfig())
+    c = tr.config
+    assert (c.merge_position_m**2, c.merge_heading, c.merge_chi2) == (pos2, heading, chi2)
+    # (The tracker's hypotheses are finite: a NaN pose is the kernels' case, not the k-d tree's.)
+    fine = np.isfinite(mu_a).all(axis=1)
+    small = tr._same_pairs(mu_a[fine], P_a[fine], mu_b, P_b)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr("omniloc.track.tracker._BRUTE_PAIRS", -1)
+        large = tr._same_pairs(mu_a[fine], P_a[fine], mu_b, P_b)
+    assert np.array_equal(small[0], large[0]) and np.array_equal(small[1], large[1])
+    want = np.flatnonzero(fine)[large[0]]  # rows of mu_a
+    kept = same & fine[ia]
+    assert np.array_equal(want, ia[kept]) and np.array_equal(large[1], ib[kept])

@@ -21,7 +21,7 @@ __all__ = [
     "frame_update_kernel",
     "integrate_pieces",
     "near_pairs",
-    "pair_forms",
+    "same_of_pairs",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -394,13 +394,43 @@ def _pair_form(A: FloatArray, B: FloatArray, d0: float, d1: float, d2: float) ->
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def pair_forms(
-    d: FloatArray, Pa: FloatArray, Pb: FloatArray, ia: IntArray, ib: IntArray
-) -> FloatArray:
-    """``d[k]^T (Pa[ia[k]] + Pb[ib[k]])^-1 d[k]`` for each pair ``k`` (:func:`_pair_form`)."""
-    out = np.full(d.shape[0], np.inf)
-    for k in range(d.shape[0]):
-        out[k] = _pair_form(Pa[ia[k]], Pb[ib[k]], d[k, 0], d[k, 1], d[k, 2])
+def _same_pose(
+    mu_a: FloatArray,
+    Pa: FloatArray,
+    a: int,
+    mu_b: FloatArray,
+    Pb: FloatArray,
+    b: int,
+    max_heading: float,
+    max_form: float,
+) -> bool:
+    """Whether poses ``mu_a[a]`` and ``mu_b[b]`` are the same beyond their positions: the
+    wrapped heading difference within ``max_heading`` and :func:`_pair_form` of the
+    difference on the summed covariances at most ``max_form`` (False for a NaN)."""
+    g2 = wrap_float(mu_a[a, 2] - mu_b[b, 2])
+    if not abs(g2) <= max_heading:
+        return False
+    g0 = mu_a[a, 0] - mu_b[b, 0]
+    g1 = mu_a[a, 1] - mu_b[b, 1]
+    return _pair_form(Pa[a], Pb[b], g0, g1, g2) <= max_form
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def same_of_pairs(
+    mu_a: FloatArray,
+    Pa: FloatArray,
+    mu_b: FloatArray,
+    Pb: FloatArray,
+    ia: IntArray,
+    ib: IntArray,
+    max_heading: float,
+    max_form: float,
+) -> NDArray[np.bool_]:
+    """Which of the candidate pairs ``(ia[k], ib[k])`` (near in position: a k-d tree's) are
+    the same pose (:func:`_same_pose`)."""
+    out = np.zeros(ia.shape[0], dtype=np.bool_)
+    for k in range(ia.shape[0]):
+        out[k] = _same_pose(mu_a, Pa, ia[k], mu_b, Pb, ib[k], max_heading, max_form)
     return out
 
 
@@ -415,9 +445,9 @@ def near_pairs(
     max_form: float,
 ) -> tuple[IntArray, IntArray]:
     """The pairs ``(a, b)`` of the poses ``mu_a`` (A, 3) and ``mu_b`` (B, 3), ordered by
-    ``a`` then ``b``, that are the same pose: ``dx^2 + dy^2 <= max_d2``, the wrapped heading
-    difference within ``max_heading`` and :func:`_pair_form` of the difference on the
-    summed covariances at most ``max_form``. Every pair is tried (for small sets)."""
+    ``a`` then ``b``, that are the same pose: ``dx^2 + dy^2 <= max_d2`` and
+    :func:`_same_pose`. Every pair is tried (for small sets; :func:`same_of_pairs` takes a
+    k-d tree's candidates for large ones)."""
     ia = np.empty(mu_a.shape[0] * mu_b.shape[0], dtype=np.int64)
     ib = np.empty_like(ia)
     n = 0
@@ -427,10 +457,7 @@ def near_pairs(
             g1 = mu_a[a, 1] - mu_b[b, 1]
             if not g0 * g0 + g1 * g1 <= max_d2:
                 continue
-            g2 = wrap_float(mu_a[a, 2] - mu_b[b, 2])
-            if not abs(g2) <= max_heading:
-                continue
-            if _pair_form(Pa[a], Pb[b], g0, g1, g2) <= max_form:
+            if _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_heading, max_form):
                 ia[n] = a
                 ib[n] = b
                 n += 1

@@ -70,7 +70,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
-from .._kernels.track import near_pairs, pair_forms
+from .._kernels.track import near_pairs, same_of_pairs
 from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number, shorten
@@ -832,28 +832,19 @@ class Tracker:
         none = np.zeros(0, dtype=np.int64)
         if mu_a.shape[0] == 0 or mu_b.shape[0] == 0:
             return none, none
+        mu_a = np.ascontiguousarray(mu_a, dtype=np.float64)
+        mu_b = np.ascontiguousarray(mu_b, dtype=np.float64)
         P_a = np.ascontiguousarray(P_a, dtype=np.float64)
         P_b = np.ascontiguousarray(P_b, dtype=np.float64)
         if mu_a.shape[0] * mu_b.shape[0] <= _BRUTE_PAIRS:
             return near_pairs(
-                np.ascontiguousarray(mu_a, dtype=np.float64),
-                P_a,
-                np.ascontiguousarray(mu_b, dtype=np.float64),
-                P_b,
-                c.merge_position_m**2,
-                c.merge_heading,
-                c.merge_chi2,
+                mu_a, P_a, mu_b, P_b, c.merge_position_m**2, c.merge_heading, c.merge_chi2
             )
         near = cKDTree(mu_a[:, :2]).sparse_distance_matrix(
             cKDTree(mu_b[:, :2]), c.merge_position_m, output_type="ndarray"
         )
         ia, ib = near["i"].astype(np.int64), near["j"].astype(np.int64)
-        d = mu_a[ia] - mu_b[ib]
-        d[:, 2] = np.asarray(wrap(d[:, 2]))
-        keep = np.abs(d[:, 2]) <= c.merge_heading
-        ia, ib, d = ia[keep], ib[keep], d[keep]
-        m2 = pair_forms(np.ascontiguousarray(d), P_a, P_b, ia, ib)
-        same = m2 <= c.merge_chi2
+        same = same_of_pairs(mu_a, P_a, mu_b, P_b, ia, ib, c.merge_heading, c.merge_chi2)
         ia, ib = ia[same], ib[same]
         order = np.lexsort((ib, ia))
         return ia[order], ib[order]
