@@ -47,12 +47,12 @@ from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.special import gammaincinv
 
 from ..angles import wrap
 from ..errors import InputError
 from ..maps import LandmarkMap
 from ..pose import Pose
+from ..sensor import chi2_quantile
 from ..track.data import Frame, GroundTruth, Odometry
 from ..track.records import TrackEstimate, TrackState
 from .common import (
@@ -93,8 +93,8 @@ WEIGHT_BINS = 10
 #: The 50 % and 99 % quantiles of the chi-square distribution with 3 degrees of freedom:
 #: the normalised estimation error squared of a pose (x, y, theta) under a consistent
 #: covariance is below them in 50 % and 99 % of the frames.
-CHI2_3DOF_50 = float(2.0 * gammaincinv(1.5, 0.5))  # chi-square(3) quantiles
-CHI2_3DOF_99 = float(2.0 * gammaincinv(1.5, 0.99))
+CHI2_3DOF_50 = chi2_quantile(0.5, 3)
+CHI2_3DOF_99 = chi2_quantile(0.99, 3)
 
 
 class LocalizerOverTime(Protocol):

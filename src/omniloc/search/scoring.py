@@ -48,7 +48,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import gammaincinv
 
 from .._kernels import evidence as _evidence
 from .._kernels import geometry as geo
@@ -56,7 +55,7 @@ from .._kernels.merge import merge
 from ..angles import TWO_PI, wrap
 from ..maps import LandmarkMap
 from ..pose import MAX_CONDITION, Pose
-from ..sensor import SensorModel
+from ..sensor import SensorModel, chi2_quantile
 from .options import Leaves, SearchOptions
 from .results import Solution
 from .tree import map_scale, path_sse
@@ -94,7 +93,7 @@ SAME_POSE_CHI2 = 1.0
 #: 99.99 %, 3 degrees of freedom). A bearing given to either of two landmarks on nearly one ray
 #: gives two such poses a few centimetres apart: one answer, not an ambiguity.
 SAME_PLACE = (0.1, float(np.deg2rad(1.0)))
-SAME_PLACE_CHI2 = float(2.0 * gammaincinv(1.5, 0.9999))  # chi-square(3) quantile
+SAME_PLACE_CHI2 = chi2_quantile(0.9999, 3)
 
 #: ``ambiguous`` unless the best solution holds at least this share of the posterior.
 DECISIVE = 0.95

@@ -44,13 +44,12 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
-from scipy.special import gammaincinv
 
 from ..angles import wrap
 from ..errors import InputError
 from ..io import shorten
 from ..maps import LandmarkMap, as_landmark_map
-from ..sensor import clutter_by_detections
+from ..sensor import chi2_quantile, clutter_by_detections
 from .data import Frame, GroundTruth, Odometry
 from .motion import MotionModel, between, integrate
 
@@ -410,7 +409,7 @@ def estimate_motion(
     logp = fit(use, np.log(np.full(len(NOISE_FIELDS), 1e-3)))
     S = np.einsum("p,npij->nij", np.exp(logp), Qp) + floor
     q = np.einsum("ni,ni->n", r, np.linalg.solve(S, r[:, :, None])[:, :, 0])
-    use = q <= 2.0 * gammaincinv(1.5, 0.999)  # the chi-square(3) quantile
+    use = q <= chi2_quantile(0.999, 3)
     logp = fit(use, logp)
     noise = {f: float(v) for f, v in zip(NOISE_FIELDS, np.exp(logp), strict=True)}
     # Values the likelihood cannot tell from zero come out as tiny ones: call them zero.
