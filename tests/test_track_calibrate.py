@@ -84,7 +84,7 @@ def test_too_little_overlap_is_refused() -> None:
         estimate_motion(odometry, truth, stretch_s=[1.0, -2.0])
     with pytest.raises(InputError, match="delays"):
         estimate_motion(odometry, truth, delays=[float("nan")])
-    with pytest.raises(InputError, match="Odometry and a GroundTruth"):
+    with pytest.raises(InputError, match=r"truth must be a GroundTruth or a list .* got Odometry"):
         estimate_motion(truth, odometry)  # type: ignore[arg-type]
     # A truth with gaps everywhere (it was numpy's "mean of empty slice", then "never moves").
     gapped = GroundTruth(truth.t, truth.x, truth.y, truth.theta, gap=np.full(truth.t.size, 5.0))
@@ -210,7 +210,7 @@ def test_one_run_in_a_list_is_that_run_and_a_run_without_overlap_adds_nothing() 
 
 def test_runs_that_do_not_pair_up_are_refused_by_name() -> None:
     odometry, truth = _recording()
-    with pytest.raises(InputError, match="2 Odometry and 1 GroundTruth given"):
+    with pytest.raises(InputError, match=r"2 odometry and 1 ground-truth tracks: .* both be lists"):
         estimate_motion([odometry, odometry], [truth])
     with pytest.raises(InputError, match="empty"):
         estimate_motion([], [])
@@ -218,9 +218,11 @@ def test_runs_that_do_not_pair_up_are_refused_by_name() -> None:
         estimate_motion([odometry, truth], [truth, truth])  # type: ignore[list-item]
     with pytest.raises(InputError, match="truth of run 1 must be a GroundTruth, got str"):
         estimate_motion([odometry], ["gt.csv"])  # type: ignore[list-item]
-    with pytest.raises(InputError, match="both be lists"):
+    with pytest.raises(
+        InputError, match=r"one odometry and 1 ground-truth tracks: .* both be lists"
+    ):
         estimate_motion(odometry, [truth])
-    with pytest.raises(InputError, match="both be lists"):
+    with pytest.raises(InputError, match="odometry must be an Odometry, got list"):
         estimate_motion([odometry], truth)
     # Too little overlap is judged on the pool, and the message gives each run's count.
     short = GroundTruth(truth.t[:50], truth.x[:50], truth.y[:50], truth.theta[:50])

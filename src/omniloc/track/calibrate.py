@@ -38,8 +38,9 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -65,6 +66,7 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+_T = TypeVar("_T")
 
 #: The noise values in the order of :attr:`MotionModel.noise`.
 NOISE_FIELDS = (
@@ -197,35 +199,47 @@ def _delay_costs(
     return cost
 
 
-def _runs(
-    odometry: Odometry | Sequence[Odometry], truth: GroundTruth | Sequence[GroundTruth]
-) -> list[tuple[Odometry, GroundTruth]]:
-    """One run (odometry, truth) or several (a list of each), as a list of pairs."""
-    if isinstance(odometry, Odometry) and isinstance(truth, GroundTruth):
-        return [(odometry, truth)]
-    if not isinstance(odometry, (list, tuple)) or not isinstance(truth, (list, tuple)):
-        got = f"got {type(odometry).__name__} and {type(truth).__name__}"
-        if isinstance(odometry, (list, tuple)) or isinstance(truth, (list, tuple)):
+def _paired(
+    first: object, truth: object, one: Callable[[object, str], _T], name: str, run: str
+) -> list[tuple[_T, GroundTruth]]:
+    """One run (``first`` and its ``truth``) or several (a list of each, paired in order) as
+    a list of pairs; ``one(item, where)`` checks one run's ``first`` (called ``name``; a run
+    is called ``run`` in messages)."""
+    if isinstance(truth, GroundTruth):
+        try:
+            return [(one(first, name), truth)]
+        except InputError as exc:
             raise InputError(
-                "for several runs, odometry and truth must both be lists (one GroundTruth per "
-                f"Odometry, in the same order), {got}"
-            )
+                f"{exc} (for several {run}s, a list of each: {name} and truth, paired in order)"
+            ) from None
+    if not isinstance(truth, (list, tuple)):
         raise InputError(
-            f"estimate_motion needs an Odometry and a GroundTruth (or a list of each), {got}"
+            f"truth must be a GroundTruth or a list of them (one per {run}), got "
+            f"{type(truth).__name__}"
         )
-    if len(odometry) != len(truth):
+    if not isinstance(first, (list, tuple)) or len(first) != len(truth):
+        n = len(first) if isinstance(first, (list, tuple)) else "one"
         raise InputError(
-            f"{len(odometry)} Odometry and {len(truth)} GroundTruth given: give one "
-            "GroundTruth per Odometry (one pair per run), in the same order"
+            f"{n} {name} and {len(truth)} ground-truth tracks: for several {run}s, {name} and "
+            f"truth must both be lists of as many, paired in order"
         )
-    if not odometry:
-        raise InputError("no run given: odometry and truth are empty lists")
-    for k, (o, g) in enumerate(zip(odometry, truth, strict=True)):
-        if not isinstance(o, Odometry):
-            raise InputError(f"odometry of run {k + 1} must be an Odometry, got {type(o).__name__}")
+    if not truth:
+        raise InputError(f"no {run} given: {name} and truth are empty lists")
+    out = []
+    for k, (f, g) in enumerate(zip(first, truth, strict=True)):
         if not isinstance(g, GroundTruth):
-            raise InputError(f"truth of run {k + 1} must be a GroundTruth, got {type(g).__name__}")
-    return list(zip(odometry, truth, strict=True))
+            raise InputError(
+                f"truth of {run} {k + 1} must be a GroundTruth, got {type(g).__name__}"
+            )
+        out.append((one(f, f"{name} of {run} {k + 1}"), g))
+    return out
+
+
+def _odometry(item: object, where: str) -> Odometry:
+    """``item`` if it is an Odometry, or an InputError naming ``where``."""
+    if not isinstance(item, Odometry):
+        raise InputError(f"{where} must be an Odometry, got {type(item).__name__}")
+    return item
 
 
 def _by_run(counts: Sequence[int]) -> str:
@@ -288,7 +302,7 @@ def estimate_motion(
     :attr:`MotionFit.stretches_by_run`); only the pool must reach MIN_STRETCHES. One run
     given as a list of one gives the same fit as given bare.
     """
-    pairs = _runs(odometry, truth)
+    pairs = _paired(odometry, truth, _odometry, "odometry", "run")
     lengths = _seconds(stretch_s, "stretch_s", "positive lengths")
     if not (lengths > 0).all():
         raise InputError(f"stretch_s must be positive lengths in seconds, got {shorten(stretch_s)}")
@@ -789,31 +803,6 @@ def _frame_list(frames: object, what: str) -> list[Frame]:
     return [f for f in items if isinstance(f, Frame)]
 
 
-def _recordings(
-    frames: Sequence[Frame] | Sequence[Sequence[Frame]],
-    truth: GroundTruth | Sequence[GroundTruth],
-) -> list[tuple[list[Frame], GroundTruth]]:
-    """One recording (frames, truth) or several, as a list of pairs."""
-    if isinstance(truth, GroundTruth):
-        return [(_frame_list(frames, "frames"), truth)]
-    if not isinstance(truth, (list, tuple)) or not all(isinstance(g, GroundTruth) for g in truth):
-        raise InputError(
-            f"truth must be a GroundTruth or a list of them (one per recording), got "
-            f"{type(truth).__name__}"
-        )
-    if not isinstance(frames, (list, tuple)) or len(frames) != len(truth):
-        raise InputError(
-            f"with {len(truth)} ground-truth tracks, frames must be a list of as many "
-            "recordings' frames (each a sequence of Frame)"
-        )
-    if not truth:
-        raise InputError("no recording given: truth is an empty list")
-    return [
-        (_frame_list(f, f"frames of recording {i + 1}"), g)
-        for i, (f, g) in enumerate(zip(frames, truth, strict=True))
-    ]
-
-
 def estimate_frame_sensor(
     landmarks: LandmarkMap | ArrayLike,
     frames: Sequence[Frame] | Sequence[Sequence[Frame]],
@@ -856,7 +845,7 @@ def estimate_frame_sensor(
         Fewer than 20 bearings taken as landmarks, or an argument out of range.
     """
     lm = as_landmark_map(landmarks)
-    pairs = _recordings(frames, truth)
+    pairs = _paired(frames, truth, _frame_list, "frames", "recording")
     _positive("gate", gate, math.pi)
     _positive("max_gap_s", max_gap_s, MAX_STRETCH_S)
     if fov is not None:
