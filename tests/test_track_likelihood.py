@@ -385,6 +385,53 @@ def test_core_update_is_a_boolean_setting() -> None:
             TrackerConfig(core_update=bad)  # type: ignore[arg-type]
 
 
+def test_an_update_scale_tempers_the_kalman_step_and_not_the_weights() -> None:
+    # The Kalman step of a bearing that can only be the landmark, with the bearing variance
+    # scaled by 2 in the update (a likelihood tempered by 0.5): the gain and the shrink of
+    # variance 2 sigma^2, the frame's ratio that of sigma^2.
+    model = _model(p_detect=0.9, clutter=1e-9)
+    tempered = dataclasses.replace(model, update_scale=2.0)
+    L = np.array([[5.0, -1.0]])
+    mu = np.array([[0.3, 0.1, -0.1]])
+    P = np.diag([0.04, 0.02, 0.001])[None]
+    z = np.array([_bearing(mu[0], L[0]) - np.deg2rad(1.5)])
+    _, _, lr = frame_update(mu, P, z, L, model)[:3]
+    mu2, P2, lr2 = frame_update(mu, P, z, L, tempered)[:3]
+    np.testing.assert_array_equal(lr2, lr)
+    dx, dy = L[0] - mu[0, :2]
+    q = dx * dx + dy * dy
+    J = np.array([dy / q, -dx / q, -1.0])
+    S = J @ P[0] @ J + 2.0 * SIGMA**2
+    K = P[0] @ J / S
+    np.testing.assert_allclose(mu2[0], mu[0] + K * (z[0] - _bearing(mu[0], L[0])), atol=1e-12)
+    np.testing.assert_allclose(P2[0], P[0] - np.outer(K, K) * S, atol=1e-12)
+    # With a sharp core in the update, its variance is scaled too: the covariance after a
+    # tempered step is wider than after the plain one.
+    sharp = dataclasses.replace(model, core_share=0.5, core_sigma2=np.deg2rad(0.3) ** 2)
+    P_s = frame_update(mu, P, z, L, sharp)[1]
+    P_t = frame_update(mu, P, z, L, dataclasses.replace(sharp, update_scale=2.0))[1]
+    assert J @ P_t[0] @ J > 1.5 * (J @ P_s[0] @ J)
+
+
+def test_temper_update_divides_the_update_variance_by_the_evidence_weight() -> None:
+    from omniloc.errors import InputError
+    from omniloc.maps import LandmarkMap
+    from omniloc.track import Tracker, TrackerConfig
+
+    lm = LandmarkMap(np.array([[0.0, 0.0], [4.0, 0.0], [0.0, 4.0], [4.0, 4.0]]))
+    sensor = SensorModel(sigma=SIGMA)
+
+    def scale(**kw: object) -> float:
+        return Tracker(lm, sensor, config=TrackerConfig(**kw))._model.update_scale
+
+    assert scale() == 1.0
+    assert scale(evidence_weight=0.7) == 1.0
+    assert scale(temper_update=True) == 1.0
+    assert scale(temper_update=True, evidence_weight=0.7) == 1.0 / 0.7
+    with pytest.raises(InputError, match="temper_update must be true or false"):
+        TrackerConfig(temper_update=1)  # type: ignore[arg-type]
+
+
 def test_the_kernels_shortcuts_of_erfc_and_exp_are_bit_for_bit(rng: np.random.Generator) -> None:
     # _in_view, _reading and _exp skip erfc where it is 0 or 2 and exp where it is 0; the plain
     # formulas they replace, compiled the same way, are the oracle, over the thresholds

@@ -194,6 +194,7 @@ def frame_update_kernel(
     core_share: float,
     core_sigma2: float,
     core_update: bool,
+    update_scale: float,
     obj_b: FloatArray,
     obj_w: FloatArray,
     obj_var: float,
@@ -218,7 +219,11 @@ def frame_update_kernel(
     errors have a sharp core and a heavier tail); each landmark's reading is then two, one
     per component, each moving the pose by its own Kalman gain (``core_update`` True) or
     both together by the gain of variance ``sigma2`` (False: the core weighs, the update is
-    the tail's). ``core_share`` 0: exactly the single Gaussian."""
+    the tail's). ``core_share`` 0: exactly the single Gaussian.
+
+    ``update_scale``: a factor on the bearing variances (``sigma2``, ``core_sigma2``) in the
+    Kalman update only, not in the weighing (1: the same model in both; ``1 / w`` is the
+    update under a likelihood tempered by ``w``)."""
     mu = mu.copy()
     P = P.copy() if update else P  # (exactly known poses: P is neither changed nor read back)
     H = mu.shape[0]
@@ -314,10 +319,10 @@ def frame_update_kernel(
                 for comp in range(components):
                     if comp == 0:
                         b = (a[n] if components == 2 else a[n] + ac[n]) / total
-                        S = var[n] + sigma2
+                        S = var[n] + sigma2 * update_scale
                     else:
                         b = ac[n] / total
-                        S = var[n] + core_sigma2
+                        S = var[n] + core_sigma2 * update_scale
                     if not b > min_reading:
                         continue
                     used = True

@@ -127,6 +127,10 @@ class FrameModel:
         With a sharp core: its readings move the pose by their own Kalman gain (True) or
         only weigh it, the update taking a landmark's two readings together with the
         variance ``sigma2`` (False).
+    update_scale : float
+        Factor on the bearing variances in the Kalman update only, not in the weighing
+        (1: the same model in both; ``1 / w`` updates as a likelihood tempered by ``w``
+        would, :attr:`~omniloc.track.TrackerConfig.temper_update`).
     """
 
     sigma2: float
@@ -140,6 +144,7 @@ class FrameModel:
     core_share: float = 0.0
     core_sigma2: float = 0.0
     core_update: bool = True
+    update_scale: float = 1.0
 
     @classmethod
     def of(cls, sensor: SensorModel, *, p_detect: float = 0.5, clutter: float = 0.5) -> FrameModel:
@@ -282,6 +287,7 @@ def _kernel(
         model.core_share,
         model.core_sigma2,
         model.core_update,
+        model.update_scale,
         ob,
     )
     var = model.object_var if ob.size else 1.0

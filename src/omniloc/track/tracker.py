@@ -110,7 +110,7 @@ _PROBABILITIES = {
     "elsewhere_inject",
 }
 _SHARES = {"fit_explained", "core_share"}
-_BOOLS = {"core_update"}
+_BOOLS = {"core_update", "temper_update"}
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
 VALUE_MAX = 1e6
@@ -239,6 +239,13 @@ class TrackerConfig:
         the tail's variance (False: the hypotheses' covariances shrink no faster than with
         the sensor's sigma alone). MRCLAM's bearing errors repeat from frame to frame, and a
         sharp update there leaves covariances too small (docs/tracking.md).
+    temper_update : bool
+        Whether the Kalman update is tempered like the weights: with ``evidence_weight``
+        ``w`` below 1 each frame's likelihood counts as its ``w``-th power in the weights,
+        which for a Gaussian bearing is the variance ``sigma^2 / w``; True updates the pose
+        and covariance with that variance too, so that a hypothesis's covariance is the one
+        of the tempered model it is weighed by. False (default): the update uses
+        ``sigma^2`` (the covariance shrinks as if every frame were independent).
     covariance_inflation : float
         Factor (>= 1) on the covariances the tracker reports and decides ``localized`` by (the
         probability of being within the tolerances), not on its filters' own: for data
@@ -321,6 +328,7 @@ class TrackerConfig:
     core_share: float = 0.0
     core_sigma: float = float(np.deg2rad(0.33))
     core_update: bool = True
+    temper_update: bool = False
     covariance_inflation: float = 1.0
     search_miss: float | None = None
     replay_s: float = 4.0
@@ -534,6 +542,8 @@ class Tracker:
                 core_sigma2=c.core_sigma**2,
                 core_update=c.core_update,
             )
+        if c.temper_update and c.evidence_weight != 1.0:
+            self._model = replace(self._model, update_scale=1.0 / c.evidence_weight)
         if c.clutter_persistence > 0:
             self._model = replace(
                 self._model,
