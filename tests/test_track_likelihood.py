@@ -405,12 +405,15 @@ def test_an_update_scale_tempers_the_kalman_step_and_not_the_weights() -> None:
     K = P[0] @ J / S
     np.testing.assert_allclose(mu2[0], mu[0] + K * (z[0] - _bearing(mu[0], L[0])), atol=1e-12)
     np.testing.assert_allclose(P2[0], P[0] - np.outer(K, K) * S, atol=1e-12)
-    # With a sharp core in the update, its variance is scaled too: the covariance after a
-    # tempered step is wider than after the plain one.
-    sharp = dataclasses.replace(model, core_share=0.5, core_sigma2=np.deg2rad(0.3) ** 2)
-    P_s = frame_update(mu, P, z, L, sharp)[1]
-    P_t = frame_update(mu, P, z, L, dataclasses.replace(sharp, update_scale=2.0))[1]
-    assert J @ P_t[0] @ J > 1.5 * (J @ P_s[0] @ J)
+    # With a sharp core in the update its variance is scaled too: a bearing that is all but
+    # surely the core's reading is the Kalman step of twice the core's variance.
+    core2 = np.deg2rad(0.3) ** 2
+    sharp = dataclasses.replace(tempered, core_share=1.0 - 1e-9, core_sigma2=core2)
+    mu3, P3 = frame_update(mu, P, z, L, sharp)[:2]
+    S = J @ P[0] @ J + 2.0 * core2
+    K = P[0] @ J / S
+    np.testing.assert_allclose(mu3[0], mu[0] + K * (z[0] - _bearing(mu[0], L[0])), atol=1e-9)
+    np.testing.assert_allclose(P3[0], P[0] - np.outer(K, K) * S, rtol=1e-6, atol=1e-12)
 
 
 def test_temper_update_divides_the_update_variance_by_the_evidence_weight() -> None:
@@ -430,6 +433,13 @@ def test_temper_update_divides_the_update_variance_by_the_evidence_weight() -> N
     assert scale(temper_update=True, evidence_weight=0.7) == 1.0 / 0.7
     with pytest.raises(InputError, match="temper_update must be true or false"):
         TrackerConfig(temper_update=1)  # type: ignore[arg-type]
+    # A weight so small that its inverse overflows would give the update an infinite
+    # variance (NaN covariances, every hypothesis dropped): refused by name.
+    for w in (5e-324, 1e-300, 1e-7):
+        with pytest.raises(InputError, match="evidence_weight must be >= 1e-06 with temper_update"):
+            TrackerConfig(temper_update=True, evidence_weight=w)
+    assert scale(temper_update=True, evidence_weight=1e-6) == 1e6
+    TrackerConfig(evidence_weight=1e-7)  # without temper_update the weight alone is fine
 
 
 def test_the_kernels_shortcuts_of_erfc_and_exp_are_bit_for_bit(rng: np.random.Generator) -> None:

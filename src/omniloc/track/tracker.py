@@ -244,8 +244,9 @@ class TrackerConfig:
         ``w`` below 1 each frame's likelihood counts as its ``w``-th power in the weights,
         which for a Gaussian bearing is the variance ``sigma^2 / w``; True updates the pose
         and covariance with that variance too, so that a hypothesis's covariance is the one
-        of the tempered model it is weighed by. False (default): the update uses
-        ``sigma^2`` (the covariance shrinks as if every frame were independent).
+        of the tempered model it is weighed by (``evidence_weight`` then at least 1e-6).
+        False (default): the update uses ``sigma^2`` (the covariance shrinks as if every
+        frame were independent).
     covariance_inflation : float
         Factor (>= 1) on the covariances the tracker reports and decides ``localized`` by (the
         probability of being within the tolerances), not on its filters' own: for data
@@ -413,6 +414,11 @@ class TrackerConfig:
         ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if self.temper_update and not self.evidence_weight >= 1.0 / VALUE_MAX:
+            raise InputError(
+                f"evidence_weight must be >= {1.0 / VALUE_MAX:g} with temper_update (the "
+                f"update's bearing variance is divided by it), got {self.evidence_weight!r}"
+            )
         if not self.covariance_inflation >= 1.0:
             raise InputError(
                 "covariance_inflation must be >= 1 (a factor below 1 would report more "
