@@ -481,3 +481,92 @@ def test_the_kernels_shortcuts_of_erfc_and_exp_are_bit_for_bit(rng: np.random.Ge
             assert same(_reading(share, rho, n, v, norm_), plain_reading(share, rho, n, v, norm_))
     for x in np.concatenate([[-750.0, -750.0 - 1e-12, -745.2, -1e300, -np.inf, np.nan], -(nu**2)]):
         assert same(_exp(float(x)), plain_exp(float(x))), x
+
+
+def test_a_log_of_nonempty_frames_weighs_each_frame_given_that_it_holds_a_bearing() -> None:
+    # Two exactly known poses, one seeing two landmarks, one seeing none; an object of the
+    # previous frame (clutter with memory). With ``nonempty`` each frame with bearings is
+    # weighed by p(z | pose) / P(some bearing | pose), against the null's likewise:
+    #   + ln(1 - exp(-kappa fov)) - ln(1 - (1 - p)^2 exp(-fresh kappa fov - w)).
+    # A frame without bearings is weighed as it was (it was not selected).
+    plain = _memory_model(fresh=0.3, sd=np.deg2rad(1.5))
+    plain = dataclasses.replace(plain, p_detect=0.6)
+    model = dataclasses.replace(plain, nonempty=True)
+    L = np.array([[3.0, 0.0], [3.0, 0.5]])
+    poses = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, math.pi]])
+    objects = Objects(np.array([0.4]), np.array([[0.5], [0.2]]))
+    kappa, fov = math.exp(model.log_kappa), np.deg2rad(90.0)
+    lam = kappa * fov
+    for z in (np.array([0.05]), np.array([0.0, 0.4])):
+        lr0, post0 = log_ratios_clutter(poses, z, L, plain, objects)
+        lr1, post1 = log_ratios_clutter(poses, z, L, model, objects)
+        for k, (seen, w) in enumerate(((2, 0.5), (0, 0.2))):
+            none = (1 - 0.6) ** seen * math.exp(-0.3 * lam - w)
+            want = lr0[k] + math.log(1 - math.exp(-lam)) - math.log(1 - none)
+            assert math.isclose(lr1[k], want, rel_tol=1e-12, abs_tol=1e-12)
+        np.testing.assert_array_equal(post1, post0)
+        # the same through the update, for hypotheses with a covariance
+        P = np.repeat(np.diag([1e-8, 1e-8, 1e-10])[None], 2, axis=0)
+        a = frame_update_clutter(poses, P, z, L, plain, objects)
+        b = frame_update_clutter(poses, P, z, L, model, objects)
+        np.testing.assert_allclose(b[2] - a[2], lr1 - lr0, rtol=0, atol=1e-6)
+        np.testing.assert_array_equal(b[0], a[0])
+        np.testing.assert_array_equal(b[1], a[1])
+    empty = np.zeros(0)
+    np.testing.assert_array_equal(
+        log_ratios_clutter(poses, empty, L, model, objects)[0],
+        log_ratios_clutter(poses, empty, L, plain, objects)[0],
+    )
+
+
+def test_nonempty_frames_reaches_the_frame_model() -> None:
+    from omniloc import LandmarkMap
+    from omniloc.track import TrackerConfig
+    from omniloc.track.motion import MotionModel
+    from omniloc.track.tracker import Tracker
+
+    lm = LandmarkMap(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
+    sensor = SensorModel(sigma=SIGMA)
+    assert not Tracker(lm, sensor, MotionModel(), TrackerConfig())._model.nonempty
+    assert Tracker(lm, sensor, MotionModel(), TrackerConfig(nonempty_frames=True))._model.nonempty
+
+
+@pytest.mark.parametrize("w", [1.0, 0.5, 0.0])
+def test_a_miss_weight_scales_the_cost_of_the_landmarks_not_reported(w: float) -> None:
+    # Two landmarks in view, none reported: 2 w ln(1 - p). One reported, exactly and
+    # without clutter's competition to speak of: it earns p times its density whatever the
+    # weight, and the other's miss costs w ln(1 - p).
+    model = dataclasses.replace(_model(fov=np.deg2rad(90.0), max_range=6.0), miss_weight=w)
+    plain = _model(fov=np.deg2rad(90.0), max_range=6.0)
+    L = np.array([[3.0, 0.0], [3.0, 0.5], [-3.0, 0.0]])
+    mu = np.array([[0.0, 0.0, 0.0]])
+    P = np.diag([1e-6, 1e-6, 1e-8])[None]
+    lr = frame_update(mu, P, np.zeros(0), L, model)[2]
+    assert math.isclose(lr[0], w * 2 * math.log(1 - 0.6), rel_tol=1e-12, abs_tol=1e-15)
+    z = np.array([_bearing(mu[0], L[0])])
+    a = frame_update(mu, P, z, L, plain)
+    b = frame_update(mu, P, z, L, model)
+    dx, dy = L[0] - mu[0, :2]
+    J = np.array([dy, -dx, -(dx * dx + dy * dy)]) / (dx * dx + dy * dy)
+    g = norm.pdf(0.0, scale=math.sqrt(J @ P[0] @ J + SIGMA**2)) / math.exp(model.log_kappa)
+    want = (w - 1) * 2 * math.log(1 - 0.6) + math.log1p(0.6 / 0.4**w * g) - math.log1p(1.5 * g)
+    assert math.isclose(b[2][0] - a[2][0], want, rel_tol=1e-9, abs_tol=1e-12)
+    # (without the clutter's share of the reading: the miss of the other landmark alone)
+    assert b[2][0] - a[2][0] == pytest.approx((w - 1) * math.log(1 - 0.6), rel=0.02, abs=1e-9)
+
+
+def test_miss_weight_reaches_the_frame_model_and_is_checked() -> None:
+    from omniloc import LandmarkMap
+    from omniloc.errors import InputError
+    from omniloc.track import TrackerConfig
+    from omniloc.track.motion import MotionModel
+    from omniloc.track.tracker import Tracker
+
+    lm = LandmarkMap(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
+    sensor = SensorModel(sigma=SIGMA)
+    tr = Tracker(lm, sensor, MotionModel(), TrackerConfig(miss_weight=0.5))
+    assert tr._model.miss_weight == 0.5
+    assert Tracker(lm, sensor, MotionModel(), TrackerConfig())._model.miss_weight == 1.0
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(InputError, match="miss_weight"):
+            TrackerConfig(miss_weight=bad)

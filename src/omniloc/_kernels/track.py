@@ -195,6 +195,8 @@ def frame_update_kernel(
     core_sigma2: float,
     core_update: bool,
     update_scale: float,
+    nonempty: bool,
+    miss_weight: float,
     obj_b: FloatArray,
     obj_w: FloatArray,
     obj_var: float,
@@ -223,7 +225,17 @@ def frame_update_kernel(
 
     ``update_scale``: a factor on the bearing variances (``sigma2``, ``core_sigma2``) in the
     Kalman update only, not in the weighing (1: the same model in both; ``1 / w`` is the
-    update under a likelihood tempered by ``w``)."""
+    update under a likelihood tempered by ``w``).
+
+    ``miss_weight``: each landmark that could have been detected and was not costs
+    ``miss_weight * ln(1 - d)``, and a reading of it has the odds ``d / (1 - d) **
+    miss_weight`` (1: the model as written): a landmark reported earns ``d`` times its
+    density whatever the weight, one not reported ``(1 - d) ** miss_weight``.
+
+    ``nonempty``: the frame was recorded because it holds a bearing (a log that lists only
+    frames with a detection); with at least one bearing, its likelihood (and the null's) is
+    conditioned on that: each ratio is multiplied by ``P_null(some bearing) / P_k(some
+    bearing)``, where ``P_k(no bearing) = prod (1 - d_n) exp(-clutter expected)``."""
     mu = mu.copy()
     P = P.copy() if update else P  # (exactly known poses: P is neither changed nor read back)
     H = mu.shape[0]
@@ -238,6 +250,10 @@ def frame_update_kernel(
         if half_fov < 0.0
         else ((1.0 - fresh) * kappa * 2.0 * half_fov)
     )
+    # Expected clutter counts over the view: the null's, and the fresh part of the model's.
+    null_rate = kappa * (2.0 * math.pi if half_fov < 0.0 else 2.0 * half_fov)
+    fresh_rate = fresh * null_rate
+    null_some = math.log(-math.expm1(-null_rate)) if nonempty else 0.0
     h = np.empty(N)
     J = np.empty((N, 3))
     var = np.empty(N)
@@ -272,10 +288,14 @@ def frame_update_kernel(
                 if dn != last_d:
                     last_d = dn
                     last_log = math.log1p(-dn)
-                s += last_log
+                s += last_log * miss_weight
         for o in range(K):
             s -= obj_w[k, o]
         log_ratio[k] = s + fresh_cost
+        if nonempty and bearings.shape[0] > 0:
+            # ln P(no bearing) = s - fresh clutter expected (the misses weighed as above);
+            # the null's: - null_rate.
+            log_ratio[k] += null_some - math.log(-math.expm1(s - fresh_rate))
         # The prediction is redone only after a bearing has moved the hypothesis (the same
         # pose and covariance predict the same, bit for bit).
         moved = False
@@ -299,7 +319,13 @@ def frame_update_kernel(
                     continue
                 S = var[n] + sigma2
                 nu[n] = wrap_float(z - h[n])
-                rho = d[n] / max(1.0 - d[n], 1e-12)
+                # (A reading takes its landmark's miss term back: with the misses weighed
+                # by miss_weight, what it takes back is the weighed term.)
+                rho = (
+                    d[n] / max(1.0 - d[n], 1e-12)
+                    if miss_weight == 1.0
+                    else d[n] / max((1.0 - d[n]) ** miss_weight, 1e-12)
+                )
                 if core_share > 0.0:
                     a[n] = _reading(wide, rho, nu[n], S, norm)
                     ac[n] = _reading(core_share, rho, nu[n], var[n] + core_sigma2, norm)

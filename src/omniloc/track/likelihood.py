@@ -131,6 +131,15 @@ class FrameModel:
         Factor on the bearing variances in the Kalman update only, not in the weighing
         (1: the same model in both; ``1 / w`` updates as a likelihood tempered by ``w``
         would, :attr:`~omniloc.track.TrackerConfig.temper_update`).
+    nonempty : bool
+        The frames come from a log that lists only frames with a bearing: a frame with
+        bearings is weighed by its likelihood given that it holds one
+        (:attr:`~omniloc.track.TrackerConfig.nonempty_frames`).
+    miss_weight : float
+        Weight of each landmark in view that the frame did not report: it costs
+        ``miss_weight * ln(1 - d)``, and a reading's odds are ``rho = d / (1 - d) **
+        miss_weight``, so that a landmark reported still earns ``d`` times its density (1:
+        the model as written above; :attr:`~omniloc.track.TrackerConfig.miss_weight`).
     """
 
     sigma2: float
@@ -145,6 +154,8 @@ class FrameModel:
     core_sigma2: float = 0.0
     core_update: bool = True
     update_scale: float = 1.0
+    nonempty: bool = False
+    miss_weight: float = 1.0
 
     @classmethod
     def of(cls, sensor: SensorModel, *, p_detect: float = 0.5, clutter: float = 0.5) -> FrameModel:
@@ -288,6 +299,8 @@ def _kernel(
         model.core_sigma2,
         model.core_update,
         model.update_scale,
+        model.nonempty,
+        model.miss_weight,
         ob,
     )
     var = model.object_var if ob.size else 1.0
