@@ -1528,7 +1528,7 @@ def _settings_targets() -> list[Target]:
                         (k,),
                         (("nan", float("nan")), ("zero", 0.0), ("huge", 1e300), ("bool", True)),
                     )
-                    for k in ("fov", "max_range", "gate", "max_gap_s")
+                    for k in ("fov", "max_range", "gate", "max_gap_s", "frame_period_s")
                 },
             },
             check=lambda kw, v: None,
@@ -2241,7 +2241,7 @@ def cli_targets() -> dict[str, CliTarget]:
                 ("a directory", Lazy(lambda f: f, needs_dir=True)),
                 ("under a file", Lazy(lambda f: _a_file(f) / "s.json", needs_dir=True)),
             ),
-            **{k: CLI_NUMBERS for k in ("--fov", "--max-range", "--gate")},
+            **{k: CLI_NUMBERS for k in ("--fov", "--max-range", "--gate", "--frame-period")},
         },
     )
     return {t.name: t for t in (localize, bearings, demo, evaluate, track, fit_motion, fit_sensor)}

@@ -96,6 +96,56 @@ MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
 
 
 @pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_on_mrclam_the_rates_per_camera_frame_are_those_of_the_docs() -> None:
+    # The preset's p_detect and clutter are per listed frame (a tube in view: 0.85-7 m and
+    # within the 67 deg view at the true pose; the other robots are the clutter). The same
+    # measures with the frames the gaps hold (one per period, each robot's median gap,
+    # 0.236-0.240 s) counted as frames that saw nothing give the rates per camera frame
+    # that docs/tracking.md gives for nonempty_frames (0.247 and 0.224).
+    import csv
+    import math
+
+    from omniloc.track import load_groundtruth, preset
+    from omniloc.track.calibrate import empty_frame_times
+
+    sensor, _, _ = preset("mrclam")
+    with (MRCLAM / "landmarks.csv").open() as fh:
+        lm = {int(r["id"]): (float(r["x"]), float(r["y"])) for r in csv.DictReader(fh)}
+    ids = sorted(lm)
+    xy = np.array([lm[i] for i in ids])
+
+    def in_view(x: float, y: float, th: float) -> np.ndarray:
+        d = xy - (x, y)
+        r = np.hypot(d[:, 0], d[:, 1])
+        b = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - th)))
+        return np.asarray((r >= 0.85) & (r <= 7.0) & (np.abs(b) <= math.radians(33.5)))
+
+    listed = empty = seen = seen_listed = reported = robots = 0
+    for robot in range(1, 6):
+        with (MRCLAM / f"robot{robot}_frames.csv").open() as fh:
+            rows = list(csv.DictReader(fh))
+        t = np.array([float(r["t"]) for r in rows])
+        truth = load_groundtruth(MRCLAM / f"robot{robot}_groundtruth_10hz.csv")
+        for r in rows:
+            v = in_view(float(r["gt_x"]), float(r["gt_y"]), float(r["gt_theta"]))
+            got = {int(e.split(":")[0]) for e in r["landmarks"].split(";") if e}
+            listed += 1
+            seen_listed += int(v.sum())
+            reported += sum(1 for j in got if v[ids.index(j)])
+            robots += int(r["n_robot"])
+        gaps, _ = truth.at(empty_frame_times(t, float(np.median(np.diff(t)))))
+        for x, y, th in gaps:
+            empty += 1
+            seen += int(in_view(x, y, th).sum())
+    seen += seen_listed
+    assert (listed, empty) == (9647, 8117)
+    assert reported / seen_listed == pytest.approx(sensor.p_detect, abs=0.01)
+    assert robots / listed == pytest.approx(sensor.clutter, abs=0.005)
+    assert reported / seen == pytest.approx(0.247, abs=0.001)
+    assert robots / (listed + empty) == pytest.approx(0.224, abs=0.001)
+
+
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
 def test_on_mrclam_the_fit_agrees_with_the_preset() -> None:
     from omniloc.track import load_groundtruth, load_odometry
 
@@ -689,3 +739,63 @@ def test_a_camera_whose_error_grows_with_the_bearing_shows_it_by_bearing() -> No
     # own, too thin to report), a NaN left out, and neither warns.
     far = bias_by_bearing(np.r_[np.full(20, 2 * math.pi + 0.05), 1e300, np.nan], np.zeros(22))
     assert [(lo, n) for lo, _, _, n in far] == [(0.0, 20)]
+
+
+def test_a_log_of_frames_with_a_bearing_gives_the_rates_per_camera_frame(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A narrow camera (60 deg) that often sees nothing; the log keeps only the frames with
+    # a bearing (MRCLAM's). Fitted as it is, the rates are those of the listed frames (too
+    # high); with the frame period the gaps count as frames that saw nothing and the
+    # simulated rates come back, with nonempty_frames in the settings.
+    import math
+
+    import omniloc
+    from omniloc.cli import main
+    from omniloc.track import estimate_frame_sensor, load_settings, simulate_run
+    from omniloc.track.calibrate import empty_frame_times
+
+    room = omniloc.demo_room()
+    fov = math.radians(60.0)
+    sensor = omniloc.SensorModel(sigma=math.radians(0.5), fov=fov, p_detect=0.4, clutter=0.3)
+    run = simulate_run(
+        room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=400.0, frame_hz=4.0, rng=4
+    )
+    listed = [f for f in run.frames if f.bearings.size]
+    assert 0.2 < 1 - len(listed) / len(run.frames) < 0.8
+    # (A log knows nothing of the frames before its first or after its last.)
+    span = [f for f in run.frames if listed[0].t <= f.t <= listed[-1].t]
+    every = estimate_frame_sensor(room, span, run.truth, fov=fov)
+    biased = estimate_frame_sensor(room, listed, run.truth, fov=fov)
+    fit = estimate_frame_sensor(room, listed, run.truth, fov=fov, frame_period_s=0.25)
+    # The gaps give back exactly the frames that were dropped ...
+    dropped = np.array([f.t for f in span if not f.bearings.size])
+    np.testing.assert_allclose(
+        empty_frame_times([f.t for f in listed], 0.25), dropped, rtol=0, atol=1e-6
+    )
+    assert fit.empty_frames == dropped.size and fit.frames == every.frames
+    # ... and with them the rates of every frame, which the listed frames alone overstate.
+    assert fit.p_detect == pytest.approx(every.p_detect, rel=1e-9)
+    assert fit.clutter == pytest.approx(every.clutter, rel=1e-9)
+    assert fit.p_detect == pytest.approx(0.4, abs=0.05) and fit.clutter == pytest.approx(
+        0.3, abs=0.06
+    )
+    assert biased.p_detect > fit.p_detect + 0.05 and biased.clutter > 1.3 * fit.clutter
+    assert fit.settings()["nonempty_frames"] is True
+    assert fit.mixture_settings()["nonempty_frames"] is True
+    assert "nonempty_frames" not in every.settings()
+    for bad in (0.0, -1.0, float("nan"), True):
+        with pytest.raises(InputError, match="frame_period_s"):
+            estimate_frame_sensor(room, listed, run.truth, frame_period_s=bad)
+    with pytest.raises(InputError, match="frame_period_s=1e-05 s makes more than"):
+        estimate_frame_sensor(room, listed, run.truth, frame_period_s=1e-5)
+    # On the command line: --frame-period, and the settings file for track.
+    lm, fr, gt = _write_recording(tmp_path, room.xy, listed, run.truth)
+    out = tmp_path / "sensor.json"
+    argv = ["fit-sensor", "--map", str(lm), "--frames", str(fr), "--groundtruth", str(gt)]
+    assert main([*argv, "--fov", "60", "--frame-period", "0.25", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"  of them {dropped.size} saw nothing" in text
+    settings = load_settings(out)
+    assert settings["nonempty_frames"] is True
+    assert settings["p_detect"] == pytest.approx(fit.p_detect, rel=1e-9)

@@ -59,6 +59,7 @@ __all__ = [
     "MotionFit",
     "SensorFit",
     "bias_by_bearing",
+    "empty_frame_times",
     "estimate_frame_sensor",
     "estimate_motion",
     "fit_core_and_tail",
@@ -680,7 +681,8 @@ class SensorFit:
         clutter comes with the landmarks (``omniloc localize --clutter-by-detections``); not
         among the tracker's :meth:`settings`.
     frames, matched, bearings : int
-        Frames with a true pose, bearings taken as landmarks, all their bearings.
+        Frames with a true pose (those that saw nothing included), bearings taken as
+        landmarks, all their bearings.
     core_share, core_sigma, tail_sigma : float
         The same errors as a sharp core and a wider tail (:func:`fit_core_and_tail`): the
         share of the errors in the sharper of two zero-mean Gaussians, its sd (rad) and the
@@ -695,6 +697,10 @@ class SensorFit:
         radians), around the errors' median: a camera whose error depends on the bearing
         (a lens or mirror calibration off) shows a pattern here that no setting of the
         tracker's models, all independent of the bearing, can take in. Diagnostic only.
+    empty_frames : int
+        Frames that saw nothing, inferred from the gaps of a log that lists only frames
+        with a bearing (``frame_period_s``), among :attr:`frames`; not in
+        :attr:`clutter_by_detections`, which is for frames that were listed.
     """
 
     sigma: float
@@ -709,15 +715,21 @@ class SensorFit:
     core_sigma: float = 0.0
     tail_sigma: float = 0.0
     bias_by_bearing: tuple[tuple[float, float, float, int], ...] = ()
+    empty_frames: int = 0
 
-    def settings(self) -> dict[str, float]:
-        """As settings for :func:`~omniloc.track.with_settings` (``omniloc track --config``)."""
-        return {
+    def settings(self) -> dict[str, float | bool]:
+        """As settings for :func:`~omniloc.track.with_settings` (``omniloc track --config``);
+        with frames that saw nothing inferred from the log's gaps (:attr:`empty_frames`),
+        ``nonempty_frames`` true, which the rates then are for."""
+        out: dict[str, float | bool] = {
             "sigma": self.sigma,
             "p_detect": self.p_detect,
             "clutter": self.clutter,
             "turn_noise_s": self.turn_noise_s,
         }
+        if self.empty_frames:
+            out["nonempty_frames"] = True
+        return out
 
     def mixture_settings(self) -> dict[str, float | bool]:
         """As :meth:`settings`, with the bearing errors as a sharp core and a wider tail: the
@@ -730,13 +742,11 @@ class SensorFit:
         if not self.core_share > 0:
             return {**self.settings(), "core_share": 0.0}
         return {
+            **self.settings(),
             "sigma": self.tail_sigma,
             "core_share": self.core_share,
             "core_sigma": self.core_sigma,
             "core_update": False,
-            "p_detect": self.p_detect,
-            "clutter": self.clutter,
-            "turn_noise_s": self.turn_noise_s,
         }
 
 
@@ -812,6 +822,7 @@ def estimate_frame_sensor(
     max_range: float | None = None,
     gate: float = math.radians(3.0),
     max_gap_s: float = 0.5,
+    frame_period_s: float | None = None,
 ) -> SensorFit:
     """Fit the bearing sensor's noise, its growth with the turn rate, the detection
     probability and the clutter from frames of bearings and a ground-truth track (see the
@@ -834,6 +845,16 @@ def estimate_frame_sensor(
         Range (m) beyond which no landmark is taken as in view.
     gate : float
         A bearing is taken as the nearest landmark's within this (rad), else as clutter.
+    max_gap_s : float
+        Frames where the true track has a gap longer than this (s) are left out.
+    frame_period_s : float, optional
+        The camera's frame period (s), for a recording that lists only frames with a
+        bearing (MRCLAM): a gap between two frames of about ``n`` periods (more than 1.5)
+        holds ``n - 1`` frames that saw nothing, and they count in ``p_detect`` (their
+        landmarks in view, at the true track, were not reported) and in ``clutter`` (per
+        camera frame): the rates the tracker's ``nonempty_frames`` wants
+        (:meth:`SensorFit.settings` then sets it). None: every frame the camera took is in
+        ``frames``.
 
     Returns
     -------
@@ -852,6 +873,8 @@ def estimate_frame_sensor(
         _positive("fov", fov, 2 * math.pi)
     if max_range is not None:
         _positive("max_range", max_range, 1e9)
+    if frame_period_s is not None:
+        _positive("frame_period_s", frame_period_s, MAX_STRETCH_S)
     L = lm.xy
     half = None if fov is None else 0.5 * float(fov)
     # Each recording's frames with its own truth, then all of them as one.
@@ -860,9 +883,24 @@ def estimate_frame_sensor(
     gap_list: list[FloatArray] = []
     at_before: list[FloatArray] = []
     at_after: list[FloatArray] = []
+    inferred = 0
+    at_empty: list[FloatArray] = []  # the true poses of the frames that saw nothing
+    gap_empty: list[FloatArray] = []
     for fr, tr in pairs:
         t = np.array([f.t for f in fr], dtype=np.float64)
         every += fr
+        if frame_period_s is not None:
+            inferred += int(_empty_counts(t, frame_period_s)[1].sum())
+            if inferred > MAX_EMPTY_FRAMES:
+                raise InputError(
+                    f"frame_period_s={frame_period_s:g} s makes more than "
+                    f"{MAX_EMPTY_FRAMES:,} frames of the log's gaps: is it the camera's frame "
+                    "period in seconds?"
+                )
+            te = empty_frame_times(t, frame_period_s)
+            pe, ge = tr.at(te) if te.size else (np.zeros((0, 3)), np.zeros(0))
+            at_empty.append(pe)
+            gap_empty.append(ge)
         p, g = tr.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
         at.append(p)
         gap_list.append(g)
@@ -881,12 +919,7 @@ def estimate_frame_sensor(
             continue
         used += 1
         total += f.bearings.size
-        d = L - x[:2]
-        r = np.hypot(d[:, 0], d[:, 1])
-        h = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - x[2]))
-        near = r > 1e-9
-        if max_range is not None:
-            near &= r <= max_range
+        h, near, plain = _landmarks_seen_from(L, x, max_range, half, gate)
         cand = np.flatnonzero(near)
         taken = np.zeros(L.shape[0], dtype=bool)
         rate = float(wrap(after[k, 2] - before[k, 2])) / 0.2
@@ -905,9 +938,20 @@ def estimate_frame_sensor(
             else:
                 unmatched += 1
         per_frame.append((int(taken.sum()), unmatched - unmatched0))
-        plain = near & ((np.abs(h) <= half - gate) if half is not None else True)
         visible += int(plain.sum())
         seen += int((plain & taken).sum())
+    empty = 0
+    for x, g in zip(
+        np.concatenate(at_empty) if at_empty else np.zeros((0, 3)),
+        np.concatenate(gap_empty) if gap_empty else np.zeros(0),
+        strict=True,
+    ):
+        # A frame that saw nothing: its landmarks in view count as not reported.
+        if not (np.isfinite(x).all() and g <= max_gap_s):
+            continue
+        empty += 1
+        visible += int(_landmarks_seen_from(L, x, max_range, half, gate)[2].sum())
+    used += empty
     if len(errors) < MIN_ERRORS:
         raise InputError(
             f"only {len(errors)} bearings within {math.degrees(gate):.1f} deg of a landmark "
@@ -937,4 +981,54 @@ def estimate_frame_sensor(
         core_sigma=mix.core_sigma,
         tail_sigma=mix.tail_sigma,
         bias_by_bearing=bias_by_bearing(np.array(where), err - np.median(err)),
+        empty_frames=empty,
     )
+
+
+def _landmarks_seen_from(
+    L: FloatArray, x: FloatArray, max_range: float | None, half: float | None, gate: float
+) -> tuple[FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
+    """From the true pose ``x``: each landmark's bearing, which are within range (a bearing's
+    candidates), and which are plainly in view (inside the field of view by more than
+    ``gate``: what ``p_detect`` counts)."""
+    d = L - x[:2]
+    r = np.hypot(d[:, 0], d[:, 1])
+    h = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - x[2]))
+    near = r > 1e-9
+    if max_range is not None:
+        near &= r <= max_range
+    plain = near & ((np.abs(h) <= half - gate) if half is not None else True)
+    return h, near, plain
+
+
+#: Most frames :func:`estimate_frame_sensor` infers from a log's gaps (each is scored at the
+#: true track): a period mistaken for milliseconds would make millions.
+MAX_EMPTY_FRAMES = 1_000_000
+
+
+def _empty_counts(t: FloatArray, period: float) -> tuple[FloatArray, NDArray[np.int64]]:
+    """Each gap of ``t`` and the number of frames it holds (see :func:`empty_frame_times`)."""
+    if t.size < 2:
+        return np.zeros(0), np.zeros(0, dtype=np.int64)
+    gap = np.diff(t)
+    with np.errstate(over="ignore", invalid="ignore"):
+        k = np.where(gap > 1.5 * period, np.rint(gap / period) - 1.0, 0.0)
+    return gap, np.minimum(k, MAX_EMPTY_FRAMES + 1.0).astype(np.int64)
+
+
+def empty_frame_times(t: ArrayLike, period: float) -> FloatArray:
+    """The times of the frames a log that lists only frames with a bearing left out: a gap
+    of ``g`` seconds between two listed frames (``t`` in time order) holds
+    ``round(g / period) - 1`` of them, evenly spaced (none in a gap under 1.5 periods).
+
+    Examples
+    --------
+    >>> empty_frame_times([0.0, 0.25, 1.0, 1.3], 0.25).tolist()
+    [0.5, 0.75]
+    """
+    t = np.asarray(t, dtype=np.float64).reshape(-1)
+    gap, n = _empty_counts(t, period)
+    if not n.any():
+        return np.zeros(0)
+    k = np.flatnonzero(n)
+    return np.concatenate([t[i] + gap[i] * np.arange(1, n[i] + 1) / (n[i] + 1) for i in k])
