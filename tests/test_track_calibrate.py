@@ -789,6 +789,16 @@ def test_a_log_of_frames_with_a_bearing_gives_the_rates_per_camera_frame(
             estimate_frame_sensor(room, listed, run.truth, frame_period_s=bad)
     with pytest.raises(InputError, match="frame_period_s=1e-05 s makes more than"):
         estimate_frame_sensor(room, listed, run.truth, frame_period_s=1e-5)
+    for t, period, match in (
+        ([0.0, 1.0], 0.0, "period"),
+        ([0.0, 1.0], float("nan"), "period"),
+        ([0.0, float("nan")], 0.25, "finite"),
+        ([1.0, 0.0], 0.25, "time order"),
+        (["a"], 0.25, "times"),
+        ([0.0, 1e6], 1e-3, "more than"),
+    ):
+        with pytest.raises(InputError, match=match):
+            empty_frame_times(t, period)  # type: ignore[arg-type]
     # On the command line: --frame-period, and the settings file for track.
     lm, fr, gt = _write_recording(tmp_path, room.xy, listed, run.truth)
     out = tmp_path / "sensor.json"

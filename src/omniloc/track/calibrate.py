@@ -1026,8 +1026,19 @@ def empty_frame_times(t: ArrayLike, period: float) -> FloatArray:
     >>> empty_frame_times([0.0, 0.25, 1.0, 1.3], 0.25).tolist()
     [0.5, 0.75]
     """
-    t = np.asarray(t, dtype=np.float64).reshape(-1)
+    _positive("period", period, MAX_STRETCH_S)
+    try:
+        t = np.asarray(t, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"t must be times in seconds, got {shorten(t)}") from None
+    if not np.isfinite(t).all() or (np.diff(t) < 0).any():
+        raise InputError("t must be finite times in seconds, in time order")
     gap, n = _empty_counts(t, period)
+    if int(n.sum()) > MAX_EMPTY_FRAMES:
+        raise InputError(
+            f"a period of {period:g} s makes more than {MAX_EMPTY_FRAMES:,} frames of the "
+            "gaps: is it the frame period in seconds?"
+        )
     if not n.any():
         return np.zeros(0)
     k = np.flatnonzero(n)
