@@ -6,15 +6,15 @@ Run:  python benchmarks/track_losses.py [--data PATH] [--robots 1 2 3 4 5]
 
 Each robot's whole run with the ``mrclam`` preset (``--set`` changes a setting by name, as
 ``omniloc track --set``). At each frame the true place is the reported hypotheses within
-0.5 m and 10 deg of the ground truth (the frame's own ``gt_*``); a loss is a frame at which
-it holds at least 90 % of the mass followed, within 3 s, by a frame at which it holds under
-10 %. Each loss is put down to elsewhere (elsewhere holds half the mass or more at its end)
-or to a rival (the best hypothesis then, its distance and heading from the truth). The
-frames of the losses (after the 90 % frame, up to the 10 % one) are compared with the frames
-in which the true place holds at least half the mass: among those with 3 or more tubes in
-view (0.85-7 m, within 33.5 deg of the heading, at the true pose), the share of the tubes in
-view reported. The recordings' landmark ids say which bearing is which; the tracker never
-reads them.
+0.5 m and 10 deg of the ground truth; a loss is a frame at which it holds at least 90 % of
+the mass followed, within 3 s, by a frame at which it holds under 10 %. Each loss is put
+down to elsewhere (elsewhere holds half the mass or more at its end) or to a rival (the best
+hypothesis then, its distance and heading from the truth). The frames of the losses (after
+the 90 % frame, up to the 10 % one) are compared with the frames in which the true place
+holds at least half the mass: among those with 3 or more tubes in view of the true pose
+(the preset sensor's ``visible``: 0.85-7 m, the 67 deg view), the share of the tubes in view
+reported. The recordings' landmark ids (``Frame.truth``) say which bearing is which; the
+tracker never reads them.
 
 Writes ``results_track_losses.json`` beside this file; docs/tracking.md ("Frames listed only
 when they hold a bearing") cites it.
@@ -23,8 +23,6 @@ when they hold a bearing") cites it.
 from __future__ import annotations
 
 import argparse
-import csv
-import json
 import math
 import sys
 from pathlib import Path
@@ -36,27 +34,16 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 from _results import run_meta, write_results  # noqa: E402
-from omniloc import LandmarkMap  # noqa: E402
-from omniloc.track import (  # noqa: E402
-    TrackEstimate,
-    load_frames,
-    load_odometry,
-    preset,
-    track,
-    with_settings,
-)
+from omniloc.angles import wrap  # noqa: E402
+from omniloc.cli import _setting  # noqa: E402
+from omniloc.evaluate.tracking import MAX_GAP_S, mrclam_streams, run_stream  # noqa: E402
+from omniloc.track import Tracker, TrackEstimate, preset, with_settings  # noqa: E402
 
 DATA = HERE.parent.parent / "shared" / "data" / "mrclam-ds6"
 #: The true place: hypotheses within this of the ground truth (m, rad).
 NEAR_M, NEAR_HEADING = 0.5, math.radians(10.0)
 #: A loss: from at least HELD to under GONE within WITHIN_S seconds.
 HELD, GONE, WITHIN_S = 0.9, 0.1, 3.0
-#: A tube in view: range and half field of view (the preset's measures).
-RANGE_M, HALF_FOV = (0.85, 7.0), math.radians(33.5)
-
-
-def _wrap(a: float) -> float:
-    return (a + math.pi) % (2 * math.pi) - math.pi
 
 
 def _true_share(e: TrackEstimate, x: float, y: float, th: float) -> float:
@@ -65,7 +52,7 @@ def _true_share(e: TrackEstimate, x: float, y: float, th: float) -> float:
             h.weight
             for h in e.hypotheses
             if math.hypot(h.pose.x - x, h.pose.y - y) < NEAR_M
-            and abs(_wrap(h.pose.theta - th)) < NEAR_HEADING
+            and abs(float(wrap(h.pose.theta - th))) < NEAR_HEADING
         )
     )
 
@@ -116,48 +103,32 @@ def reported_share(counts: Any) -> dict[str, float]:
 
 def run_robot(data: Path, robot: int, settings: dict[str, Any]) -> dict[str, Any]:
     """One robot's losses of the true place and its frames' reported shares."""
-    with (data / "landmarks.csv").open() as fh:
-        tubes = {int(r["id"]): (float(r["x"]), float(r["y"])) for r in csv.DictReader(fh)}
-    ids = sorted(tubes)
-    xy = np.array([tubes[i] for i in ids])
-    with (data / f"robot{robot}_frames.csv").open() as fh:
-        rows = list(csv.DictReader(fh))
+    (stream,) = mrclam_streams(data, (robot,))
     sensor, motion, config = with_settings(*preset("mrclam"), settings)
-    frames = load_frames(data / f"robot{robot}_frames.csv")
-    run = track(
-        LandmarkMap.load(data / "landmarks.csv"),
-        load_odometry(data / f"robot{robot}_odometry.csv"),
-        frames,
-        sensor=sensor,
-        motion=motion,
-        config=config,
-    )
-    est = run.estimates
-    if len(est) != len(rows):
-        raise SystemExit(f"robot {robot}: {len(est)} estimates for {len(rows)} frames")
-    share = np.zeros(len(rows))
-    counts = np.zeros((len(rows), 2))  # (tubes in view reported, tubes in view)
-    for k, (r, e) in enumerate(zip(rows, est, strict=True)):
-        x, y, th = float(r["gt_x"]), float(r["gt_y"]), float(r["gt_theta"])
-        share[k] = _true_share(e, x, y, th)
-        d = xy - (x, y)
-        q = np.hypot(d[:, 0], d[:, 1])
-        b = np.array([_wrap(v - th) for v in np.arctan2(d[:, 1], d[:, 0])])
-        view = (q >= RANGE_M[0]) & (q <= RANGE_M[1]) & (np.abs(b) <= HALF_FOV)
-        got = {int(s.split(":")[0]) for s in r["landmarks"].split(";") if s}
-        counts[k] = (sum(1 for j in got if view[ids.index(j)]), view.sum())
-    t = np.array([f.t for f in frames])
+    est, _ = run_stream(Tracker(stream.landmarks, sensor, motion, config), stream)
+    t = np.array([f.t for f in stream.frames])
+    truth, gaps = stream.truth_at(t)
+    known = (gaps <= MAX_GAP_S) & np.isfinite(truth).all(axis=1)
+    share = np.full(t.size, np.nan)
+    counts = np.zeros((t.size, 2))  # (tubes in view reported, tubes in view)
+    view_model = preset("mrclam")[0]
+    for k in np.flatnonzero(known):
+        x, y, th = truth[k]
+        share[k] = _true_share(est[k], x, y, th)
+        view = view_model.visible(stream.landmarks.xy, truth[k])
+        got = {j for j in (stream.frames[k].truth or ()) if j is not None}
+        counts[k] = (sum(1 for j in got if view[j]), view.sum())
     losses: list[dict[str, Any]] = []
     during: list[int] = []
-    for i, j in find_losses(t, share):
-        r, e = rows[j], est[j]
-        x, y, th = float(r["gt_x"]), float(r["gt_y"]), float(r["gt_theta"])
-        out = _elsewhere(e)
+    # (a frame without a ground truth neither holds nor loses the true place)
+    for i, j in find_losses(t, np.nan_to_num(share, nan=0.5)):
+        x, y, th = truth[j]
+        out = _elsewhere(est[j])
         loss: dict[str, Any] = {"t": float(t[j] - t[0]), "elsewhere": out}
-        if out < 0.5 and e.hypotheses:
-            best = e.hypotheses[0].pose
+        if out < 0.5 and est[j].hypotheses:
+            best = est[j].hypotheses[0].pose
             loss["rival_m"] = math.hypot(best.x - x, best.y - y)
-            loss["rival_deg"] = math.degrees(abs(_wrap(best.theta - th)))
+            loss["rival_deg"] = math.degrees(abs(float(wrap(best.theta - th))))
         losses.append(loss)
         during += range(i + 1, j + 1)
     held = np.flatnonzero(share >= 0.5)
@@ -179,10 +150,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     ap.add_argument("--out", type=Path, default=HERE / "results_track_losses.json")
     args = ap.parse_args(argv)
-    settings = {}
+    settings: dict[str, Any] = {}
     for item in args.set:
-        name, _, value = item.partition("=")
-        settings[name] = json.loads(value)
+        settings.update(_setting(item))
     runs = [run_robot(args.data, r, settings) for r in args.robots]
     all_losses = [loss for r in runs for loss in r["losses"]]
     n_else = sum(1 for loss in all_losses if loss["elsewhere"] >= 0.5)

@@ -97,52 +97,36 @@ MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
 
 @pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
 def test_on_mrclam_the_rates_per_camera_frame_are_those_of_the_docs() -> None:
-    # The preset's p_detect and clutter are per listed frame (a tube in view: 0.85-7 m and
-    # within the 67 deg view at the true pose; the other robots are the clutter). The same
-    # measures with the frames the gaps hold (one per period, each robot's median gap,
-    # 0.236-0.240 s) counted as frames that saw nothing give the rates per camera frame
-    # that docs/tracking.md gives for nonempty_frames (0.247 and 0.224).
-    import csv
-    import math
-
-    from omniloc.track import load_groundtruth, preset
+    # The preset's p_detect and clutter are per listed frame (a tube in view: the preset
+    # sensor's ``visible`` at the true pose, 0.85-7 m and the 67 deg view; the bearings of no
+    # tube are the clutter). The same measures with the frames the gaps hold (one per period,
+    # each robot's median gap, 0.236-0.240 s) counted as frames that saw nothing give the
+    # rates per camera frame that docs/tracking.md gives for nonempty_frames (0.247, 0.224).
+    from omniloc.evaluate.tracking import mrclam_streams
+    from omniloc.track import preset
     from omniloc.track.calibrate import empty_frame_times
 
     sensor, _, _ = preset("mrclam")
-    with (MRCLAM / "landmarks.csv").open() as fh:
-        lm = {int(r["id"]): (float(r["x"]), float(r["y"])) for r in csv.DictReader(fh)}
-    ids = sorted(lm)
-    xy = np.array([lm[i] for i in ids])
-
-    def in_view(x: float, y: float, th: float) -> np.ndarray:
-        d = xy - (x, y)
-        r = np.hypot(d[:, 0], d[:, 1])
-        b = np.angle(np.exp(1j * (np.arctan2(d[:, 1], d[:, 0]) - th)))
-        return np.asarray((r >= 0.85) & (r <= 7.0) & (np.abs(b) <= math.radians(33.5)))
-
-    listed = empty = seen = seen_listed = reported = robots = 0
-    for robot in range(1, 6):
-        with (MRCLAM / f"robot{robot}_frames.csv").open() as fh:
-            rows = list(csv.DictReader(fh))
-        t = np.array([float(r["t"]) for r in rows])
-        truth = load_groundtruth(MRCLAM / f"robot{robot}_groundtruth_10hz.csv")
-        for r in rows:
-            v = in_view(float(r["gt_x"]), float(r["gt_y"]), float(r["gt_theta"]))
-            got = {int(e.split(":")[0]) for e in r["landmarks"].split(";") if e}
+    listed = empty = seen_listed = seen = reported = clutter = 0
+    for stream in mrclam_streams(MRCLAM):
+        t = np.array([f.t for f in stream.frames])
+        truth, _ = stream.truth_at(t)
+        for f, x in zip(stream.frames, truth, strict=True):
+            view = sensor.visible(stream.landmarks.xy, x)
+            rows = [j for j in f.truth or () if j is not None]
             listed += 1
-            seen_listed += int(v.sum())
-            reported += sum(1 for j in got if v[ids.index(j)])
-            robots += int(r["n_robot"])
-        gaps, _ = truth.at(empty_frame_times(t, float(np.median(np.diff(t)))))
-        for x, y, th in gaps:
-            empty += 1
-            seen += int(in_view(x, y, th).sum())
+            seen_listed += int(view.sum())
+            reported += sum(1 for j in set(rows) if view[j])
+            clutter += f.bearings.size - len(rows)
+        gaps, _ = stream.truth_at(empty_frame_times(t, float(np.median(np.diff(t)))))
+        empty += len(gaps)
+        seen += sum(int(sensor.visible(stream.landmarks.xy, x).sum()) for x in gaps)
     seen += seen_listed
     assert (listed, empty) == (9647, 8117)
     assert reported / seen_listed == pytest.approx(sensor.p_detect, abs=0.01)
-    assert robots / listed == pytest.approx(sensor.clutter, abs=0.005)
+    assert clutter / listed == pytest.approx(sensor.clutter, abs=0.005)
     assert reported / seen == pytest.approx(0.247, abs=0.001)
-    assert robots / (listed + empty) == pytest.approx(0.224, abs=0.001)
+    assert clutter / (listed + empty) == pytest.approx(0.224, abs=0.001)
 
 
 @pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
@@ -787,8 +771,12 @@ def test_a_log_of_frames_with_a_bearing_gives_the_rates_per_camera_frame(
     for bad in (0.0, -1.0, float("nan"), True):
         with pytest.raises(InputError, match="frame_period_s"):
             estimate_frame_sensor(room, listed, run.truth, frame_period_s=bad)
-    with pytest.raises(InputError, match="frame_period_s=1e-05 s makes more than"):
+    with pytest.raises(InputError, match="frame_period_s: a period of 1e-05 s makes more than"):
         estimate_frame_sensor(room, listed, run.truth, frame_period_s=1e-5)
+    # Frames out of time order: the gaps are those of the sorted times.
+    shuffled = listed[::-1]
+    back = estimate_frame_sensor(room, shuffled, run.truth, fov=fov, frame_period_s=0.25)
+    assert back.empty_frames == fit.empty_frames and back.p_detect == fit.p_detect
     for t, period, match in (
         ([0.0, 1.0], 0.0, "period"),
         ([0.0, 1.0], float("nan"), "period"),

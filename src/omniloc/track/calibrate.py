@@ -890,14 +890,16 @@ def estimate_frame_sensor(
         t = np.array([f.t for f in fr], dtype=np.float64)
         every += fr
         if frame_period_s is not None:
-            inferred += int(_empty_counts(t, frame_period_s)[1].sum())
+            try:
+                te = empty_frame_times(np.sort(t), frame_period_s)
+            except InputError as exc:
+                raise InputError(f"frame_period_s: {exc}") from None
+            inferred += te.size
             if inferred > MAX_EMPTY_FRAMES:
                 raise InputError(
-                    f"frame_period_s={frame_period_s:g} s makes more than "
-                    f"{MAX_EMPTY_FRAMES:,} frames of the log's gaps: is it the camera's frame "
-                    "period in seconds?"
+                    f"frame_period_s: a period of {frame_period_s:g} s makes more than "
+                    f"{MAX_EMPTY_FRAMES:,} frames of the gaps: is it the frame period in seconds?"
                 )
-            te = empty_frame_times(t, frame_period_s)
             pe, ge = tr.at(te) if te.size else (np.zeros((0, 3)), np.zeros(0))
             at_empty.append(pe)
             gap_empty.append(ge)
@@ -1006,16 +1008,6 @@ def _landmarks_seen_from(
 MAX_EMPTY_FRAMES = 1_000_000
 
 
-def _empty_counts(t: FloatArray, period: float) -> tuple[FloatArray, NDArray[np.int64]]:
-    """Each gap of ``t`` and the number of frames it holds (see :func:`empty_frame_times`)."""
-    if t.size < 2:
-        return np.zeros(0), np.zeros(0, dtype=np.int64)
-    gap = np.diff(t)
-    with np.errstate(over="ignore", invalid="ignore"):
-        k = np.where(gap > 1.5 * period, np.rint(gap / period) - 1.0, 0.0)
-    return gap, np.minimum(k, MAX_EMPTY_FRAMES + 1.0).astype(np.int64)
-
-
 def empty_frame_times(t: ArrayLike, period: float) -> FloatArray:
     """The times of the frames a log that lists only frames with a bearing left out: a gap
     of ``g`` seconds between two listed frames (``t`` in time order) holds
@@ -1033,7 +1025,11 @@ def empty_frame_times(t: ArrayLike, period: float) -> FloatArray:
         raise InputError(f"t must be times in seconds, got {shorten(t)}") from None
     if not np.isfinite(t).all() or (np.diff(t) < 0).any():
         raise InputError("t must be finite times in seconds, in time order")
-    gap, n = _empty_counts(t, period)
+    gap = np.diff(t)
+    # (capped: a gap of hours over a period of microseconds would not fit an int)
+    with np.errstate(over="ignore"):
+        k = np.where(gap > 1.5 * period, np.rint(gap / period) - 1.0, 0.0)
+    n = np.minimum(k, MAX_EMPTY_FRAMES + 1.0).astype(np.int64)
     if int(n.sum()) > MAX_EMPTY_FRAMES:
         raise InputError(
             f"a period of {period:g} s makes more than {MAX_EMPTY_FRAMES:,} frames of the "
