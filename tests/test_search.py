@@ -9,7 +9,7 @@ import pytest
 from omniloc.errors import InputError
 from omniloc.maps import LandmarkMap
 from omniloc.pose import Pose, predict_bearings
-from omniloc.search import Method, localize
+from omniloc.search import LocalizationResult, Method, Solutions, localize
 from omniloc.simulate import demo_room, observe, random_map, random_pose, symmetric_map
 
 DEG = np.pi / 180
@@ -20,6 +20,36 @@ def _has_pose(result, pose: Pose, tol_xy: float = 1e-6, tol_th: float = 1e-6) ->
         s.pose.distance_to(pose)[0] <= tol_xy and s.pose.distance_to(pose)[1] <= tol_th
         for s in result.solutions
     )
+
+
+def test_solutions_are_a_sequence_with_arrays_of_them_all() -> None:
+    # Many interpretations (a symmetric map, clutter allowed): the result's arrays are its
+    # solutions', row for row, and the sequence reads like a list.
+    lm = symmetric_map("octagon")
+    scene = observe(lm, random_pose(lm, rng=3), n_obs=5, rng=4)
+    res = localize(lm, scene.bearings, sigma=DEG, max_spurious=1)
+    sols = list(res.solutions)
+    k = len(sols)
+    assert isinstance(res.solutions, Solutions) and k > 1 and len(res) == k
+    assert res.poses.shape == (k, 3) and res.assignments.shape == (k, scene.bearings.size)
+    for i, s in enumerate(sols):
+        assert tuple(res.poses[i]) == s.pose.as_tuple()
+        assert tuple(None if a < 0 else int(a) for a in res.assignments[i]) == s.assignment
+        assert isinstance(s.residual_rms, float) and isinstance(s.matched, int)
+    conf = [s.confidence for s in sols]
+    assert conf == sorted(conf, reverse=True)
+    assert res.solutions[-1] == sols[-1] and res.solutions[1:3] == sols[1:3]
+    assert res.solutions == sols and res.solutions[0] is res.best
+    with pytest.raises(IndexError):
+        res.solutions[k]
+    with pytest.raises(ValueError, match="read-only"):
+        res.poses[0, 0] = 1.0
+    # A result made from a list of solutions gives the same arrays.
+    again = LocalizationResult(sols, res.stats, lm)
+    np.testing.assert_array_equal(again.poses, res.poses)
+    np.testing.assert_array_equal(again.assignments, res.assignments)
+    empty = LocalizationResult([], res.stats, lm)
+    assert empty.poses.shape == (0, 3) and empty.assignments.shape[0] == 0
 
 
 @pytest.mark.parametrize(("n", "m"), [(12, 4), (12, 7), (5, 5), (30, 3)])

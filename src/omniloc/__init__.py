@@ -47,6 +47,7 @@ from .search import (
     Method,
     SearchStats,
     Solution,
+    Solutions,
     Strategy,
     localize,
 )
@@ -69,6 +70,7 @@ __all__ = [
     "SearchStats",
     "SensorModel",
     "Solution",
+    "Solutions",
     "Strategy",
     "VisionError",
     "__version__",

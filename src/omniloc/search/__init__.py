@@ -33,7 +33,7 @@ from ..maps import LandmarkMap, as_landmark_map
 from ..sensor import IMPLAUSIBLE_NOISE, SensorModel
 from .hypotheses import run_hypotheses
 from .options import Budget, Leaves, SearchOptions, make_options
-from .results import LocalizationResult, Method, SearchStats, Solution, Strategy
+from .results import LocalizationResult, Method, SearchStats, Solution, Solutions, Strategy
 from .scoring import DECISIVE, MAX_LEAVES, convincing, finish
 from .tree import TreeSearch, robust_order, run_paper_kernel
 
@@ -44,6 +44,7 @@ __all__ = [
     "Method",
     "SearchStats",
     "Solution",
+    "Solutions",
     "Strategy",
     "localize",
 ]

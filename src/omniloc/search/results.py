@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import enum
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import overload
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,9 +13,10 @@ from numpy.typing import NDArray
 from ..maps import LandmarkMap
 from ..pose import Pose
 
-__all__ = ["LocalizationResult", "Method", "SearchStats", "Solution", "Strategy"]
+__all__ = ["LocalizationResult", "Method", "SearchStats", "Solution", "Solutions", "Strategy"]
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 class Method(str, enum.Enum):
@@ -150,14 +153,128 @@ class Solution:
     missed: int = 0
 
 
+class Solutions(Sequence[Solution]):
+    """The solutions of a search, best first: a read-only sequence of :class:`Solution`
+    held as arrays, each ``Solution`` made when it is first read.
+
+    A window search of the tracker finds about a thousand interpretations and reads only
+    their poses and assignments (:attr:`poses`, :attr:`assignments`): making a ``Solution``
+    (and its ``Pose``) for each cost as much as the search's refinement.
+
+    Parameters
+    ----------
+    poses : ndarray, shape (K, 3)
+    assignments : ndarray of int, shape (K, m)
+        Landmark row of each observation, -1 for a spurious one.
+    residual_rms, cost, confidence : ndarray, shape (K,)
+    matched, missed : ndarray of int, shape (K,)
+    covariances : ndarray, shape (K, 3, 3)
+    """
+
+    __slots__ = ("_arrays", "_made")
+
+    def __init__(
+        self,
+        poses: FloatArray,
+        assignments: IntArray,
+        residual_rms: FloatArray,
+        matched: IntArray,
+        covariances: FloatArray,
+        cost: FloatArray,
+        confidence: FloatArray,
+        missed: IntArray,
+    ) -> None:
+        k = len(poses)
+        arrays = (poses, assignments, residual_rms, matched, covariances, cost, confidence, missed)
+        if any(len(a) != k for a in arrays) or poses.shape[1:] != (3,):
+            raise ValueError("Solutions: every array must have one row per solution")
+        for a in arrays:
+            a.setflags(write=False)
+        self._arrays = arrays
+        self._made: list[Solution | None] = [None] * k
+
+    @classmethod
+    def empty(cls, m: int = 0) -> Solutions:
+        """No solution (for ``m`` observations)."""
+        z = np.zeros(0)
+        zi = np.zeros(0, dtype=np.int64)
+        return cls(
+            np.zeros((0, 3)), np.zeros((0, m), dtype=np.int64), z, zi, np.zeros((0, 3, 3)), z, z, zi
+        )
+
+    @property
+    def poses(self) -> FloatArray:
+        """(K, 3) poses ``(x, y, theta)``, best first (read-only)."""
+        return self._arrays[0]
+
+    @property
+    def assignments(self) -> IntArray:
+        """(K, m) landmark rows of each observation, -1 for spurious (read-only)."""
+        return self._arrays[1]
+
+    @property
+    def confidences(self) -> FloatArray:
+        """(K,) posterior probabilities (read-only)."""
+        return self._arrays[6]
+
+    def __len__(self) -> int:
+        return len(self._made)
+
+    def _make(self, i: int) -> Solution:
+        sol = self._made[i]
+        if sol is None:
+            pose, assign, rms, nmatch, cov, cost, conf, missed = (a[i] for a in self._arrays)
+            sol = Solution(
+                pose=Pose(*pose.tolist()),
+                assignment=tuple([v if v >= 0 else None for v in assign.tolist()]),
+                residual_rms=float(rms),
+                matched=int(nmatch),
+                covariance=cov,
+                cost=float(cost),
+                confidence=float(conf),
+                missed=int(missed),
+            )
+            self._made[i] = sol
+        return sol
+
+    @overload
+    def __getitem__(self, i: int) -> Solution: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[Solution]: ...
+
+    def __getitem__(self, i: int | slice) -> Solution | list[Solution]:
+        if isinstance(i, slice):
+            return [self._make(j) for j in range(*i.indices(len(self)))]
+        n = len(self)
+        j = i + n if i < 0 else i
+        if not 0 <= j < n:
+            raise IndexError(f"solution {i} of {n}")
+        return self._make(j)
+
+    def __iter__(self) -> Iterator[Solution]:
+        return (self._make(j) for j in range(len(self)))
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Sequence) and not isinstance(other, (str, bytes)):
+            return len(self) == len(other) and all(a == b for a, b in zip(self, other, strict=True))
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"Solutions({len(self)} solutions)"
+
+
 @dataclass(frozen=True)
 class LocalizationResult:
     """The outcome of :func:`localize`; tests false when there is no solution.
 
     Attributes
     ----------
-    solutions : list of Solution
-        Best first, by posterior confidence.
+    solutions : Solutions (a sequence of Solution)
+        Best first, by posterior confidence; :attr:`poses` and :attr:`assignments` give
+        them all as arrays.
     stats : SearchStats
     landmarks : LandmarkMap
         The map searched (for landmark ids).
@@ -172,7 +289,7 @@ class LocalizationResult:
         Posterior probability that none of the solutions is right: every bearing clutter.
     """
 
-    solutions: list[Solution]
+    solutions: Sequence[Solution]
     stats: SearchStats
     landmarks: LandmarkMap
     ambiguous: bool = False
@@ -187,6 +304,24 @@ class LocalizationResult:
     def best(self) -> Solution | None:
         """The best solution, or None."""
         return self.solutions[0] if self.solutions else None
+
+    @property
+    def poses(self) -> FloatArray:
+        """Every solution's pose ``(x, y, theta)``, best first, shape (K, 3)."""
+        if isinstance(self.solutions, Solutions):
+            return self.solutions.poses
+        return np.array([s.pose.as_tuple() for s in self.solutions], dtype=np.float64).reshape(
+            -1, 3
+        )
+
+    @property
+    def assignments(self) -> IntArray:
+        """Every solution's landmark row for each observation (-1: spurious), best first,
+        shape (K, m) (``(0, 0)`` for a result made from an empty list)."""
+        if isinstance(self.solutions, Solutions):
+            return self.solutions.assignments
+        rows = [[-1 if a is None else a for a in s.assignment] for s in self.solutions]
+        return np.array(rows, dtype=np.int64) if rows else np.zeros((0, 0), dtype=np.int64)
 
     @property
     def complete(self) -> bool:

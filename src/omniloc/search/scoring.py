@@ -54,10 +54,10 @@ from .._kernels import geometry as geo
 from .._kernels.merge import merge
 from ..angles import TWO_PI, wrap
 from ..maps import LandmarkMap
-from ..pose import MAX_CONDITION, Pose
+from ..pose import MAX_CONDITION
 from ..sensor import SensorModel, chi2_quantile
 from .options import Leaves, SearchOptions
-from .results import Solution
+from .results import Solutions
 from .tree import map_scale, path_sse
 
 __all__ = [
@@ -248,7 +248,7 @@ def log_evidence(
 class Scored:
     """What :func:`finish` returns: the solutions, best first, and the posterior's verdict."""
 
-    solutions: list[Solution]
+    solutions: Solutions
     ambiguous: bool
     unexplained: float
 
@@ -269,7 +269,7 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     # No solution decides nothing: ambiguous, so that ``not result.ambiguous`` always has a
     # best to read.
     if len(level_assign) == 0:
-        return Scored([], True, 1.0)
+        return Scored(Solutions.empty(leaves.m), True, 1.0)
     m = leaves.m
     order = leaves.order
     s = opt.sensor
@@ -316,7 +316,7 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
         # together must also fit one pose: sse / sigma^2 ~ chi-square with n - 3 dof.
         joint &= sse / s.sigma**2 <= opt.joint_chi2[nmatch]
     if not joint.any():
-        return Scored([], True, 1.0)
+        return Scored(Solutions.empty(leaves.m), True, 1.0)
     if not joint.all():
         k = np.flatnonzero(joint)
         assign, w, Lm, poses, sse, nmatch = assign[k], w[k], Lm[k], poses[k], sse[k], nmatch[k]
@@ -330,7 +330,7 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     # covariance is the floor's, not the data's (pose_covariance refuses the same).
     fixed = _fixed(cov)
     if not fixed.any():
-        return Scored([], True, 1.0)
+        return Scored(Solutions.empty(leaves.m), True, 1.0)
     if not fixed.all():
         k = np.flatnonzero(fixed)
         assign, w, Lm, poses, sse, nmatch, rms, cov = (
@@ -364,35 +364,31 @@ def finish(lm: LandmarkMap, bearings: FloatArray, leaves: Leaves, opt: SearchOpt
     top = max(float(mass.max()), ev.log_null)
     total = top + math.log(float(np.exp(mass - top).sum()) + math.exp(ev.log_null - top))
     conf = np.exp(mass - total)
-    # Python numbers row by row (``tolist``: the same values as float()/int() of each
-    # entry, without a numpy scalar per field; the tracker's window searches return
-    # ~1,000 solutions each).
-    rows, pairs = poses.tolist(), assign.tolist()
-    rms_, nmatch_, cost_, missed_ = rms.tolist(), nmatch.tolist(), (-ln_e).tolist(), missed.tolist()
-    sols = [
-        Solution(
-            pose=Pose(*rows[i]),
-            assignment=tuple([v if v >= 0 else None for v in pairs[i]]),
-            residual_rms=rms_[i],
-            matched=nmatch_[i],
-            covariance=cov[i],
-            cost=cost_[i],
-            confidence=cf,
-            missed=missed_[i],
-        )
-        for i, cf in zip(keep, conf.tolist(), strict=True)
-    ]
-    # The merge may have put a solution with more evidence behind the one it absorbed.
-    sols.sort(key=lambda sol: -sol.confidence)
+    # Best first by confidence (a stable order: the merge may have put a solution with more
+    # evidence behind the one it absorbed). The solutions stay arrays, each made into a
+    # Solution when read (:class:`Solutions`).
+    keep_arr = np.asarray(keep, dtype=np.int64)
+    by = np.argsort(-conf, kind="stable")
+    keep_arr, conf = keep_arr[by], conf[by]
+    sols = Solutions(
+        poses[keep_arr],
+        assign[keep_arr],
+        rms[keep_arr],
+        nmatch[keep_arr],
+        cov[keep_arr],
+        -ln_e[keep_arr],
+        conf,
+        missed[keep_arr].astype(np.int64),
+    )
     # A search cut short by its budget, or stopped at a first fit, has not looked for every
     # rival: whatever the best's share among what was found, it is not a decisive answer.
-    ambiguous = sols[0].confidence < opt.decisive or not leaves.complete or not leaves.exhaustive
+    ambiguous = float(conf[0]) < opt.decisive or not leaves.complete or not leaves.exhaustive
     # Nor is a best that beats the null by less than a chance fit somewhere on the map could
     # (look-elsewhere over its landmarks): when the true interpretation is out of reach (a
     # real bearing outside its gate, more clutter than max_spurious), a modest chance fit on
     # a large map would otherwise hold all the posterior.
     unexplained = float(math.exp(ev.log_null - total))
-    ambiguous |= not convincing(sols[0].confidence, unexplained, lm.n, opt)
+    ambiguous |= not convincing(float(conf[0]), unexplained, lm.n, opt)
     return Scored(sols, bool(ambiguous), unexplained)
 
 

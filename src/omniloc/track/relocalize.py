@@ -139,12 +139,7 @@ def search_window(
         return _none(m)
     if not res:
         return Candidates(np.zeros((0, 3)), np.zeros((0, 3, 3)), m, res.complete)
-    poses = np.array([s.pose.as_tuple() for s in res.solutions], dtype=np.float64)
-    assign = np.array(
-        [[-1 if a is None else int(a) for a in s.assignment] for s in res.solutions],
-        dtype=np.int64,
-    )
-    poses, covs = refine_on_frames(landmarks.xy, frames, member, assign, poses, noise)
+    poses, covs = refine_on_frames(landmarks.xy, frames, member, res.assignments, res.poses, noise)
     covs = covs * cov_inflation
     return Candidates(poses, covs, m, res.complete)
 
