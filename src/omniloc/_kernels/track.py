@@ -273,6 +273,13 @@ def frame_update_kernel(
     tan_out = math.tan(edge) if not update and 0.0 <= half_fov and edge < 1.5 else -1.0
     last_d = -1.0
     last_log = 0.0
+    # Each object's Gaussian at each bearing (the same for every hypothesis; each
+    # hypothesis weighs it by its own expected count).
+    obj_g = np.empty((bearings.shape[0], K))
+    for iz in range(bearings.shape[0]):
+        for o in range(K):
+            e = wrap_float(bearings[iz] - obj_b[o])
+            obj_g[iz, o] = _exp(-0.5 * e * e / obj_var)
     for k in range(H):
         m = mu[k]
         C = P[k]
@@ -309,8 +316,7 @@ def frame_update_kernel(
             base = fresh
             for o in range(K):
                 if obj_w[k, o] > 0.0:
-                    e = wrap_float(z - obj_b[o])
-                    base += obj_w[k, o] * _exp(-0.5 * e * e / obj_var) * obj_norm
+                    base += obj_w[k, o] * obj_g[iz, o] * obj_norm
             total = base
             for n in range(N):
                 if d[n] == 0.0:

@@ -67,6 +67,9 @@ PARALLEL_MIN = 512
 #: Threads for the halves (at most the machine's cores).
 THREADS = 2
 
+#: The machine's cores (asked once: ``os.cpu_count`` reads /proc each time).
+_CORES = os.cpu_count() or 1
+
 _pool: ThreadPoolExecutor | None = None
 _pool_lock = threading.Lock()
 
@@ -75,7 +78,7 @@ def _shared_pool() -> ThreadPoolExecutor | None:
     """The module's pool of one helper thread (the caller runs the other half), made at
     first use; None on a machine with one core."""
     global _pool
-    if min(THREADS, os.cpu_count() or 1) < 2:
+    if min(THREADS, _CORES) < 2:
         return None
     with _pool_lock:
         if _pool is None:
