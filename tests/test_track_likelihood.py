@@ -167,6 +167,27 @@ def test_an_object_seen_again_by_hand() -> None:
     assert math.isclose(lr2[0], want, rel_tol=1e-9) and explained[0] == 0.0 and post2[0, 0] == 1.0
 
 
+def test_objects_and_bearings_each_paired_by_hand() -> None:
+    # Two bearings, two objects, two poses that remember them differently: each bearing's
+    # density sums every object's Gaussian at that bearing, weighed by that pose's count.
+    model = _memory_model(fresh=0.3, sd=np.deg2rad(2.0))
+    L = np.array([[-3.0, 0.0]])  # behind: every bearing is clutter
+    kappa = math.exp(model.log_kappa)
+    fov = np.deg2rad(90.0)
+    z = np.array([0.1, -0.4])
+    b = np.array([0.12, -0.38])
+    w = np.array([[0.6, 0.1], [0.0, 0.9]])
+    lr, post = log_ratios_clutter(np.zeros((2, 3)), z, L, model, Objects(b, w))
+    sd = np.deg2rad(2.0)
+    for k in range(2):
+        want = 0.7 * kappa * fov - w[k].sum()
+        for zi in z:
+            dens = kappa * 0.3 + sum(w[k, o] * norm.pdf(zi, b[o], sd) for o in range(2))
+            want += math.log(dens / kappa)
+        assert math.isclose(lr[k], want, rel_tol=1e-9)
+    assert (post == 1.0).all()
+
+
 def test_an_object_seen_again_weighs_less_for_a_landmark_and_more_for_clutter() -> None:
     # Two poses: one explains the bearing with a landmark, one as clutter. A persistent
     # object at that bearing narrows their gap: the windfall of calling a robot a landmark.
