@@ -50,6 +50,12 @@ def test_solutions_are_a_sequence_with_arrays_of_them_all() -> None:
     np.testing.assert_array_equal(again.assignments, res.assignments)
     empty = LocalizationResult([], res.stats, lm)
     assert empty.poses.shape == (0, 3) and empty.assignments.shape[0] == 0
+    # Made from the caller's arrays: read-only views, the caller's arrays left writable.
+    mine = [np.asarray(a).copy() for a in res.solutions._arrays]
+    again = Solutions(*mine)
+    assert again == res.solutions and all(a.flags.writeable for a in mine)
+    with pytest.raises(ValueError, match="one row per solution"):
+        Solutions(mine[0], mine[1][:1], *mine[2:])
 
 
 @pytest.mark.parametrize(("n", "m"), [(12, 4), (12, 7), (5, 5), (30, 3)])

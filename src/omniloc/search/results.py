@@ -185,9 +185,11 @@ class Solutions(Sequence[Solution]):
         missed: IntArray,
     ) -> None:
         k = len(poses)
-        arrays = (poses, assignments, residual_rms, matched, covariances, cost, confidence, missed)
-        if any(len(a) != k for a in arrays) or poses.shape[1:] != (3,):
+        given = (poses, assignments, residual_rms, matched, covariances, cost, confidence, missed)
+        if any(len(a) != k for a in given) or poses.shape[1:] != (3,):
             raise ValueError("Solutions: every array must have one row per solution")
+        # Read-only views: the caller's arrays keep their flags.
+        arrays = tuple(np.asarray(a).view() for a in given)
         for a in arrays:
             a.setflags(write=False)
         self._arrays = arrays
