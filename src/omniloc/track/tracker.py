@@ -122,6 +122,9 @@ MAX_FRAME_BEARINGS = 1000
 INT_MAX = 10**9
 _INT_MAX = {"elsewhere_samples": 100_000, "max_hypotheses": 10_000, "max_candidates": 1_000_000}
 
+#: Largest seed of elsewhere's random generator.
+SEED_MAX = 2**63 - 1
+
 #: Below this many pairs of poses, all pairs are compared directly (building two k-d trees
 #: costs more).
 _BRUTE_PAIRS = 4096
@@ -305,6 +308,10 @@ class TrackerConfig:
         are dropped and the tracker relocalizes.
     max_reported : int
         At most this many hypotheses in an estimate.
+    seed : int
+        Seed of elsewhere's particles (their uniform start, motion noise, resampling and
+        injection): a run is the same for the same seed; other seeds show how much of a
+        result is the luck of the draw.
 
     Raises
     ------
@@ -361,10 +368,19 @@ class TrackerConfig:
     kidnap_watch_s: float = 10.0
     max_odometry_gap_s: float = 2.0
     max_reported: int = 10
+    seed: int = 0
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name == "seed":
+                whole = isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                if not (whole and 0 <= v <= SEED_MAX):
+                    raise InputError(
+                        f"seed must be an integer from 0 to 2**63 - 1, got {shorten(v)}"
+                    )
+                object.__setattr__(self, f.name, int(v))
+                continue
             if f.name == "search_miss":
                 if v is None:
                     continue
@@ -588,7 +604,9 @@ class Tracker:
         self.region = (x0, x1, y0, y1)
         # ln of the prior density of a pose, uniform over the region and all headings.
         self._log_prior = -math.log((x1 - x0) * (y1 - y0) * 2.0 * math.pi)
-        self._elsewhere = Elsewhere(self.region, c.elsewhere_samples, c.elsewhere_inject)
+        self._elsewhere = Elsewhere(
+            self.region, c.elsewhere_samples, c.elsewhere_inject, seed=c.seed
+        )
         self._window = Window(max(c.replay_s, c.search_window_s) + 1e-9)
         # (t, ln elsewhere mass, cumulative normaliser) before each frame of the window.
         self._history: deque[tuple[float, float, float]] = deque()
