@@ -3,6 +3,7 @@ bad files get one line on stderr and exit status 1."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 from functools import cache
 from pathlib import Path
@@ -239,3 +240,90 @@ def test_evaluate_mrclam_track_reports_runs_and_totals(
     assert report["whole_runs"]["totals"]["runs"] == 5
     assert report["kidnap_streams"] is None
     assert (out / "mrclam_track_runs.csv").read_text().count("\n") == 6  # header + 5 runs
+
+
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_evaluate_mrclam_track_over_tracker_seeds(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = _truncated_mrclam(tmp_path / "mrclam", 20.0)
+    out = tmp_path / "out"
+    argv = ["-q", "evaluate", "--dataset", "mrclam-track", str(data), "--kidnap", "0"]
+    assert main([*argv, "--tracker-seeds", "3", "0", "3", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "== tracker seed 3" in text and "== tracker seed 0" in text
+    assert "over the tracker's seeds 3, 0:" in text
+    spread = json.loads((out / "mrclam_track_seeds.json").read_text())
+    for seed in ("3", "0"):
+        report = json.loads((out / f"seed-{seed}" / "mrclam_track.json").read_text())
+        totals = report["whole_runs"]["totals"]
+        frames = totals["frames_scored"] * totals["localized_rate"]
+        assert spread["localized frames"]["by_seed"][seed] == pytest.approx(frames)
+        ece = spread["weight ECE"]["by_seed"][seed]
+        assert ece == pytest.approx(totals["best_weight_ece"], nan_ok=True)
+    # Without kidnapped streams, no figure of theirs.
+    assert "kidnapped: recovered" not in spread and "plain: false alarms" not in spread
+    fig = spread["localized frames"]
+    assert list(fig["by_seed"]) == ["3", "0"] and fig["min"] <= fig["max"]
+    table = (out / "mrclam_track_seeds.md").read_text().splitlines()
+    assert table[0] == "| figure | seed 3 | seed 0 | range |" and len(table) == 2 + len(spread)
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--tracker-seeds", "1", "--set", "seed=2"], "leave seed out of --set"),
+        (["--tracker-seeds", "-1"], "must be >= 0"),
+        (["--tracker-seeds", str(2**63)], "seed must be an integer"),
+    ],
+)
+def test_bad_tracker_seeds_are_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: list[str], message: str
+) -> None:
+    argv = ["-q", "evaluate", "--dataset", "mrclam-track", str(tmp_path / "none"), "--kidnap", "0"]
+    with contextlib.suppress(SystemExit):
+        assert main([*argv, *extra, "--out", str(tmp_path / "out")]) == 1
+    assert message in capsys.readouterr().err
+
+
+def test_tracker_seeds_need_the_tracking_dataset(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["-q", "evaluate", "--tracker-seeds", "1", "--out", str(tmp_path / "out")]
+    assert main(argv) == 1
+    assert "--tracker-seeds applies to --dataset mrclam-track only" in capsys.readouterr().err
+
+
+def test_seed_spread_needs_reports_with_integer_seeds() -> None:
+    from omniloc.errors import InputError
+    from omniloc.evaluate.tracking import seed_spread
+
+    with pytest.raises(InputError, match="at least one report"):
+        seed_spread({})
+    with pytest.raises(InputError, match="seeds must be integers"):
+        seed_spread({"a": None})  # type: ignore[dict-item]
+
+
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_seed_spread_reads_the_streams_figures(tmp_path: Path) -> None:
+    from omniloc.evaluate.tracking import (
+        TrackingReport,
+        evaluate_mrclam_tracking,
+        seed_spread,
+        seed_spread_table,
+    )
+
+    data = _truncated_mrclam(tmp_path / "mrclam", 20.0)
+    res, _ = evaluate_mrclam_tracking(data, kidnapped=0, progress=False)
+    # The whole runs standing in for streams: none has a jump, all are plain.
+    rep = TrackingReport(res.whole, kidnap=res.whole)
+    spread = seed_spread({5: rep, 1: rep})
+    assert spread["kidnapped: recovered"]["by_seed"] == {5: 0.0, 1: 0.0}
+    plain = res.whole.totals(False)
+    want = 100.0 * plain["false_alarm_run_rate"]
+    assert spread["plain: false alarms"]["by_seed"][5] == pytest.approx(want)
+    wrong = spread["confidently wrong"]
+    assert wrong["min"] == wrong["max"] == wrong["by_seed"][1]
+    lines = seed_spread_table(spread).splitlines()
+    assert lines[0] == "| figure | seed 5 | seed 1 | range |"
+    assert any(line.startswith("| plain: false alarms (%) |") for line in lines)

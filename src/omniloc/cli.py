@@ -22,7 +22,7 @@ import numpy as np
 
 from . import __version__
 from .errors import InputError, OmnilocError
-from .io import make_folder, shorten
+from .io import make_folder, shorten, write_json
 from .pose import Pose
 from .search import Method, Strategy
 
@@ -240,6 +240,15 @@ def _build_parser() -> argparse.ArgumentParser:
         type=int,
         default=100,
         help="mrclam-track: kidnapped streams (and as many without a jump), default 100",
+    )
+    e.add_argument(
+        "--tracker-seeds",
+        type=_seed,
+        nargs="+",
+        metavar="N",
+        help="mrclam-track: run once per seed of the tracker's random particles "
+        "(TrackerConfig.seed) and report each figure's range over them (--seed seeds the "
+        "kidnapped streams)",
     )
     _add_settings_options(e, "mrclam-track: ")
     e.add_argument("--max-samples", type=int, help="use at most this many dataset samples")
@@ -747,6 +756,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
             "--config and --set change the tracker's settings: they apply to --dataset "
             "mrclam-track only"
         )
+    if args.tracker_seeds and (args.dataset is None or args.dataset[0] != "mrclam-track"):
+        raise InputError("--tracker-seeds applies to --dataset mrclam-track only")
     track_settings: dict[str, Any] = {}
     if args.dataset is not None and args.dataset[0] == "mrclam-track":
         from .track import preset, with_settings
@@ -802,6 +813,8 @@ def _cmd_evaluate_track(args: argparse.Namespace, settings: dict[str, Any]) -> i
 
     if args.kidnap < 0:
         raise InputError(f"--kidnap must be >= 0, got {args.kidnap}")
+    if args.tracker_seeds:
+        return _cmd_evaluate_track_seeds(args, settings)
     res, _ = evaluate_mrclam_tracking(
         args.dataset[1],
         kidnapped=args.kidnap,
@@ -814,6 +827,48 @@ def _cmd_evaluate_track(args: argparse.Namespace, settings: dict[str, Any]) -> i
     res.to_csv(out / "mrclam_track_runs.csv")
     (out / "mrclam_track.json").write_text(json.dumps(res.as_dict(), indent=1))
     print(f"written: {out / 'mrclam_track_runs.csv'}, {out / 'mrclam_track.json'}")
+    return 0
+
+
+def _cmd_evaluate_track_seeds(args: argparse.Namespace, settings: dict[str, Any]) -> int:
+    """``--tracker-seeds``: the evaluation once per seed (each in ``OUT/seed-N``), then each
+    figure's range over the seeds (``OUT/mrclam_track_seeds.md`` and ``.json``)."""
+    from .evaluate.tracking import (
+        evaluate_mrclam_tracking,
+        seed_spread,
+        seed_spread_table,
+        tracking_summary,
+    )
+    from .track import preset, with_settings
+
+    seeds = list(dict.fromkeys(args.tracker_seeds))  # each once, in the order given
+    if "seed" in settings:
+        raise InputError("--tracker-seeds sets the tracker's seed: leave seed out of --set")
+    for seed in seeds:  # every seed refused before the first run, not after it
+        with_settings(*preset("mrclam"), {**settings, "seed": seed})
+    out: Path = args.out
+    reports = {}
+    for seed in seeds:
+        print(f"== tracker seed {seed}")
+        res, _ = evaluate_mrclam_tracking(
+            args.dataset[1],
+            kidnapped=args.kidnap,
+            rng=args.seed,
+            settings={**settings, "seed": seed},
+            progress=not args.quiet,
+        )
+        print(tracking_summary(res))
+        folder = make_folder(out / f"seed-{seed}", "--out")
+        res.to_csv(folder / "mrclam_track_runs.csv")
+        (folder / "mrclam_track.json").write_text(json.dumps(res.as_dict(), indent=1))
+        reports[seed] = res
+    spread = seed_spread(reports)
+    table = seed_spread_table(spread)
+    print(f"over the tracker's seeds {', '.join(map(str, seeds))}:")
+    print(table)
+    (out / "mrclam_track_seeds.md").write_text(table + "\n")
+    write_json(out / "mrclam_track_seeds.json", spread)  # (NaN, a run never localized: null)
+    print(f"written: {out / 'mrclam_track_seeds.md'}, {out / 'mrclam_track_seeds.json'}, seed-N/")
     return 0
 
 

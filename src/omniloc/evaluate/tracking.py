@@ -75,6 +75,8 @@ __all__ = [
     "evaluate_tracking",
     "run_stream",
     "score_run",
+    "seed_spread",
+    "seed_spread_table",
     "splice",
     "tracker_factory",
     "tracking_summary",
@@ -827,3 +829,89 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
             f"{_fmt(tp['time_to_localize_median_s'], '.1f')} s"
         )
     return "\n".join(lines)
+
+
+#: The figures :func:`seed_spread` compares across draws: (name, where, key of
+#: :meth:`TrackingResult.totals`, kidnapped selection, scale, unit, format).
+SPREAD_FIGURES: tuple[tuple[str, str, str, bool | None, float, str, str], ...] = (
+    ("localized frames", "whole", "localized_frames", None, 1.0, "", ".0f"),
+    ("confidently wrong", "whole", "confidently_wrong_rate", None, 100.0, "%", ".2f"),
+    ("first correct, median", "whole", "time_to_localize_median_s", None, 1.0, "s", ".1f"),
+    ("correct after (mean over runs)", "whole", "correct_after_rate", None, 100.0, "%", ".1f"),
+    ("position RMSE", "whole", "pos_rmse_m", None, 1.0, "m", ".3f"),
+    ("weight ECE", "whole", "best_weight_ece", None, 1.0, "", ".3f"),
+    ("kidnapped: confidently wrong", "kidnap", "confidently_wrong_rate", True, 100.0, "%", ".2f"),
+    ("kidnapped: recovered", "kidnap", "recovered", True, 1.0, "", ".0f"),
+    ("plain: false alarms", "kidnap", "false_alarm_run_rate", False, 100.0, "%", ".1f"),
+)
+
+
+def seed_spread(reports: Mapping[int, TrackingReport]) -> dict[str, dict[str, Any]]:
+    """The tracker's figures under several seeds of its random particles
+    (``TrackerConfig.seed``), side by side: how much of a result is the luck of the draw.
+
+    Parameters
+    ----------
+    reports : mapping of int to TrackingReport
+        One report per seed, on the same streams.
+
+    Returns
+    -------
+    dict
+        For each figure of :data:`SPREAD_FIGURES` that every report has: ``unit``,
+        ``format`` (how :func:`seed_spread_table` prints it), the value under each seed
+        (``by_seed``, in the order given; NaN where a run never localized), and its ``min``
+        and ``max`` over the seeds (NaN when none is finite).
+
+    Raises
+    ------
+    InputError
+        No report, or a key that is not an integer seed.
+    """
+    if not reports:
+        raise InputError("seed_spread needs at least one report")
+    for seed in reports:
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+            raise InputError(f"seed_spread: seeds must be integers, got {seed!r}")
+    out: dict[str, dict[str, Any]] = {}
+    for name, where, key, kidnapped, scale, unit, spec in SPREAD_FIGURES:
+        values: dict[int, float] = {}
+        for seed, rep in reports.items():
+            res = rep.whole if where == "whole" else rep.kidnap
+            if res is None:
+                break
+            tot = res.totals(kidnapped)
+            if key == "localized_frames":
+                v = float(sum(r.n_localized for r in res._sel(kidnapped)))
+            elif key == "recovered":
+                v = tot["runs"] - tot["unrecovered"]
+            else:
+                v = tot[key] * scale
+            values[int(seed)] = v
+        else:
+            finite = [v for v in values.values() if math.isfinite(v)]
+            out[name] = {
+                "unit": unit,
+                "format": spec,
+                "by_seed": values,
+                "min": min(finite) if finite else NAN,
+                "max": max(finite) if finite else NAN,
+            }
+    return out
+
+
+def seed_spread_table(spread: Mapping[str, Mapping[str, Any]]) -> str:
+    """Markdown table of :func:`seed_spread`: a row per figure, a column per seed, and the
+    range."""
+    if not spread:
+        return ""
+    seeds = list(next(iter(spread.values()))["by_seed"])
+    head = "| figure | " + " | ".join(f"seed {s}" for s in seeds) + " | range |"
+    rule = "|---" * (len(seeds) + 2) + "|"
+    rows = [head, rule]
+    for name, fig in spread.items():
+        spec = fig["format"]
+        label = f"{name} ({fig['unit']})" if fig["unit"] else name
+        cells = " | ".join(_fmt(fig["by_seed"][s], spec) for s in seeds)
+        rows.append(f"| {label} | {cells} | {_fmt(fig['min'], spec)}-{_fmt(fig['max'], spec)} |")
+    return "\n".join(rows)
