@@ -842,6 +842,8 @@ SPREAD_FIGURES: tuple[tuple[str, str, str, bool | None, float, str, str], ...] =
     ("weight ECE", "whole", "best_weight_ece", None, 1.0, "", ".3f"),
     ("kidnapped: confidently wrong", "kidnap", "confidently_wrong_rate", True, 100.0, "%", ".2f"),
     ("kidnapped: recovered", "kidnap", "recovered", True, 1.0, "", ".0f"),
+    ("kidnapped: recovery, median", "kidnap", "recovery_median_s", True, 1.0, "s", ".1f"),
+    ("plain: confidently wrong", "kidnap", "confidently_wrong_rate", False, 100.0, "%", ".2f"),
     ("plain: false alarms", "kidnap", "false_alarm_run_rate", False, 100.0, "%", ".1f"),
 )
 
