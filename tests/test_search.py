@@ -54,7 +54,7 @@ def test_solutions_are_a_sequence_with_arrays_of_them_all() -> None:
     mine = [np.asarray(a).copy() for a in res.solutions._arrays]
     again = Solutions(*mine)
     assert again == res.solutions and all(a.flags.writeable for a in mine)
-    with pytest.raises(ValueError, match="one row per solution"):
+    with pytest.raises(InputError, match="one row per solution"):
         Solutions(mine[0], mine[1][:1], *mine[2:])
 
 

@@ -224,14 +224,21 @@ def _truncated_mrclam(folder: Path, seconds: float) -> Path:
     return folder
 
 
+def _evaluate_track_argv(tmp_path: Path, seconds: float) -> tuple[list[str], Path]:
+    """``omniloc evaluate --dataset mrclam-track`` on the first ``seconds`` of each run,
+    without kidnapped streams (they need minutes), and its output folder."""
+    data = _truncated_mrclam(tmp_path / "mrclam", seconds)
+    out = tmp_path / "out"
+    argv = ["-q", "evaluate", "--dataset", "mrclam-track", str(data), "--kidnap", "0"]
+    return [*argv, "--out", str(out)], out
+
+
 @pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
 def test_evaluate_mrclam_track_reports_runs_and_totals(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    data = _truncated_mrclam(tmp_path / "mrclam", 4.0)
-    out = tmp_path / "out"
-    argv = ["-q", "evaluate", "--dataset", "mrclam-track", str(data), "--kidnap", "0"]
-    assert main([*argv, "--out", str(out)]) == 0
+    argv, out = _evaluate_track_argv(tmp_path, 4.0)
+    assert main(argv) == 0
     text = capsys.readouterr().out
     for r in range(1, 6):
         assert f"robot{r}" in text
@@ -244,12 +251,22 @@ def test_evaluate_mrclam_track_reports_runs_and_totals(
 
 @pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
 def test_evaluate_mrclam_track_over_tracker_seeds(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    data = _truncated_mrclam(tmp_path / "mrclam", 20.0)
-    out = tmp_path / "out"
-    argv = ["-q", "evaluate", "--dataset", "mrclam-track", str(data), "--kidnap", "0"]
-    assert main([*argv, "--tracker-seeds", "3", "0", "3", "--out", str(out)]) == 0
+    import omniloc.evaluate.tracking as tracking
+
+    # Each run gets its own seed on top of the settings given (--set), once per seed.
+    real = tracking.evaluate_mrclam_tracking
+    asked: list[dict[str, object]] = []
+
+    def spy(*args: object, **kw: object) -> object:
+        asked.append(dict(kw["settings"]))  # type: ignore[call-overload]
+        return real(*args, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(tracking, "evaluate_mrclam_tracking", spy)
+    argv, out = _evaluate_track_argv(tmp_path, 20.0)
+    assert main([*argv, "--set", "min_age_s=5", "--tracker-seeds", "3", "0", "3"]) == 0
+    assert asked == [{"min_age_s": 5, "seed": 3}, {"min_age_s": 5, "seed": 0}]
     text = capsys.readouterr().out
     assert "== tracker seed 3" in text and "== tracker seed 0" in text
     assert "over the tracker's seeds 3, 0:" in text
@@ -257,8 +274,7 @@ def test_evaluate_mrclam_track_over_tracker_seeds(
     for seed in ("3", "0"):
         report = json.loads((out / f"seed-{seed}" / "mrclam_track.json").read_text())
         totals = report["whole_runs"]["totals"]
-        frames = totals["frames_scored"] * totals["localized_rate"]
-        assert spread["localized frames"]["by_seed"][seed] == pytest.approx(frames)
+        assert spread["localized frames"]["by_seed"][seed] == totals["localized_frames"]
         ece = spread["weight ECE"]["by_seed"][seed]
         assert ece == pytest.approx(totals["best_weight_ece"], nan_ok=True)
     # Without kidnapped streams, no figure of theirs.

@@ -16,7 +16,7 @@ import sys
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 import numpy as np
 
@@ -25,6 +25,9 @@ from .errors import InputError, OmnilocError
 from .io import make_folder, shorten, write_json
 from .pose import Pose
 from .search import Method, Strategy
+
+if TYPE_CHECKING:
+    from .evaluate.tracking import TrackingReport
 
 log = logging.getLogger("omniloc")
 
@@ -823,11 +826,17 @@ def _cmd_evaluate_track(args: argparse.Namespace, settings: dict[str, Any]) -> i
         progress=not args.quiet,
     )
     print(tracking_summary(res))
-    out: Path = args.out  # made by _cmd_evaluate before the run
-    res.to_csv(out / "mrclam_track_runs.csv")
-    (out / "mrclam_track.json").write_text(json.dumps(res.as_dict(), indent=1))
-    print(f"written: {out / 'mrclam_track_runs.csv'}, {out / 'mrclam_track.json'}")
+    written = _write_track_report(res, args.out)  # (made by _cmd_evaluate before the run)
+    print(f"written: {', '.join(map(str, written))}")
     return 0
+
+
+def _write_track_report(res: TrackingReport, folder: Path) -> tuple[Path, Path]:
+    """A tracking report's runs (CSV) and totals (JSON) in ``folder``."""
+    csv_path, json_path = folder / "mrclam_track_runs.csv", folder / "mrclam_track.json"
+    res.to_csv(csv_path)
+    json_path.write_text(json.dumps(res.as_dict(), indent=1))
+    return csv_path, json_path
 
 
 def _cmd_evaluate_track_seeds(args: argparse.Namespace, settings: dict[str, Any]) -> int:
@@ -858,9 +867,7 @@ def _cmd_evaluate_track_seeds(args: argparse.Namespace, settings: dict[str, Any]
             progress=not args.quiet,
         )
         print(tracking_summary(res))
-        folder = make_folder(out / f"seed-{seed}", "--out")
-        res.to_csv(folder / "mrclam_track_runs.csv")
-        (folder / "mrclam_track.json").write_text(json.dumps(res.as_dict(), indent=1))
+        _write_track_report(res, make_folder(out / f"seed-{seed}", "--out"))
         reports[seed] = res
     spread = seed_spread(reports)
     table = seed_spread_table(spread)

@@ -561,6 +561,7 @@ class TrackingResult:
         return {
             "runs": float(len(rs)),
             "frames_scored": float(scored),
+            "localized_frames": float(loc),
             "time_to_localize_median_s": _nanmedian(ttl),
             "time_to_localize_max_s": max(ttl) if ttl and all(map(math.isfinite, ttl)) else NAN,
             "never_localized": float(sum(not math.isfinite(x) for x in ttl)),
@@ -883,9 +884,7 @@ def seed_spread(reports: Mapping[int, TrackingReport]) -> dict[str, dict[str, An
             if res is None:
                 break
             tot = res.totals(kidnapped)
-            if key == "localized_frames":
-                v = float(sum(r.n_localized for r in res._sel(kidnapped)))
-            elif key == "recovered":
+            if key == "recovered":
                 v = tot["runs"] - tot["unrecovered"]
             else:
                 v = tot[key] * scale

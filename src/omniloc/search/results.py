@@ -10,6 +10,7 @@ from typing import overload
 import numpy as np
 from numpy.typing import NDArray
 
+from ..errors import InputError
 from ..maps import LandmarkMap
 from ..pose import Pose
 
@@ -187,7 +188,7 @@ class Solutions(Sequence[Solution]):
         k = len(poses)
         given = (poses, assignments, residual_rms, matched, covariances, cost, confidence, missed)
         if any(len(a) != k for a in given) or poses.shape[1:] != (3,):
-            raise ValueError("Solutions: every array must have one row per solution")
+            raise InputError("Solutions: every array must have one row per solution")
         # Read-only views: the caller's arrays keep their flags.
         arrays = tuple(np.asarray(a).view() for a in given)
         for a in arrays:
@@ -213,11 +214,6 @@ class Solutions(Sequence[Solution]):
     def assignments(self) -> IntArray:
         """(K, m) landmark rows of each observation, -1 for spurious (read-only)."""
         return self._arrays[1]
-
-    @property
-    def confidences(self) -> FloatArray:
-        """(K,) posterior probabilities (read-only)."""
-        return self._arrays[6]
 
     def __len__(self) -> int:
         return len(self._made)
