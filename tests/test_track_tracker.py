@@ -771,3 +771,115 @@ def test_the_seed_of_elsewhere_reproduces_a_run_and_another_seed_draws_another()
 def test_a_bad_seed_is_named(seed: object) -> None:
     with pytest.raises(InputError, match="seed must be an integer"):
         TrackerConfig(seed=seed)  # type: ignore[arg-type]
+
+
+def _one_place(config: TrackerConfig, mass: float, localized_run: int, localized: bool) -> Tracker:
+    """A tracker holding one old, twice-confirmed hypothesis with a small covariance and
+    ``mass`` of the mass (the rest elsewhere), after ``localized_run`` frames localized by the
+    full tests (at that place when ``localized``)."""
+    tr = Tracker(GRID, SENSOR, MOTION, config)
+    tr._mu = np.array([[5.0, 4.0, 0.1]])
+    tr._P = np.diag([0.01**2, 0.01**2, np.deg2rad(0.2) ** 2])[None]
+    tr._logw = np.log([mass])
+    tr._log_out = float(np.log1p(-mass))
+    tr._ids = np.array([7])
+    tr._born = np.array([0.0])
+    tr._conf = np.array([2])
+    tr._conf_t = np.array([0.0])
+    tr._fit_m = np.array([1.0])
+    tr._fit_n = np.array([1.0])
+    tr._mem_w = np.zeros((1, 0))
+    tr._localized_run = localized_run
+    tr._localized_id = 7 if localized else None
+    return tr
+
+
+def test_keep_probability_keeps_a_place_localized_once_it_has_been(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    keep = replace(CONFIG, keep_probability=0.9, keep_after=3, min_age_s=3.0)
+    p_tol = {"value": 0.95}  # what the covariance says: set by hand
+    monkeypatch.setattr("omniloc.track.tracker.within_tolerance", lambda *a: p_tol["value"])
+
+    def decide(config: TrackerConfig, mass: float, run: int, here: bool, t: float = 100.0):  # type: ignore[no-untyped-def]
+        return _one_place(config, mass, run, here)._decide(t)
+
+    # The place holds 99.5 % of the mass; its covariance puts it within tolerance with
+    # probability 0.95: below localized_probability (0.99), above keep_probability.
+    state, reason, best = decide(keep, 0.995, 3, True)
+    assert state is TrackState.LOCALIZED and best == 0
+    assert reason.startswith("kept: the place holds 99.50 % of the mass")
+    assert "within tolerance with probability 0.9500 under its covariance" in reason
+    assert "at least 0.9 once localized here for 3 frames" in reason
+    # Not kept: no hysteresis (the default), too few frames localized before, another
+    # place localized, the mass below localized_probability (a rival or elsewhere took it).
+    for args in (
+        (CONFIG, 0.995, 3, True),
+        (keep, 0.995, 2, True),
+        (keep, 0.995, 3, False),
+        (keep, 0.98, 3, True),
+    ):
+        state, reason, _ = decide(*args)
+        assert state is TrackState.AMBIGUOUS and not reason.startswith("kept")
+    # ... nor below keep_probability.
+    p_tol["value"] = 0.89
+    assert decide(keep, 0.995, 3, True)[0] is TrackState.AMBIGUOUS
+    # Above localized_probability it is the full tests that decide, with their reason ...
+    p_tol["value"] = 1.0
+    state, reason, _ = decide(keep, 0.999, 0, False)
+    assert state is TrackState.LOCALIZED and reason.startswith("within tolerance")
+    # ... and a place kept that fails one of them (here: tracked 1 s) stays kept.
+    state, reason, _ = decide(keep, 0.999, 3, True, t=1.0)
+    assert state is TrackState.LOCALIZED and reason.startswith("kept:")
+    state, reason, _ = decide(keep, 0.999, 0, False, t=1.0)
+    assert state is TrackState.AMBIGUOUS and "is new" in reason
+
+
+def test_kept_frames_follow_enough_frames_localized_by_the_full_tests() -> None:
+    run, _ = _scenario()
+    # A tolerance tight enough (5 cm, 1 deg) for the covariance, not only the mass, to
+    # decide some frames of this run.
+    tight = replace(CONFIG, tolerance_m=0.05, tolerance_heading=float(np.deg2rad(1.0)))
+    keep = replace(tight, keep_probability=0.5, keep_after=2)
+    res = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=tight)
+    kept = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=keep)
+    states = [e.state for e in kept.estimates]
+    reasons = [e.reason for e in kept.estimates]
+    is_kept = [r.startswith("kept:") for r in reasons]
+    assert any(is_kept) and sum(e.localized for e in kept.estimates) > sum(
+        e.localized for e in res.estimates
+    )
+    for k, flag in enumerate(is_kept):
+        if not flag:
+            continue
+        assert states[k] is TrackState.LOCALIZED
+        # the frames before it in its run of localized frames: at least keep_after of them
+        # by the full tests
+        j, full = k - 1, 0
+        while j >= 0 and states[j] is TrackState.LOCALIZED:
+            full += not is_kept[j]
+            j -= 1
+        assert full >= 2
+        assert float(reasons[k].split("probability ")[1].split(" ")[0]) >= 0.5
+        assert float(reasons[k].split("holds ")[1].split(" ")[0]) >= 99.0
+    # Kept, and still right: within the tolerance the estimates claim.
+    d, h = _errors(run, kept)
+    loc = np.array([e.localized for e in kept.estimates])
+    assert (d[loc] < 0.05).all() and (h[loc] < 1.0).all()
+
+
+@pytest.mark.parametrize(
+    ("kw", "match"),
+    [
+        ({"keep_probability": 0.0}, "keep_probability must lie strictly between 0 and 1"),
+        ({"keep_probability": 1.0}, "keep_probability must lie strictly between 0 and 1"),
+        ({"keep_probability": "0.9"}, "keep_probability must be None or a number"),
+        ({"keep_probability": True}, "keep_probability must be None or a number"),
+        ({"keep_probability": 0.995}, r"must not exceed localized_probability \(0.99\)"),
+        ({"keep_after": 0}, "keep_after must be a positive integer"),
+        ({"keep_after": 1.5}, "keep_after must be a positive integer"),
+    ],
+)
+def test_keep_settings_are_checked(kw: dict[str, object], match: str) -> None:
+    with pytest.raises(InputError, match=match):
+        TrackerConfig(**kw)  # type: ignore[arg-type]

@@ -45,6 +45,10 @@ when the tracker wakes up.
   and ``tolerance_heading`` of the truth -- the mass of the best place times the chance, under
   its covariance, that it is that close -- reaches ``localized_probability``. ``ambiguous``
   otherwise, with the competing hypotheses; ``lost`` when elsewhere holds nearly all the mass.
+  With ``keep_probability`` set, a place localized so for ``keep_after`` frames in a row stays
+  ``localized`` while it holds that mass and its covariance puts it within tolerance with at
+  least ``keep_probability`` (a hysteresis on the pose's uncertainty; the reason says
+  "kept").
 * **Kidnapping.** When the place the tracker was localized at loses its mass (below
   ``kidnap_share``) to elsewhere or to another place, the estimate is flagged ``kidnapped``;
   the old hypothesis stays alongside the new ones until the evidence decides. A place that
@@ -93,6 +97,7 @@ FloatArray = NDArray[np.float64]
 
 _INTS = {
     "min_confirmations",
+    "keep_after",
     "max_hypotheses",
     "search_min_bearings",
     "search_max_bearings",
@@ -109,6 +114,8 @@ _PROBABILITIES = {
     "prune_weight",
     "elsewhere_inject",
 }
+#: Probabilities that may be None (off).
+_OPTIONAL_PROBABILITIES = {"search_miss", "keep_probability"}
 _SHARES = {"fit_explained", "core_share", "miss_weight"}
 _BOOLS = {"core_update", "temper_update", "nonempty_frames"}
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
@@ -147,6 +154,18 @@ class TrackerConfig:
         Position tolerance of that statement, metres.
     tolerance_heading : float
         Heading tolerance of that statement, radians.
+    keep_probability : float or None
+        Once ``localized`` (by every test above, ``localized_probability`` included) for
+        ``keep_after`` frames in a row, the tracker stays ``localized`` at that place while
+        the place still holds ``localized_probability`` of the mass and its covariance puts
+        it within tolerance with at least this probability (a hysteresis on the pose's
+        uncertainty only: the frames with few landmarks, over which the odometry's error
+        grows, no longer break the track; a rival or elsewhere taking mass still does).
+        None (the default): no hysteresis. The reason of a frame kept so begins "kept:".
+        At most ``localized_probability``.
+    keep_after : int
+        Frames ``localized`` in a row (by the full tests) before ``keep_probability``
+        applies: a place the weights are sure of for a frame or two is not kept.
     lost_share : float
         ``lost`` when elsewhere holds at least this share of the mass (or there is no
         hypothesis).
@@ -322,6 +341,8 @@ class TrackerConfig:
     localized_probability: float = 0.99
     tolerance_m: float = 0.3
     tolerance_heading: float = float(np.deg2rad(5.0))
+    keep_probability: float | None = None
+    keep_after: int = 3
     lost_share: float = 0.99
     kidnap_rate: float = 1e-3
     evidence_weight: float = 1.0
@@ -381,15 +402,15 @@ class TrackerConfig:
                     )
                 object.__setattr__(self, f.name, int(v))
                 continue
-            if f.name == "search_miss":
+            if f.name in _OPTIONAL_PROBABILITIES:
                 if v is None:
                     continue
                 if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)):
-                    raise InputError(f"search_miss must be None or a number, got {v!r}")
-                miss = finite_number(v, "search_miss")
-                if not 0.0 < miss < 1.0:
-                    raise InputError(f"search_miss must lie strictly between 0 and 1, got {v!r}")
-                object.__setattr__(self, f.name, miss)
+                    raise InputError(f"{f.name} must be None or a number, got {v!r}")
+                prob = finite_number(v, f.name)
+                if not 0.0 < prob < 1.0:
+                    raise InputError(f"{f.name} must lie strictly between 0 and 1, got {v!r}")
+                object.__setattr__(self, f.name, prob)
                 continue
             if f.name in _BOOLS:
                 if not isinstance(v, (bool, np.bool_)):
@@ -448,6 +469,12 @@ class TrackerConfig:
         ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if self.keep_probability is not None and self.keep_probability > self.localized_probability:
+            raise InputError(
+                f"keep_probability ({self.keep_probability!r}) must not exceed "
+                f"localized_probability ({self.localized_probability!r}): it is the lower "
+                "threshold that keeps a place localized once it has been"
+            )
         if self.temper_update and not self.evidence_weight >= 1.0 / VALUE_MAX:
             raise InputError(
                 f"evidence_weight must be >= {1.0 / VALUE_MAX:g} with temper_update (the "
@@ -641,6 +668,11 @@ class Tracker:
         self._last_search = -math.inf
         self._bearings_since_search = 0
         self._localized_id: int | None = None
+        # Hysteresis (keep_probability): frames localized in a row up to the last one (0: it
+        # was not localized; a frame can only be kept after keep_after of them, all localized
+        # by the full tests), and whether the last decision kept a frame.
+        self._localized_run = 0
+        self._kept = False
         # The first frame since the last localized one that was not localized (None while
         # localized): kidnap_watch_s runs from there.
         self._unvouched_t: float | None = None
@@ -1284,8 +1316,10 @@ class Tracker:
         self._merge_and_prune()
         self._bearings_since_search += int(b.size)
         state, reason, best = self._decide(tf)
+        # Searches run while the place is not localized by the full tests (a frame kept by
+        # keep_probability is searched as it would have been without the hysteresis).
         if (
-            state is not TrackState.LOCALIZED
+            (state is not TrackState.LOCALIZED or self._kept)
             and self._bearings_since_search
             and tf - self._last_search >= c.search_interval_s
             and self._search(tf)
@@ -1319,8 +1353,11 @@ class Tracker:
         if state is TrackState.LOCALIZED and best is not None:
             self._localized_id = int(self._ids[best])
             self._unvouched_t = None
-        elif self._unvouched_t is None:
-            self._unvouched_t = tf
+            self._localized_run += 1
+        else:
+            self._localized_run = 0
+            if self._unvouched_t is None:
+                self._unvouched_t = tf
         return self._estimate(tf, state, reason, kidnapped, best)
 
     def _place(self, i: int) -> NDArray[np.bool_]:
@@ -1353,6 +1390,7 @@ class Tracker:
     def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
         """(state, reason, index of the best hypothesis)."""
         c = self.config
+        self._kept = False
         out = math.exp(self._log_out)
         H = self.n_hypotheses
         if H == 0:
@@ -1373,6 +1411,29 @@ class Tracker:
         age = t - float(self._born[place].min())
         fit = float(self._fit_m[i] / max(self._fit_n[i], 1e-9))
         conf = int(self._conf[place].max())
+        if (
+            c.keep_probability is not None
+            and not (
+                p >= c.localized_probability
+                and conf >= c.min_confirmations
+                and fit >= c.fit_explained
+                and age >= c.min_age_s
+            )
+            and mass >= c.localized_probability
+            and p_tol >= c.keep_probability
+            and self._localized_run >= c.keep_after
+            and self._localized_id is not None
+            and bool(np.isin(self._localized_id, self._ids[place]))
+        ):
+            self._kept = True
+            return (
+                TrackState.LOCALIZED,
+                f"kept: the place holds {100 * mass:.2f} % of the mass and is within "
+                f"tolerance with probability {p_tol:.4f} under its covariance (at least "
+                f"{c.keep_probability:g} once localized here for {self._localized_run} frames; "
+                f"{rivals} rival{'s' if rivals != 1 else ''}, {100 * out:.2g} % elsewhere)",
+                i,
+            )
         if p >= c.localized_probability and conf < c.min_confirmations:
             return (
                 TrackState.AMBIGUOUS,
