@@ -883,3 +883,34 @@ def test_kept_frames_follow_enough_frames_localized_by_the_full_tests() -> None:
 def test_keep_settings_are_checked(kw: dict[str, object], match: str) -> None:
     with pytest.raises(InputError, match=match):
         TrackerConfig(**kw)  # type: ignore[arg-type]
+
+
+def test_kept_frames_do_not_lengthen_the_kidnap_watch() -> None:
+    # The watch on the place localized at runs from the first frame not localized by the
+    # full tests: a kept frame starts (or continues) that clock, a fully localized one stops it.
+    run, _ = _scenario()
+    keep = replace(
+        CONFIG,
+        tolerance_m=0.05,
+        tolerance_heading=float(np.deg2rad(1.0)),
+        keep_probability=0.5,
+        keep_after=2,
+    )
+    tr = Tracker(GRID, SENSOR, MOTION, keep)
+    o = run.odometry
+    k = 0
+    n_kept = 0
+    for f in run.frames:
+        k1 = int(np.searchsorted(o.t, f.t, side="right"))
+        if k1 > k:
+            tr.odometry(o.t[k:k1], o.v[k:k1], o.w[k:k1])
+            k = k1
+        e = tr.frame(f.t, f.bearings)
+        if e.reason.startswith("kept:"):
+            n_kept += 1
+            assert tr._unvouched_t is not None and tr._unvouched_t <= e.t
+        elif e.localized:
+            assert tr._unvouched_t is None
+        else:
+            assert tr._unvouched_t is not None
+    assert n_kept > 0

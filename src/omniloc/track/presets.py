@@ -125,7 +125,7 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # localized (seed 0: 1,491 against 1,199, correct after 31.6 % against 25.3 %), 2-4
         # more wrong per seed, every one a near miss (the far places of seeds 1-3 are
         # unchanged); the seeded streams: kidnapped 0.23 % wrong (0.15 %), plain 0.09 %
-        # (0.01 %), false alarms on 6 of 20 (4). The rule on mass times covariance at 0.9
+        # (0.01 %), false alarms on 4 of 20 as before. The rule on mass times covariance at 0.9
         # kept more frames but let kidnapped streams reach 0.32 % wrong; one frame in a row
         # instead of three kept robot 1's 4.3 m place. docs/tracking.md, "Staying localized".
         config = TrackerConfig(

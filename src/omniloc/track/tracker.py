@@ -162,7 +162,7 @@ class TrackerConfig:
         uncertainty only: the frames with few landmarks, over which the odometry's error
         grows, no longer break the track; a rival or elsewhere taking mass still does).
         None (the default): no hysteresis. The reason of a frame kept so begins "kept:".
-        At most ``localized_probability``.
+        At most ``localized_probability``. Kept frames do not restart ``kidnap_watch_s``.
     keep_after : int
         Frames ``localized`` in a row (by the full tests) before ``keep_probability``
         applies: a place the weights are sure of for a frame or two is not kept.
@@ -317,9 +317,10 @@ class TrackerConfig:
     kidnap_watch_s : float
         ... within this many seconds of the first frame that was not ``localized`` after it
         (the clock starts at that frame: frames that stop coming while the tracker is
-        localized do not start it). Later the place is no longer watched (the estimates have
-        not vouched for it since): on MRCLAM, places that stayed ``ambiguous`` for tens of
-        seconds after their last
+        localized do not start it; a frame kept by ``keep_probability`` counts as not
+        localized here, so that the hysteresis does not lengthen the watch). Later the
+        place is no longer watched (the estimates have not vouched for it since): on
+        MRCLAM, places that stayed ``ambiguous`` for tens of seconds after their last
         ``localized`` frame and then lost their mass had lost it to the weights' swings, not
         to a kidnapping (docs/tracking.md). ``1e6`` watches a place until its mass falls.
     max_odometry_gap_s : float
@@ -1352,7 +1353,12 @@ class Tracker:
                 )
         if state is TrackState.LOCALIZED and best is not None:
             self._localized_id = int(self._ids[best])
-            self._unvouched_t = None
+            # A kept frame does not vouch for the place anew: the watch runs from the first
+            # frame not localized by the full tests (the hysteresis does not lengthen it).
+            if not self._kept:
+                self._unvouched_t = None
+            elif self._unvouched_t is None:
+                self._unvouched_t = tf
             self._localized_run += 1
         else:
             self._localized_run = 0
