@@ -773,10 +773,13 @@ def test_a_bad_seed_is_named(seed: object) -> None:
         TrackerConfig(seed=seed)  # type: ignore[arg-type]
 
 
-def _one_place(config: TrackerConfig, mass: float, localized_run: int, localized: bool) -> Tracker:
-    """A tracker holding one old, twice-confirmed hypothesis with a small covariance and
-    ``mass`` of the mass (the rest elsewhere), after ``localized_run`` frames localized by the
-    full tests (at that place when ``localized``)."""
+def _one_place(
+    config: TrackerConfig, mass: float, localized_run: int, localized: bool | int
+) -> Tracker:
+    """A tracker holding one old, twice-confirmed hypothesis (id 7) with a small covariance
+    and ``mass`` of the mass (the rest elsewhere), after ``localized_run`` frames localized by
+    the full tests: at that place when ``localized`` is True, at none when False, at the
+    hypothesis of that id (gone since) when it is an int."""
     tr = Tracker(GRID, SENSOR, MOTION, config)
     tr._mu = np.array([[5.0, 4.0, 0.1]])
     tr._P = np.diag([0.01**2, 0.01**2, np.deg2rad(0.2) ** 2])[None]
@@ -790,7 +793,7 @@ def _one_place(config: TrackerConfig, mass: float, localized_run: int, localized
     tr._fit_n = np.array([1.0])
     tr._mem_w = np.zeros((1, 0))
     tr._localized_run = localized_run
-    tr._localized_id = 7 if localized else None
+    tr._localized_id = (7 if localized else None) if isinstance(localized, bool) else localized
     return tr
 
 
@@ -811,12 +814,14 @@ def test_keep_probability_keeps_a_place_localized_once_it_has_been(
     assert reason.startswith("kept: the place holds 99.50 % of the mass")
     assert "within tolerance with probability 0.9500 under its covariance" in reason
     assert "at least 0.9 once localized here for 3 frames" in reason
-    # Not kept: no hysteresis (the default), too few frames localized before, another
-    # place localized, the mass below localized_probability (a rival or elsewhere took it).
+    # Not kept: no hysteresis (the default), too few frames localized before, no place
+    # localized, another place localized, the mass below localized_probability (a rival or
+    # elsewhere took it).
     for args in (
         (CONFIG, 0.995, 3, True),
         (keep, 0.995, 2, True),
         (keep, 0.995, 3, False),
+        (keep, 0.995, 3, 8),
         (keep, 0.98, 3, True),
     ):
         state, reason, _ = decide(*args)
@@ -835,14 +840,28 @@ def test_keep_probability_keeps_a_place_localized_once_it_has_been(
     assert state is TrackState.AMBIGUOUS and "is new" in reason
 
 
-def test_kept_frames_follow_enough_frames_localized_by_the_full_tests() -> None:
+def test_kept_frames_follow_enough_frames_localized_by_the_full_tests(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     run, _ = _scenario()
     # A tolerance tight enough (5 cm, 1 deg) for the covariance, not only the mass, to
     # decide some frames of this run.
     tight = replace(CONFIG, tolerance_m=0.05, tolerance_heading=float(np.deg2rad(1.0)))
     keep = replace(tight, keep_probability=0.5, keep_after=2)
+    searches: list[tuple[float, bool]] = []  # (time, in a kept frame)
+    search = Tracker._search
+
+    def logged(self: Tracker, t: float) -> int:
+        searches.append((t, self._kept))
+        return search(self, t)
+
+    monkeypatch.setattr(Tracker, "_search", logged)
     res = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=tight)
+    searched = [t for t, _ in searches]
+    searches.clear()
     kept = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=keep)
+    # Searches go on in kept frames: the same searches at the same times, one in a kept frame.
+    assert [t for t, _ in searches] == searched and any(k for _, k in searches)
     states = [e.state for e in kept.estimates]
     reasons = [e.reason for e in kept.estimates]
     is_kept = [r.startswith("kept:") for r in reasons]
@@ -862,6 +881,19 @@ def test_kept_frames_follow_enough_frames_localized_by_the_full_tests() -> None:
         assert full >= 2
         assert float(reasons[k].split("probability ")[1].split(" ")[0]) >= 0.5
         assert float(reasons[k].split("holds ")[1].split(" ")[0]) >= 99.0
+    # So the hysteresis changes what is said, not what the filter does: every hypothesis,
+    # weight and kidnapping flag is the same, and a kept frame is one the tracker without it
+    # called ambiguous.
+    assert len(res.estimates) == len(kept.estimates)
+    for e0, e1 in zip(res.estimates, kept.estimates, strict=True):
+        assert e0.t == e1.t and e0.kidnapped == e1.kidnapped
+        assert [(h.pose.as_tuple(), h.weight) for h in e0.hypotheses] == [
+            (h.pose.as_tuple(), h.weight) for h in e1.hypotheses
+        ]
+        if e1.reason.startswith("kept:"):
+            assert e0.state is TrackState.AMBIGUOUS
+        else:
+            assert (e0.state, e0.reason) == (e1.state, e1.reason)
     # Kept, and still right: within the tolerance the estimates claim.
     d, h = _errors(run, kept)
     loc = np.array([e.localized for e in kept.estimates])
