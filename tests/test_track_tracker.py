@@ -137,13 +137,19 @@ class _Doubting(Tracker):
 def _flags(doubt_s: float, watch_s: float, blind_s: float = 0.0) -> tuple[list[float], list[str]]:
     """Times flagged kidnapped and every state, the place doubted for ``doubt_s`` and no
     frame at all for ``blind_s`` before the jump."""
-    run, _ = _scenario()
     tr = _Doubting(GRID, SENSOR, MOTION, replace(CONFIG, kidnap_watch_s=watch_s))
     tr.doubt_from = KIDNAP[0] - doubt_s
+    return _feed(tr, skip=(KIDNAP[0] - blind_s, KIDNAP[0]))
+
+
+def _feed(tr: Tracker, skip: tuple[float, float] = (0.0, 0.0)) -> tuple[list[float], list[str]]:
+    """The scenario's odometry and frames (but those in ``skip``, a time interval) fed to
+    ``tr``: the times flagged kidnapped and every state."""
+    run, _ = _scenario()
     flagged, states = [], []
     k = 0
     for f in run.frames:
-        if KIDNAP[0] - blind_s <= f.t < KIDNAP[0]:
+        if skip[0] <= f.t < skip[1]:
             continue
         k1 = int(np.searchsorted(run.odometry.t, f.t, side="right"))
         if k1 > k:
@@ -176,6 +182,58 @@ def test_a_place_is_watched_for_kidnap_watch_s_after_it_was_last_called_localize
     # No frames for 4 s before the jump while localized: the place is still vouched for.
     blind, _ = _flags(0.0, 2.0, blind_s=4.0)
     assert blind and jump <= blind[0] < jump + 6.0
+
+
+class _Dipping(Tracker):
+    """A tracker whose watched place seems to hold 10 % of the mass in the frames of
+    ``dip`` (a time interval; the filter untouched), called ``ambiguous`` there unless
+    ``still_localized``."""
+
+    dip = (float("inf"), float("inf"))
+    still_localized = False
+
+    def _in_dip(self) -> bool:
+        return self._t is not None and self.dip[0] <= self._t < self.dip[1]
+
+    def _watched_share(self) -> float:
+        return 0.1 if self._in_dip() else super()._watched_share()
+
+    def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
+        state, reason, best = super()._decide(t)
+        if self._in_dip() and not self.still_localized and state is TrackState.LOCALIZED:
+            return TrackState.AMBIGUOUS, "dipping", best
+        return state, reason, best
+
+
+def _dip_run(
+    confirm_s: float, dip: tuple[float, float], still_localized: bool = False
+) -> tuple[list[float], list[str]]:
+    """Times flagged kidnapped and every state, with ``kidnap_confirm_s``."""
+    tr = _Dipping(GRID, SENSOR, MOTION, replace(CONFIG, kidnap_confirm_s=confirm_s))
+    tr.dip, tr.still_localized = dip, still_localized
+    return _feed(tr)
+
+
+def test_a_loss_is_flagged_only_once_it_has_lasted_kidnap_confirm_s() -> None:
+    jump = KIDNAP[0]
+    never = (float("inf"), float("inf"))
+    flagged, states = _dip_run(0.0, never)
+    assert len(flagged) == 1 and jump <= flagged[0] < jump + 0.5
+    # The flag waits a second after the first frame under kidnap_share; nothing else changes.
+    late, late_states = _dip_run(1.0, never)
+    assert len(late) == 1 and flagged[0] + 1.0 <= late[0] < flagged[0] + 1.5
+    assert late_states == states
+    # A loss of half a second that is won back: flagged at once without the wait, not with it.
+    dip = (20.0, 20.5)
+    short, _ = _dip_run(0.0, dip)
+    assert short[0] == 20.125 and short[1:] == flagged
+    assert _dip_run(1.0, dip)[0] == late
+    # One that lasts: flagged once it has lasted the second.
+    long_dip, _ = _dip_run(1.0, (20.0, 21.5))
+    assert long_dip[0] == 21.125 and long_dip[1:] == late
+    # Localized at another place (here, faked: localized while the place seems to hold 10 %):
+    # flagged at once.
+    assert _dip_run(1.0, dip, still_localized=True)[0][0] == 20.125
 
 
 def test_a_place_found_after_a_kidnapping_is_not_judged_by_the_frames_before_it() -> None:

@@ -54,7 +54,8 @@ when the tracker wakes up.
   the old hypothesis stays alongside the new ones until the evidence decides. A place that
   loses its mass more than ``kidnap_watch_s`` after the tracker stopped calling it
   ``localized`` is not flagged: the estimates have said ``ambiguous`` or ``lost`` all that
-  while.
+  while. With ``kidnap_confirm_s`` the loss must last that long before it is flagged (a
+  place that wins its mass back within it was not left).
 
 Bad input: times that go back, values that are not finite and frames before any odometry
 get a clear :class:`~omniloc.errors.InputError` or a stated behaviour (see
@@ -323,6 +324,14 @@ class TrackerConfig:
         MRCLAM, places that stayed ``ambiguous`` for tens of seconds after their last
         ``localized`` frame and then lost their mass had lost it to the weights' swings, not
         to a kidnapping (docs/tracking.md). ``1e6`` watches a place until its mass falls.
+    kidnap_confirm_s : float
+        The place's mass must stay below ``kidnap_share`` for this many seconds before the
+        flag is raised (0, the default: at the first frame below). A place that gets its
+        mass back within that time was not left: on MRCLAM the true place loses it for a
+        second or two to frames that report few of the tubes in view and then wins it
+        back. The state says what it always says meanwhile (``ambiguous`` or ``lost``:
+        the place no longer holds the mass); only the flag waits. The flag is raised at
+        once when the tracker is ``localized`` at another place.
     max_odometry_gap_s : float
         Odometry rows further apart than this (s) leave the motion unknown: the hypotheses
         are dropped and the tracker relocalizes.
@@ -388,6 +397,7 @@ class TrackerConfig:
     max_hypotheses: int = 50
     kidnap_share: float = 0.5
     kidnap_watch_s: float = 10.0
+    kidnap_confirm_s: float = 0.0
     max_odometry_gap_s: float = 2.0
     max_reported: int = 10
     seed: int = 0
@@ -677,6 +687,9 @@ class Tracker:
         # The first frame since the last localized one that was not localized (None while
         # localized): kidnap_watch_s runs from there.
         self._unvouched_t: float | None = None
+        # The first frame of the current run of frames in which the watched place held less
+        # than kidnap_share (None: it holds at least that): kidnap_confirm_s runs from there.
+        self._below_t: float | None = None
         #: Number of searches run so far (for reports).
         self.searches = 0
 
@@ -896,6 +909,7 @@ class Tracker:
         self._mem_t = -math.inf
         self._log_out = 0.0
         self._localized_id = None
+        self._below_t = None
         self._elsewhere.reset()
 
     def _exclude(self) -> None:
@@ -1331,26 +1345,35 @@ class Tracker:
         if reason_gap:
             reason = reason_gap + "; " + reason
         # Kidnapping: the place we were localized at lost its mass (watched until kidnap_watch_s
-        # after the estimates stopped calling it localized).
+        # after the estimates stopped calling it localized; a loss that began within the watch
+        # is followed to its end) and did not win it back within kidnap_confirm_s.
         if (
             self._localized_id is not None
             and self._unvouched_t is not None
+            and self._below_t is None
             and tf - self._unvouched_t > c.kidnap_watch_s
         ):
             self._localized_id = None
         if self._localized_id is not None:
-            where = np.flatnonzero(self._ids == self._localized_id)
-            share = 0.0
-            if where.size:
-                i = int(where[0])
-                share = float(np.exp(self._logw[self._place(i)]).sum())
-            if share < c.kidnap_share:
-                kidnapped = True
-                self._localized_id = None
-                reason = (
-                    f"the place it was localized at now holds {100 * share:.1f} % of the mass: "
-                    "kidnapped or lost; " + reason
-                )
+            share = self._watched_share()
+            if share >= c.kidnap_share:
+                self._below_t = None
+            else:
+                if self._below_t is None:
+                    self._below_t = tf
+                below = tf - self._below_t
+                # (Localized now is localized at another place: this one holds under half.)
+                if below >= c.kidnap_confirm_s or state is TrackState.LOCALIZED:
+                    kidnapped = True
+                    self._localized_id = None
+                    self._below_t = None
+                    since = ""
+                    if below:
+                        since = f" (under {100 * c.kidnap_share:g} % for {below:.1f} s)"
+                    reason = (
+                        f"the place it was localized at now holds {100 * share:.1f} % of the "
+                        f"mass{since}: kidnapped or lost; " + reason
+                    )
         if state is TrackState.LOCALIZED and best is not None:
             self._localized_id = int(self._ids[best])
             # A kept frame does not vouch for the place anew: the watch runs from the first
@@ -1365,6 +1388,14 @@ class Tracker:
             if self._unvouched_t is None:
                 self._unvouched_t = tf
         return self._estimate(tf, state, reason, kidnapped, best)
+
+    def _watched_share(self) -> float:
+        """The mass of the place the tracker was localized at (0 when its hypotheses are
+        gone)."""
+        where = np.flatnonzero(self._ids == self._localized_id)
+        if where.size == 0:
+            return 0.0
+        return float(np.exp(self._logw[self._place(int(where[0]))]).sum())
 
     def _place(self, i: int) -> NDArray[np.bool_]:
         """Which hypotheses are at the place of hypothesis ``i`` (within the tolerances)."""
