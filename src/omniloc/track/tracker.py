@@ -1448,14 +1448,30 @@ class Tracker:
         age = t - float(self._born[place].min())
         fit = float(self._fit_m[i] / max(self._fit_n[i], 1e-9))
         conf = int(self._conf[place].max())
+        # The full tests: the probability first, then, in order, the first other test that
+        # holds the place back says why.
+        held: str | None = None
+        if p >= c.localized_probability:
+            if conf < c.min_confirmations:
+                held = (
+                    f"the best place was found by {conf} search{'es' if conf != 1 else ''} on "
+                    f"separate frames, {c.min_confirmations} needed (within tolerance with "
+                    f"probability {p:.4f})"
+                )
+            elif fit < c.fit_explained:
+                held = (
+                    f"the best place explains only {100 * fit:.0f} % of the recent bearings "
+                    f"(within tolerance with probability {p:.4f})"
+                )
+            elif age < c.min_age_s:
+                held = (
+                    f"the best place is new (tracked {age:.1f} s; within tolerance with "
+                    f"probability {p:.4f})"
+                )
+        full = p >= c.localized_probability and held is None
         if (
             c.keep_probability is not None
-            and not (
-                p >= c.localized_probability
-                and conf >= c.min_confirmations
-                and fit >= c.fit_explained
-                and age >= c.min_age_s
-            )
+            and not full
             and mass >= c.localized_probability
             and p_tol >= c.keep_probability
             and self._localized_run >= c.keep_after
@@ -1471,29 +1487,9 @@ class Tracker:
                 f"{rivals} rival{'s' if rivals != 1 else ''}, {100 * out:.2g} % elsewhere)",
                 i,
             )
-        if p >= c.localized_probability and conf < c.min_confirmations:
-            return (
-                TrackState.AMBIGUOUS,
-                f"the best place was found by {conf} search{'es' if conf != 1 else ''} on "
-                f"separate frames, {c.min_confirmations} needed (within tolerance with "
-                f"probability {p:.4f})",
-                i,
-            )
-        if p >= c.localized_probability and fit < c.fit_explained:
-            return (
-                TrackState.AMBIGUOUS,
-                f"the best place explains only {100 * fit:.0f} % of the recent bearings "
-                f"(within tolerance with probability {p:.4f})",
-                i,
-            )
-        if p >= c.localized_probability and age < c.min_age_s:
-            return (
-                TrackState.AMBIGUOUS,
-                f"the best place is new (tracked {age:.1f} s; within tolerance with probability "
-                f"{p:.4f})",
-                i,
-            )
-        if p >= c.localized_probability:
+        if held is not None:
+            return TrackState.AMBIGUOUS, held, i
+        if full:
             return (
                 TrackState.LOCALIZED,
                 f"within tolerance with probability {p:.4f}, fit {fit:.2f} (the place holds "
