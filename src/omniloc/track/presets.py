@@ -132,10 +132,10 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # place has held under half the mass for 2 s. On the seeded streams the true place
         # often loses the mass for a second or two and wins it back (frames that report
         # few of the tubes in view); false alarms on 3 of 20 plain streams against 4 (the
-        # same with 4 s: the three left are the true place truly lost to rivals 3-5 m
-        # away), every other figure the same (the flag changes no estimate); over
-        # elsewhere's seeds 0-4 3-4 of 20 either way (seed 0 alone gains a stream): small
-        # and free. docs/tracking.md, "A loss must last".
+        # same with 4 s: the three left are longer losses of the true place, to elsewhere
+        # or to rivals 2.6-3.9 m away), every other figure the same (the flag changes no
+        # estimate); over elsewhere's seeds 0-4 3-4 of 20 either way (seed 0 alone gains a
+        # stream): small and free. docs/tracking.md, "A loss must last".
         config = TrackerConfig(
             region=(-1.0, 5.5, -6.0, 6.5),
             clutter_persistence=0.75,
