@@ -34,13 +34,12 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 from _results import run_meta, write_results  # noqa: E402
+from detection_dispersion import EDGE  # noqa: E402  (the same view as its counts)
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
 from omniloc.sensor import SensorModel  # noqa: E402
 from omniloc.track import preset  # noqa: E402
 
 DATA = HERE.parent.parent / "shared" / "data" / "mrclam-ds6"
-#: Landmarks this close to the edge of the field of view are not counted as in view.
-EDGE = math.radians(2.0)
 #: Frames further apart than this break every landmark's run.
 BREAK_S = 2.0
 #: Runs of this many or more are tabulated together.

@@ -206,10 +206,14 @@ class _Dipping(Tracker):
 
 
 def _dip_run(
-    confirm_s: float, dip: tuple[float, float], still_localized: bool = False
+    confirm_s: float,
+    dip: tuple[float, float],
+    still_localized: bool = False,
+    watch_s: float = CONFIG.kidnap_watch_s,
 ) -> tuple[list[float], list[str]]:
     """Times flagged kidnapped and every state, with ``kidnap_confirm_s``."""
-    tr = _Dipping(GRID, SENSOR, MOTION, replace(CONFIG, kidnap_confirm_s=confirm_s))
+    config = replace(CONFIG, kidnap_confirm_s=confirm_s, kidnap_watch_s=watch_s)
+    tr = _Dipping(GRID, SENSOR, MOTION, config)
     tr.dip, tr.still_localized = dip, still_localized
     return _feed(tr)
 
@@ -234,6 +238,9 @@ def test_a_loss_is_flagged_only_once_it_has_lasted_kidnap_confirm_s() -> None:
     # Localized at another place (here, faked: localized while the place seems to hold 10 %):
     # flagged at once.
     assert _dip_run(1.0, dip, still_localized=True)[0][0] == 20.125
+    # A loss that began within kidnap_watch_s is followed to its end, even when the watch
+    # (here 1 s from the first frame not localized) ends before the wait does.
+    assert _dip_run(2.0, (20.0, 23.0), watch_s=1.0)[0][0] == 22.125
 
 
 def test_a_place_found_after_a_kidnapping_is_not_judged_by_the_frames_before_it() -> None:
