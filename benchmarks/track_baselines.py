@@ -340,6 +340,8 @@ def _label(key: str) -> str:
 
 
 def _f(v: Any, fmt: str = "{:.3g}") -> str:
+    if v == math.inf:
+        return "never"  # (a median time over runs half of which never got there)
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "-"
     return fmt.format(v)
@@ -364,11 +366,24 @@ def _cov(t: dict[str, Any]) -> str:
     return f"{inside_50} / {_f(100 * t['cov_inside_99_rate'], '{:.0f}')} %"
 
 
-def _totals(runs: list[dict[str, Any]]) -> dict[str, Any]:
+def _run_scores(runs: list[dict[str, Any]]) -> list[Any]:
+    """Stored runs (JSON: None where NaN) as :class:`RunScore`."""
     from omniloc.evaluate.tracking import RunScore
 
-    rs = [RunScore(**{k: (math.nan if v is None else v) for k, v in r.items()}) for r in runs]
-    return TrackingResult("x", rs).totals()
+    return [RunScore(**{k: (math.nan if v is None else v) for k, v in r.items()}) for r in runs]
+
+
+def _totals(runs: list[dict[str, Any]]) -> dict[str, Any]:
+    return TrackingResult("x", _run_scores(runs)).totals()
+
+
+def _retotal(result: dict[str, Any]) -> dict[str, Any]:
+    """A stored result with its totals computed again from its runs by today's scoring."""
+    if "runs" not in result:
+        return result
+    fresh = TrackingResult(result.get("name", "x"), _run_scores(result["runs"])).as_dict()
+    keys = ("totals", "totals_without_jump", "totals_kidnapped")
+    return {**result, **{k: fresh[k] for k in keys}}
 
 
 def tables(results: dict[str, dict[str, Any]]) -> str:
@@ -403,7 +418,9 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
     # Totals per stream set.
     lines += [
         "**Totals per set of streams** (whole runs: the five robots; kidnapped: the streams "
-        "with a jump; plain: the same stretches without one)",
+        "with a jump; plain: the same stretches without one; a median time counts a stream "
+        "that never got there as later than any that did: never, when half or more never "
+        "did)",
         "",
         "| localizer | streams | n | time to localize median / max s | never | "
         "correct after | correct | confidently wrong | pos RMSE m | heading RMSE deg | "
@@ -464,8 +481,8 @@ def tuning_summary(rec: dict[str, Any]) -> str:
             lines.append(
                 f"* `{key}` ({v['streams']} kidnapped + {v['streams']} plain tuning streams, "
                 f"seed + 1000): best {opts(v['best']['options'])} (J {v['best']['J']}, "
-                f"recovery median {_f(v['best']['recovery_median_s'], '{:.0f}')} s, "
-                f"unrecovered {v['best']['unrecovered']:.0f}); kidnap threshold "
+                f"unrecovered {v['best']['unrecovered']:.0f}, the others after a median of "
+                f"{_f(v['best']['recovery_median_recovered_s'], '{:.0f}')} s); kidnap threshold "
                 f"{v['kidnap_ratio']['kidnap_ratio']} (false-alarm run rate "
                 f"{v['kidnap_ratio']['false_alarm_run_rate']}, flagged within 30 s "
                 f"{v['kidnap_ratio']['flagged_within_30s']}). Thresholds: "
@@ -769,7 +786,9 @@ def main(argv: list[str] | None = None) -> int:
         # The baselines' rows keep the date they were measured (an earlier --tracker-only
         # run passes it on); the time reported is this run's.
         meta["baselines_measured"] = old_meta.get("baselines_measured") or old_meta.get("when")
-        results.update(earlier.get("results", {}))
+        # The earlier rows' totals are computed again from their runs (the scoring may have
+        # changed since: e.g. medians that count the runs that never got there).
+        results.update({k: _retotal(v) for k, v in earlier.get("results", {}).items()})
         print(save({"tracker": run_tracker([*runs, *kid, *plain], print)}, final=True))
         return 0
     save({"tracker": run_tracker([*runs, *kid, *plain], print)})

@@ -101,6 +101,8 @@ def run_scenario(name: str, sensor: SensorModel, n: int, seed: int) -> TrackingR
 
 
 def _f(v: float, spec: str) -> str:
+    if v == math.inf:
+        return "never"  # (a median time over runs half of which never got there)
     return "-" if v is None or not math.isfinite(v) else format(v, spec)
 
 

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from omniloc import LandmarkMap, Pose
 from omniloc.evaluate.tracking import Stream, TrackingResult, score_run, weight_ece, whole_run
@@ -133,3 +135,76 @@ def test_without_localized_frames_the_covariance_is_not_scored() -> None:
     tot = TrackingResult("x", [r]).totals()
     assert math.isnan(tot["cov_inside_50_rate"]) and math.isnan(tot["cov_inside_99_rate"])
     assert "reported covariance" not in tracking_summary(TrackingResult("x", [r]))
+
+
+@given(
+    st.lists(st.floats(0.0, 1e4), min_size=1, max_size=12),
+    st.integers(0, 12),
+)
+def test_a_run_that_never_got_there_counts_as_later_than_any_that_did(
+    times: list[float], n_never: int
+) -> None:
+    from omniloc.evaluate.tracking import censored_median
+
+    # All got there: the plain median.
+    assert censored_median(times) == pytest.approx(float(np.median(times)))
+    with_never = times + [math.nan] * n_never
+    m = censored_median(with_never)
+    # Never below the median of those that did; "never" once half of the runs never did.
+    assert m >= float(np.median(times)) - 1e-9
+    # (The middle one, or the upper of the middle two, is a run that never got there.)
+    assert (m == math.inf) == (len(with_never) // 2 >= len(times))
+    # inf and NaN both mean never.
+    assert censored_median(times + [math.inf] * n_never) == m
+
+
+def test_the_median_of_no_runs_is_not_a_number() -> None:
+    from omniloc.evaluate.tracking import censored_median
+
+    assert math.isnan(censored_median([]))
+    assert censored_median([math.nan]) == math.inf
+
+
+def test_medians_count_the_runs_that_never_got_there() -> None:
+    """A localizer that fails on two runs of five must not look faster than one that
+    localizes every run a little later (the medians over the runs that got there are
+    reported beside, under their own names)."""
+    from dataclasses import replace
+
+    from omniloc.evaluate.tracking import tracking_summary
+
+    stream = _stream(4)
+    base = score_run(stream, [_ambiguous(float(k), TRUE, 0.5) for k in range(4)])
+    times = [138.0, 150.0, 658.0, math.nan, math.nan]
+    runs = [replace(base, name=f"r{i}", time_to_localize_s=t) for i, t in enumerate(times)]
+    tot = TrackingResult("pf", runs).totals()
+    assert tot["time_to_localize_median_s"] == 658.0
+    assert tot["time_to_localize_median_localized_s"] == 150.0
+    assert tot["never_localized"] == 2
+    always = [replace(r, time_to_localize_s=435.0) for r in runs]
+    assert TrackingResult("t", always).totals()["time_to_localize_median_s"] < 658.0
+    # Three of five never: the median is never, said as such.
+    runs[2] = replace(runs[2], time_to_localize_s=math.nan)
+    res = TrackingResult("pf", runs)
+    assert res.totals()["time_to_localize_median_s"] == math.inf
+    text = tracking_summary(res)
+    said = "time to localize median never, never on 3 of 5 runs; the 2 localized: median 144.0 s"
+    assert said in text
+
+
+def test_recovery_and_detection_medians_count_the_streams_never_recovered() -> None:
+    from dataclasses import replace
+
+    stream = _stream(4)
+    base = score_run(stream, [_ambiguous(float(k), TRUE, 0.5) for k in range(4)])
+    jumps = [
+        replace(base, name=f"k{i}", jump_t=1.0, detection_delay_s=d, recovery_s=r)
+        for i, (d, r) in enumerate([(0.3, 20.0), (0.5, math.nan), (math.nan, math.nan)])
+    ]
+    tot = TrackingResult("t", jumps).totals(True)
+    assert tot["recovery_median_s"] == math.inf
+    assert tot["recovery_median_recovered_s"] == 20.0
+    assert tot["unrecovered"] == 2
+    assert tot["detection_delay_median_s"] == 0.5
+    assert tot["detection_delay_median_detected_s"] == pytest.approx(0.4)
+    assert tot["undetected"] == 1

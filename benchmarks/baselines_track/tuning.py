@@ -77,9 +77,10 @@ def summarize(res: TrackingResult) -> dict[str, Any]:
         "correct": round(correct, 4),
         "wrong": round(t["confidently_wrong_rate"], 4),
         "pos_rmse_m": round(t["pos_rmse_m"], 4) if math.isfinite(t["pos_rmse_m"]) else None,
-        "ttl_median_s": (
-            round(t["time_to_localize_median_s"], 1)
-            if math.isfinite(t["time_to_localize_median_s"])
+        # (The median over the streams that localized; how many never did is in the rows.)
+        "ttl_median_localized_s": (
+            round(t["time_to_localize_median_localized_s"], 1)
+            if math.isfinite(t["time_to_localize_median_localized_s"])
             else None
         ),
         "per_run": [
@@ -194,7 +195,8 @@ def tune_pf_global(
             rows.append(row)
             log(
                 f"pf-global {opts} -> J {row['J']} correct {row['correct']} wrong "
-                f"{row['wrong']} ttl {row['ttl_median_s']} ({row['wall_s']} s)"
+                f"{row['wrong']} ttl (localized) {row['ttl_median_localized_s']} "
+                f"({row['wall_s']} s)"
             )
         return cache[key]
 
@@ -303,7 +305,7 @@ def tune_recovery(
         row = {
             "options": opts,
             **summarize(res),
-            "recovery_median_s": t["recovery_median_s"],
+            "recovery_median_recovered_s": t["recovery_median_recovered_s"],
             "unrecovered": t["unrecovered"],
             "wall_s": round(time.time() - c0),
         }

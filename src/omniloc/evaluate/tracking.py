@@ -70,6 +70,7 @@ __all__ = [
     "Stream",
     "TrackingReport",
     "TrackingResult",
+    "censored_median",
     "errors_against",
     "evaluate_mrclam_tracking",
     "evaluate_tracking",
@@ -517,9 +518,43 @@ def weight_ece(bins: Sequence[Sequence[float]]) -> float:
 
 
 def _nanmedian(x: Sequence[float]) -> float:
+    """The median of the finite values (NaN when there is none)."""
     a = np.asarray(x, dtype=np.float64)
     a = a[np.isfinite(a)]
     return float(np.median(a)) if a.size else NAN
+
+
+def censored_median(times: Sequence[float]) -> float:
+    """The median time to an event over runs of which some never reached it.
+
+    A run that never got there (NaN or inf) counts as later than every run that did, so
+    the median is ``inf`` ("never") when half of the runs or more never got there; NaN
+    without runs. Leaving such runs out instead would make a localizer that often fails
+    look faster than one that always succeeds, a little later.
+
+    Parameters
+    ----------
+    times : sequence of float
+        Seconds to the event, one per run; NaN or inf for a run that never reached it.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> censored_median([10.0, 20.0, float("nan")])
+    20.0
+    >>> censored_median([10.0, float("nan"), float("nan")])
+    inf
+    >>> censored_median([10.0, 20.0, 30.0, float("nan")])
+    25.0
+    """
+    a = np.asarray(times, dtype=np.float64).reshape(-1)
+    if a.size == 0:
+        return NAN
+    a = np.where(np.isfinite(a), a, math.inf)
+    return float(np.median(a))
 
 
 @dataclass(frozen=True)
@@ -537,7 +572,14 @@ class TrackingResult:
         return [r for r in self.runs if math.isfinite(r.jump_t) == kidnapped]
 
     def totals(self, kidnapped: bool | None = None) -> dict[str, float]:
-        """Aggregates over the runs (``kidnapped``: only streams with / without a jump)."""
+        """Aggregates over the runs (``kidnapped``: only streams with / without a jump).
+
+        The median times (``time_to_localize_median_s``, ``detection_delay_median_s``,
+        ``recovery_median_s``) count a run that never got there as later than any that did
+        (:func:`censored_median`: ``inf``, "never", when half of the runs or more never
+        did); the same keys ending ``_localized_s``, ``_detected_s`` and ``_recovered_s``
+        are the medians over the runs that got there, beside the counts of those that did
+        not (``never_localized``, ``undetected``, ``unrecovered``)."""
         rs = self._sel(kidnapped)
         scored = sum(r.n_scored for r in rs)
         loc = sum(r.n_localized for r in rs)
@@ -562,7 +604,8 @@ class TrackingResult:
             "runs": float(len(rs)),
             "frames_scored": float(scored),
             "localized_frames": float(loc),
-            "time_to_localize_median_s": _nanmedian(ttl),
+            "time_to_localize_median_s": censored_median(ttl),
+            "time_to_localize_median_localized_s": _nanmedian(ttl),
             "time_to_localize_max_s": max(ttl) if ttl and all(map(math.isfinite, ttl)) else NAN,
             "never_localized": float(sum(not math.isfinite(x) for x in ttl)),
             "correct_after_rate": float(np.mean(after)) if after else NAN,
@@ -570,9 +613,11 @@ class TrackingResult:
             "confidently_wrong_rate": wrong / scored if scored else NAN,
             "pos_rmse_m": pooled("pos_rmse_m"),
             "heading_rmse_deg": pooled("heading_rmse_deg"),
-            "detection_delay_median_s": _nanmedian([r.detection_delay_s for r in jumps]),
+            "detection_delay_median_s": censored_median([r.detection_delay_s for r in jumps]),
+            "detection_delay_median_detected_s": _nanmedian([r.detection_delay_s for r in jumps]),
             "undetected": float(sum(not math.isfinite(r.detection_delay_s) for r in jumps)),
-            "recovery_median_s": _nanmedian([r.recovery_s for r in jumps]),
+            "recovery_median_s": censored_median([r.recovery_s for r in jumps]),
+            "recovery_median_recovered_s": _nanmedian([r.recovery_s for r in jumps]),
             "unrecovered": float(sum(not math.isfinite(r.recovery_s) for r in jumps)),
             "false_alarm_run_rate": (
                 sum(r.false_alarms > 0 for r in plain) / len(plain) if plain else NAN
@@ -767,6 +812,19 @@ def _fmt(v: float, spec: str = ".2f", none: str = "-") -> str:
     return none.rjust(int(width)) if width.isdigit() else none
 
 
+def _seconds(v: float) -> str:
+    """A median time: ``"12.3 s"``, ``"never"`` (inf) or ``"-"`` (NaN)."""
+    return f"{v:.1f} s" if math.isfinite(v) else ("never" if v == math.inf else "-")
+
+
+def _of_those(n: int, what: str, median: float) -> str:
+    """``"; the 3 localized: median 149.8 s"`` -- the median over the runs that got there,
+    said beside the count of those that did not (nothing when all or none got there)."""
+    if n <= 0 or not math.isfinite(median):
+        return ""
+    return f"; the {n} {what}: median {median:.1f} s"
+
+
 def tracking_summary(report: TrackingReport | TrackingResult) -> str:
     """Plain-text table of the runs and the totals that the targets read."""
     if isinstance(report, TrackingResult):
@@ -792,9 +850,10 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
         f"max {_fmt(tot['time_to_localize_max_s'], '.1f')} s"
         if not never
         else f"never on {never} of {len(w.runs)} run{'s' if len(w.runs) != 1 else ''}"
+        + _of_those(len(w.runs) - never, "localized", tot["time_to_localize_median_localized_s"])
     )
     lines.append(
-        f"all runs: time to localize median {_fmt(tot['time_to_localize_median_s'], '.1f')} s, "
+        f"all runs: time to localize median {_seconds(tot['time_to_localize_median_s'])}, "
         f"{worst}; correct after "
         f"{_fmt(100 * tot['correct_after_rate'], '.1f')} %; confidently wrong "
         f"{_fmt(100 * tot['confidently_wrong_rate'], '.2f')} % of frames; position RMSE "
@@ -818,16 +877,32 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
         tp = k.totals(False)
         lines.append(
             f"kidnapped streams ({int(tj['runs'])}): detection delay median "
-            f"{_fmt(tj['detection_delay_median_s'], '.1f')} s "
-            f"({int(tj['undetected'])} undetected), "
-            f"recovery median {_fmt(tj['recovery_median_s'], '.1f')} s ({int(tj['unrecovered'])} "
-            f"not recovered); confidently wrong {_fmt(100 * tj['confidently_wrong_rate'], '.2f')} %"
+            f"{_seconds(tj['detection_delay_median_s'])} ({int(tj['undetected'])} undetected"
+            + _of_those(
+                int(tj["runs"] - tj["undetected"]) if tj["undetected"] else 0,
+                "detected",
+                tj["detection_delay_median_detected_s"],
+            )
+            + f"), recovery median {_seconds(tj['recovery_median_s'])} "
+            f"({int(tj['unrecovered'])} not recovered"
+            + _of_those(
+                int(tj["runs"] - tj["unrecovered"]) if tj["unrecovered"] else 0,
+                "recovered",
+                tj["recovery_median_recovered_s"],
+            )
+            + f"); confidently wrong {_fmt(100 * tj['confidently_wrong_rate'], '.2f')} %"
         )
         lines.append(
             f"same segments without a jump ({int(tp['runs'])}): false alarm on "
             f"{_fmt(100 * tp['false_alarm_run_rate'], '.1f')} % of runs; confidently wrong "
             f"{_fmt(100 * tp['confidently_wrong_rate'], '.2f')} %; time to localize median "
-            f"{_fmt(tp['time_to_localize_median_s'], '.1f')} s"
+            f"{_seconds(tp['time_to_localize_median_s'])} ({int(tp['never_localized'])} never"
+            + _of_those(
+                int(tp["runs"] - tp["never_localized"]) if tp["never_localized"] else 0,
+                "localized",
+                tp["time_to_localize_median_localized_s"],
+            )
+            + ")"
         )
     return "\n".join(lines)
 
@@ -863,8 +938,9 @@ def seed_spread(reports: Mapping[int, TrackingReport]) -> dict[str, dict[str, An
     dict
         For each figure of :data:`SPREAD_FIGURES` that every report has: ``unit``,
         ``format`` (how :func:`seed_spread_table` prints it), the value under each seed
-        (``by_seed``, in the order given; NaN where a run never localized), and its ``min``
-        and ``max`` over the seeds (NaN when none is finite).
+        (``by_seed``, in the order given; NaN where a figure has no value, inf where a
+        median time is "never"), and its ``min`` and ``max`` over the seeds (NaN when none
+        has a value).
 
     Raises
     ------
@@ -890,15 +966,21 @@ def seed_spread(reports: Mapping[int, TrackingReport]) -> dict[str, dict[str, An
                 v = tot[key] * scale
             values[int(seed)] = v
         else:
-            finite = [v for v in values.values() if math.isfinite(v)]
+            # (inf, "never", is a value: a median over runs half of which never got there.)
+            known = [v for v in values.values() if not math.isnan(v)]
             out[name] = {
                 "unit": unit,
                 "format": spec,
                 "by_seed": values,
-                "min": min(finite) if finite else NAN,
-                "max": max(finite) if finite else NAN,
+                "min": min(known) if known else NAN,
+                "max": max(known) if known else NAN,
             }
     return out
+
+
+def _median_cell(v: float, spec: str) -> str:
+    """A figure of :func:`seed_spread`: inf (a median time) is "never"."""
+    return _fmt(v, spec, "never" if v == math.inf else "-")
 
 
 def seed_spread_table(spread: Mapping[str, Mapping[str, Any]]) -> str:
@@ -913,6 +995,9 @@ def seed_spread_table(spread: Mapping[str, Mapping[str, Any]]) -> str:
     for name, fig in spread.items():
         spec = fig["format"]
         label = f"{name} ({fig['unit']})" if fig["unit"] else name
-        cells = " | ".join(_fmt(fig["by_seed"][s], spec) for s in seeds)
-        rows.append(f"| {label} | {cells} | {_fmt(fig['min'], spec)}-{_fmt(fig['max'], spec)} |")
+        cells = " | ".join(_median_cell(fig["by_seed"][s], spec) for s in seeds)
+        rows.append(
+            f"| {label} | {cells} | {_median_cell(fig['min'], spec)}-"
+            f"{_median_cell(fig['max'], spec)} |"
+        )
     return "\n".join(rows)
