@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 from scipy.stats import binom
 
 HERE = Path(__file__).resolve().parent
@@ -31,11 +32,21 @@ sys.path.insert(0, str(HERE.parent / "src"))
 from _results import run_meta, write_results  # noqa: E402
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
 from omniloc.sensor import SensorModel  # noqa: E402
-from omniloc.track import preset  # noqa: E402
+from omniloc.track import Frame, preset  # noqa: E402
 
 DATA = HERE.parent.parent / "shared" / "data" / "mrclam-ds6"
 #: Landmarks this close to the edge of the field of view are not counted as in view.
 EDGE = math.radians(2.0)
+
+
+def reported(frame: Frame, n: int) -> NDArray[np.bool_]:
+    """Which of the map's ``n`` landmarks ``frame`` reported, by the recording's own ids
+    (``frame.truth``; None: a bearing that is no landmark)."""
+    seen = np.zeros(n, dtype=bool)
+    for t in frame.truth or ():
+        if t is not None:
+            seen[t] = True
+    return seen
 
 
 def counts_in_view(streams: Sequence[Stream], sensor: SensorModel) -> dict[int, list[int]]:

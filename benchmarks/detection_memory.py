@@ -34,7 +34,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 from _results import run_meta, write_results  # noqa: E402
-from detection_dispersion import EDGE  # noqa: E402  (the same view as its counts)
+from detection_dispersion import EDGE, reported  # noqa: E402  (the same view as its counts)
 from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
 from omniloc.sensor import SensorModel  # noqa: E402
 from omniloc.track import preset  # noqa: E402
@@ -68,10 +68,7 @@ def sightings(streams: Sequence[Stream], sensor: SensorModel) -> list[tuple[int,
                 continue
             last = f.t
             vis = sensor.visible(L, x)
-            seen = np.zeros(len(L), dtype=bool)
-            for t in f.truth or ():
-                if t is not None:
-                    seen[t] = True
+            seen = reported(f, len(L))
             for j in np.flatnonzero(vis):
                 out.append((int(hits[j]), int(misses[j]), bool(seen[j])))
             hits = np.where(vis, hits + seen, 0)
