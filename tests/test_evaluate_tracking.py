@@ -208,3 +208,21 @@ def test_recovery_and_detection_medians_count_the_streams_never_recovered() -> N
     assert tot["detection_delay_median_s"] == 0.5
     assert tot["detection_delay_median_detected_s"] == pytest.approx(0.4)
     assert tot["undetected"] == 1
+
+
+def test_the_seed_spread_says_never_for_a_median_that_never_came() -> None:
+    from dataclasses import replace
+
+    from omniloc.evaluate.tracking import TrackingReport, seed_spread, seed_spread_table
+
+    stream = _stream(4)
+    base = score_run(stream, [_ambiguous(float(k), TRUE, 0.5) for k in range(4)])
+    late = [replace(base, name=f"r{i}", time_to_localize_s=t) for i, t in enumerate([5.0, 9.0])]
+    never = [replace(r, time_to_localize_s=math.nan) for r in late]
+    reports = {0: late, 1: never}
+    spread = seed_spread({k: TrackingReport(TrackingResult("t", v)) for k, v in reports.items()})
+    first = spread["first correct, median"]
+    assert first["by_seed"] == {0: 7.0, 1: math.inf}
+    assert (first["min"], first["max"]) == (7.0, math.inf)
+    row = next(r for r in seed_spread_table(spread).splitlines() if r.startswith("| first correct"))
+    assert row == "| first correct, median (s) | 7.0 | never | 7.0-never |"

@@ -874,7 +874,8 @@ def _cmd_evaluate_track_seeds(args: argparse.Namespace, settings: dict[str, Any]
     print(f"over the tracker's seeds {', '.join(map(str, seeds))}:")
     print(table)
     (out / "mrclam_track_seeds.md").write_text(table + "\n")
-    write_json(out / "mrclam_track_seeds.json", spread)  # (NaN, a run never localized: null)
+    # (null: NaN, no value, or inf, a median time that is "never")
+    write_json(out / "mrclam_track_seeds.json", spread)
     print(f"written: {out / 'mrclam_track_seeds.md'}, {out / 'mrclam_track_seeds.json'}, seed-N/")
     return 0
 
