@@ -15,6 +15,7 @@ from omniloc.track.motion import (
     compose_jacobians,
     integrate,
     inverse,
+    move,
     twist_of,
 )
 
@@ -125,3 +126,38 @@ def test_bad_input() -> None:
     with pytest.raises(InputError, match="positive duration"):
         twist_of([1.0, 0.0, 0.0], 0.0)
     assert MotionModel(delay_s=-0.1).delay_s == -0.1  # odometry stamped late
+
+
+@settings(max_examples=60, deadline=None)  # (the first call may compile the kernel)
+@given(st.lists(poses, min_size=1, max_size=6), poses, st.integers(0, 2**31 - 1))
+def test_moving_gaussians_is_composition_and_first_order_propagation(
+    ps: list[np.ndarray], delta: np.ndarray, seed: int
+) -> None:
+    """The compiled move against the formula it implements, written with numpy:
+    ``compose`` and ``Jp P Jp^T + Jd Q Jd^T``, symmetric."""
+    r = np.random.default_rng(seed)
+    mu = np.array(ps)
+    A = r.normal(size=(len(ps), 3, 3)) * 0.3
+    P = A @ np.swapaxes(A, 1, 2)
+    B = r.normal(size=(3, 3)) * 0.05
+    Q = B @ B.T
+    d = delta * 0.1
+    new, P2 = move(mu, P, d, Q)
+    Jp, Jd = compose_jacobians(mu, d)
+    want = Jp @ P @ np.swapaxes(Jp, 1, 2) + Jd @ Q @ np.swapaxes(Jd, 1, 2)
+    np.testing.assert_array_equal(new, compose(mu, d))
+    np.testing.assert_allclose(P2, want, rtol=1e-12, atol=1e-15)
+    np.testing.assert_array_equal(P2, np.swapaxes(P2, 1, 2))
+
+
+def test_move_refuses_shapes_it_cannot_read() -> None:
+    mu, P, d, Q = np.zeros((2, 3)), np.zeros((2, 3, 3)), np.zeros(3), np.zeros((3, 3))
+    assert move(mu[:0], P[:0], d, Q)[0].shape == (0, 3)
+    with pytest.raises(InputError, match="poses of shape"):
+        move(mu[:, :2], P, d, Q)
+    with pytest.raises(InputError, match="poses of shape"):
+        move(mu, P[:1], d, Q)
+    with pytest.raises(InputError, match="motion of shape"):
+        move(mu, P, d[:2], Q)
+    with pytest.raises(InputError, match="motion of shape"):
+        move(mu, P, d, Q[:2])

@@ -20,12 +20,26 @@ __all__ = [
     "covered_kernel",
     "frame_update_kernel",
     "integrate_pieces",
+    "move_kernel",
     "near_pairs",
     "same_of_pairs",
 ]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _jacobians(c: float, s: float, dx: float, dy: float, Jp: FloatArray, Jd: FloatArray) -> None:
+    """Write the Jacobians of ``pose (+) (dx, dy, .)`` at heading cos ``c``, sin ``s``: with
+    respect to the pose (``Jp``, its last column) and to the motion (``Jd``, its rotation);
+    the rest of both is the identity, written by the caller."""
+    Jp[0, 2] = -s * dx - c * dy
+    Jp[1, 2] = c * dx - s * dy
+    Jd[0, 0] = c
+    Jd[0, 1] = -s
+    Jd[1, 0] = s
+    Jd[1, 1] = c
 
 
 @njit(cache=True, error_model="numpy")
@@ -69,18 +83,62 @@ def integrate_pieces(
         N[2, 2] = noise[2] * abs(phi) + noise[3] * dist + noise[4] * h
         c = np.cos(tt)
         s = np.sin(tt)
-        Jp[0, 2] = -s * dx - c * dy
-        Jp[1, 2] = c * dx - s * dy
-        Jd[0, 0] = c
-        Jd[0, 1] = -s
-        Jd[1, 0] = s
-        Jd[1, 1] = c
+        _jacobians(c, s, dx, dy, Jp, Jd)
         Q = Jp @ Q @ Jp.T + Jd @ N @ Jd.T
         tx += c * dx - s * dy
         ty += s * dx + c * dy
         tt += phi
     out = np.array([tx, ty, tt])
     return out, 0.5 * (Q + Q.T)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def move_kernel(
+    poses: FloatArray, covs: FloatArray, delta: FloatArray, Q: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """H Gaussian poses ``(poses, covs)``, shapes (H, 3) and (H, 3, 3), moved by ``delta``
+    (3,) with noise ``Q`` (3, 3), both in each pose's frame: the pose ``compose(pose,
+    delta)`` (the heading wrapped) and the covariance ``Jp P Jp^T + Jd Q Jd^T`` with the
+    Jacobians of the composition, symmetrised (see :func:`omniloc.track.motion.move`)."""
+    H = poses.shape[0]
+    new = np.empty((H, 3))
+    out = np.empty((H, 3, 3))
+    dx = delta[0]
+    dy = delta[1]
+    A = np.empty((3, 3))
+    B = np.empty((3, 3))
+    Jp = np.eye(3)
+    Jd = np.eye(3)
+    for k in range(H):
+        c = math.cos(poses[k, 2])
+        s = math.sin(poses[k, 2])
+        new[k, 0] = poses[k, 0] + c * dx - s * dy
+        new[k, 1] = poses[k, 1] + s * dx + c * dy
+        new[k, 2] = wrap_float(poses[k, 2] + delta[2])
+        _jacobians(c, s, dx, dy, Jp, Jd)
+        for i in range(3):
+            for j in range(3):
+                a = 0.0
+                b = 0.0
+                for m in range(3):
+                    a += Jp[i, m] * covs[k, m, j]
+                    b += Jd[i, m] * Q[m, j]
+                A[i, j] = a
+                B[i, j] = b
+        for i in range(3):
+            for j in range(3):
+                a = 0.0
+                b = 0.0
+                for m in range(3):
+                    a += A[i, m] * Jp[j, m]
+                    b += B[i, m] * Jd[j, m]
+                out[k, i, j] = a + b
+        for i in range(3):
+            for j in range(i + 1, 3):
+                v = 0.5 * (out[k, i, j] + out[k, j, i])
+                out[k, i, j] = v
+                out[k, j, i] = v
+    return new, out
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

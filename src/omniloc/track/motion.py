@@ -333,11 +333,30 @@ def move(
     -------
     poses, covs : ndarray
         ``compose(poses, delta)`` and ``Jp P Jp^T + Jd Q Jd^T`` with the Jacobians of
-        :func:`compose`.
+        :func:`compose` (compiled: ``omniloc._kernels.track.move_kernel``).
+
+    Raises
+    ------
+    InputError
+        Arrays of other shapes.
     """
-    if poses.shape[0] == 0:
+    p = np.asarray(poses)
+    P = np.asarray(covs)
+    if p.ndim != 2 or p.shape[1:] != (3,) or P.shape != (p.shape[0], 3, 3):
+        raise InputError(
+            f"move needs poses of shape (H, 3) and covariances (H, 3, 3), got {p.shape} and "
+            f"{P.shape}"
+        )
+    if np.shape(delta) != (3,) or np.shape(Q) != (3, 3):
+        raise InputError(
+            f"move needs a motion of shape (3,) and its covariance (3, 3), got "
+            f"{np.shape(delta)} and {np.shape(Q)}"
+        )
+    if p.shape[0] == 0:
         return poses, covs
-    Jp, Jd = compose_jacobians(poses, delta)
-    new = compose(poses, delta)
-    P = Jp @ covs @ np.swapaxes(Jp, -1, -2) + Jd @ Q @ np.swapaxes(Jd, -1, -2)
-    return new, 0.5 * (P + np.swapaxes(P, -1, -2))
+    return _kernels.move_kernel(
+        np.ascontiguousarray(poses, dtype=np.float64),
+        np.ascontiguousarray(covs, dtype=np.float64),
+        np.ascontiguousarray(delta, dtype=np.float64),
+        np.ascontiguousarray(Q, dtype=np.float64),
+    )
