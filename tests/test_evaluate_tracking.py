@@ -226,3 +226,12 @@ def test_the_seed_spread_says_never_for_a_median_that_never_came() -> None:
     assert (first["min"], first["max"]) == (7.0, math.inf)
     row = next(r for r in seed_spread_table(spread).splitlines() if r.startswith("| first correct"))
     assert row == "| first correct, median (s) | 7.0 | never | 7.0-never |"
+
+
+@pytest.mark.parametrize("bad", [["a", 1.0], [[1.0, 2.0]], {1.0}, [10**400]])
+def test_the_censored_median_names_times_it_cannot_read(bad: object) -> None:
+    from omniloc.errors import InputError
+    from omniloc.evaluate.tracking import censored_median
+
+    with pytest.raises(InputError, match="censored_median: times must be"):
+        censored_median(bad)  # type: ignore[arg-type]

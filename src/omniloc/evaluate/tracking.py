@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..angles import wrap
 from ..errors import InputError
+from ..io import shorten
 from ..maps import LandmarkMap
 from ..pose import Pose
 from ..sensor import chi2_quantile
@@ -541,6 +542,11 @@ def censored_median(times: Sequence[float]) -> float:
     -------
     float
 
+    Raises
+    ------
+    InputError
+        ``times`` not a flat sequence of numbers.
+
     Examples
     --------
     >>> censored_median([10.0, 20.0, float("nan")])
@@ -550,7 +556,12 @@ def censored_median(times: Sequence[float]) -> float:
     >>> censored_median([10.0, 20.0, 30.0, float("nan")])
     25.0
     """
-    a = np.asarray(times, dtype=np.float64).reshape(-1)
+    try:
+        a = np.asarray(times, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"censored_median: times must be numbers, got {shorten(times)}") from exc
+    if a.ndim != 1:
+        raise InputError(f"censored_median: times must be a flat sequence, got shape {a.shape}")
     if a.size == 0:
         return NAN
     a = np.where(np.isfinite(a), a, math.inf)
