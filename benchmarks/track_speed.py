@@ -13,14 +13,25 @@ where the frame likelihood of many hypotheses runs on two threads). Before the t
 one untimed run of robot 1's first 200 frames loads the compiled kernels. With ``--repeat``,
 each run's fastest repeat is reported (the machine's load varies from minute to minute).
 
+The machine itself varies from hour to hour (a shared virtual machine: the same code took
+40-50 % longer on some afternoons). A fixed reference workload -- pure Python and small
+numpy calls, the mix of the tracker's own per-frame work -- is timed before and after the
+runs (the median of 7 each) and written beside them: tables of different days compare by
+it, not by their dates.
+
 Writes ``results_track_speed.json`` and ``.md`` beside this file.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import statistics
 import sys
+import time
 from pathlib import Path
+
+import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
@@ -54,6 +65,42 @@ def run_robot(data: Path, robot: int, limit: int | None = None) -> dict[str, flo
     }
 
 
+def reference_ms(repeat: int = 7) -> dict[str, float]:
+    """The machine's speed now: the median over ``repeat`` of a fixed pure-Python workload
+    and of a fixed one of small numpy calls, milliseconds (no randomness: the same work
+    every time)."""
+
+    def python_work() -> float:
+        acc = 0.0
+        table: dict[int, float] = {}
+        for i in range(200_000):
+            x = math.sin(i * 1e-3) + (i % 7) * 0.5
+            table[i & 255] = x
+            acc += x * table.get((i + 1) & 255, 0.0)
+        return acc
+
+    poses = np.linspace(0.0, 1.0, 120).reshape(40, 3)
+
+    def numpy_work() -> float:
+        acc = 0.0
+        p = poses
+        for _ in range(2_000):
+            c, s = np.cos(p[:, 2]), np.sin(p[:, 2])
+            p = np.column_stack([p[:, 0] + 0.01 * c, p[:, 1] + 0.01 * s, p[:, 2] + 1e-3])
+            acc += float(np.exp(-0.5 * (p * p).sum(axis=1)).sum())
+        return acc
+
+    out = {}
+    for name, work in (("python_ms", python_work), ("numpy_ms", numpy_work)):
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            work()
+            times.append(1e3 * (time.perf_counter() - t0))
+        out[name] = statistics.median(times)
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", type=Path, default=DATA, help="the mrclam-ds6 folder")
@@ -63,6 +110,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=HERE / "results_track_speed")
     args = ap.parse_args(argv)
     run_robot(args.data, 1, limit=200)  # loads (or compiles) every kernel: not timed
+    before = reference_ms()
     rows = []
     for r in args.robots:
         best = min(
@@ -79,13 +127,24 @@ def main(argv: list[str] | None = None) -> int:
     wall = sum(row["wall_s"] for row in rows)
     total = {"duration_s": dur, "wall_s": wall, "realtime_factor": dur / wall}
     print(f"all: {dur:.1f} s in {wall:.2f} s ({dur / wall:.0f}x real time)")
+    after = reference_ms()
+    reference = {"before": before, "after": after}
+    said = (
+        f"the reference workload took {before['python_ms']:.0f} ms (Python) and "
+        f"{before['numpy_ms']:.0f} ms (numpy) before the runs, {after['python_ms']:.0f} and "
+        f"{after['numpy_ms']:.0f} ms after"
+    )
+    print(said)
     meta = run_meta("track_speed.py", argv, repeat=args.repeat)
-    write_results(args.out.with_suffix(".json"), meta, runs=rows, total=total)
+    write_results(
+        args.out.with_suffix(".json"), meta, runs=rows, total=total, reference_ms=reference
+    )
     lines = [
         "# The tracker's speed on MRCLAM set 6 (`benchmarks/track_speed.py`)",
         "",
         f"{meta['date']}, {meta['machine']}; `{meta['command']}`. Each run alone, the "
-        "`mrclam` preset; elapsed time (the target: >= 100x real time), processor time beside.",
+        "`mrclam` preset; elapsed time (the target: >= 100x real time), processor time beside; "
+        f"the machine's speed: {said} (compare tables of different days by it).",
         "",
         "| run | recording | elapsed | x real time | CPU | localized frames |",
         "|---|---|---|---|---|---|",

@@ -32,3 +32,7 @@ def test_times_the_first_frames_of_a_run_and_writes_both_files(tmp_path: Path) -
     assert data["meta"]["command"].startswith("python benchmarks/track_speed.py --robots 2")
     md = out.with_suffix(".md").read_text()
     assert "| robot2 |" in md and "120" in md
+    ref = data["reference_ms"]
+    assert set(ref) == {"before", "after"}
+    assert all(ref[k][w] > 0 for k in ref for w in ("python_ms", "numpy_ms"))
+    assert "the reference workload took" in md
