@@ -8,8 +8,9 @@ measurements of the pose. On each frame of the five MRCLAM runs this script take
 bearings of known tubes (the frames' own landmark ids), their errors against the Vicon pose
 (measured minus predicted, those within 5 deg: the tail is left to the gate), and for each
 pair of sightings of one tube on one run, the correlation of the two errors by the time
-between them. Writes ``results_bearing_correlation.json`` beside this file; docs/tracking.md
-("Weighing the evidence") says what the tracker does with it.
+between them. Writes ``results_bearing_correlation.json`` beside this file;
+docs/tracking-notebook.md ("Splitting on clutter and weighing the evidence") says what the
+tracker does with it.
 
 How much of that is a calibration, not noise: the errors are also fitted (least squares) with
 what a camera's calibration would hold -- per run a heading offset (the camera's yaw on the

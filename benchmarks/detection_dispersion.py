@@ -9,7 +9,7 @@ script counts the landmarks in view of the true pose (the ``mrclam`` preset's fi
 2 deg inside its edges, and range) and how many of them were reported, and compares, for each
 number in view, the spread of that count with the binomial's that independent detections
 would give. Writes ``results_detection_dispersion.json`` beside this file; see
-docs/tracking.md ("What would be tried next") for what it found.
+docs/tracking-notebook.md ("What would be tried next") for what it found.
 """
 
 from __future__ import annotations

@@ -14,7 +14,7 @@ misses in its run; the script fits ``n0`` by maximum likelihood over every frame
 run (with ``p`` the preset's ``p_detect``, and ``p`` fitted too), and gives the
 log-likelihood of independent detections (``n0`` infinite) beside it.
 
-Writes ``results_detection_memory.json`` beside this file; see docs/tracking.md ("Detection
+Writes ``results_detection_memory.json`` beside this file; see docs/tracking-notebook.md ("Detection
 with memory").
 """
 

@@ -21,7 +21,7 @@ Each cell's rate is the Beta posterior mean with ``prior`` frames of its parent'
 landmark's around the one rate, a landmark-and-range or landmark-and-direction cell's around
 its landmark's, the cell of all three around its landmark-and-range cell): a cell seen
 rarely falls back on its parent. Writes ``results_detection_viewpoint.json`` beside this
-file; see docs/tracking.md ("What would be tried next").
+file; see docs/tracking-notebook.md ("What would be tried next").
 """
 
 from __future__ import annotations

@@ -25,7 +25,7 @@ robot's run; at each of its searches it records whether the stacked search's can
 the truth, and whether the exact search's (on the last ``--bearings`` bearings of the last
 ``--window`` seconds, ``--seeds`` seed triples) do, within 0.5 m and 8 degrees (seed poses
 are not refined). Writes ``results_exact_search.json`` beside this file. This is an
-experiment, not a part of the library: see docs/tracking.md for what came of it.
+experiment, not a part of the library: see docs/tracking-notebook.md for what came of it.
 """
 
 from __future__ import annotations

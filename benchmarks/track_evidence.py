@@ -23,7 +23,7 @@ predicted poses with the exact frame model: the landmarks missed in view, the be
 landmarks, the bearings of other robots (the clutter).
 
 Writes ``results_track_evidence.json`` beside this file. A diagnosis, not a benchmark of
-speed; see docs/tracking.md ("Why the tracker is wrong on MRCLAM") for what it found.
+speed; see docs/tracking-notebook.md ("Why it is wrong there") for what it found.
 """
 
 from __future__ import annotations

@@ -16,8 +16,8 @@ holds at least half the mass: among those with 3 or more tubes in view of the tr
 reported. The recordings' landmark ids (``Frame.truth``) say which bearing is which; the
 tracker never reads them.
 
-Writes ``results_track_losses.json`` beside this file; docs/tracking.md ("Frames listed only
-when they hold a bearing") cites it.
+Writes ``results_track_losses.json`` beside this file; docs/tracking-notebook.md ("Frames listed
+only when they hold a bearing") cites it.
 """
 
 from __future__ import annotations

@@ -127,7 +127,8 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # unchanged); the seeded streams: kidnapped 0.23 % wrong (0.15 %), plain 0.09 %
         # (0.01 %), false alarms on 4 of 20 as before. The rule on mass times covariance at 0.9
         # kept more frames but let kidnapped streams reach 0.32 % wrong; one frame in a row
-        # instead of three kept robot 1's 4.3 m place. docs/tracking.md, "Staying localized".
+        # instead of three kept robot 1's 4.3 m place. docs/tracking-notebook.md, "Staying
+        # localized".
         # kidnap_confirm_s 2 (since 2026-12-04 15:00): the kidnapping flag waits until the
         # place has held under half the mass for 2 s. On the seeded streams the true place
         # often loses the mass for a second or two and wins it back (frames that report
@@ -135,7 +136,7 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # same with 4 s: the three left are longer losses of the true place, to elsewhere
         # or to rivals 2.6-3.9 m away), every other figure the same (the flag changes no
         # estimate); over elsewhere's seeds 0-4 3-4 of 20 either way (seed 0 alone gains a
-        # stream): small and free. docs/tracking.md, "A loss must last".
+        # stream): small and free. docs/tracking-notebook.md, "A loss must last".
         config = TrackerConfig(
             region=(-1.0, 5.5, -6.0, 6.5),
             clutter_persistence=0.75,
