@@ -20,8 +20,10 @@ __all__ = [
     "covered_kernel",
     "frame_update_kernel",
     "integrate_pieces",
+    "merge_kernel",
     "move_kernel",
     "near_pairs",
+    "particles_move_kernel",
     "same_of_pairs",
 ]
 
@@ -139,6 +141,138 @@ def move_kernel(
                 out[k, i, j] = v
                 out[k, j, i] = v
     return new, out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def particles_move_kernel(
+    poses: FloatArray,
+    delta: FloatArray,
+    noise: FloatArray,
+    jitter: FloatArray,
+    z_jitter: FloatArray,
+) -> FloatArray:
+    """M exactly known poses (M, 3) each moved by ``delta`` (3,) plus its own noise
+    ``noise[m] + jitter * z_jitter[m]`` (``noise``, ``z_jitter``: (M, 3); ``jitter`` (3,)),
+    in the pose's frame: ``compose(pose, delta + noise)``, the heading wrapped (the same
+    numbers as numpy's ``compose(poses, delta + (noise + z_jitter * jitter))``, bit for
+    bit)."""
+    M = poses.shape[0]
+    out = np.empty((M, 3))
+    d = np.empty(3)
+    for m in range(M):
+        for j in range(3):
+            d[j] = delta[j] + (noise[m, j] + z_jitter[m, j] * jitter[j])
+        c = math.cos(poses[m, 2])
+        s = math.sin(poses[m, 2])
+        out[m, 0] = poses[m, 0] + c * d[0] - s * d[1]
+        out[m, 1] = poses[m, 1] + s * d[0] + c * d[1]
+        out[m, 2] = wrap_float(poses[m, 2] + d[2])
+    return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def merge_kernel(
+    pa: IntArray,
+    pb: IntArray,
+    w_pair: FloatArray,
+    mu: FloatArray,
+    P: FloatArray,
+    born: FloatArray,
+    conf: IntArray,
+    conf_t: FloatArray,
+    fit_m: FloatArray,
+    fit_n: FloatArray,
+    mem_w: FloatArray,
+    ids: IntArray,
+    localized_id: int,
+) -> tuple[NDArray[np.bool_], FloatArray, int]:
+    """Merge H Gaussian hypotheses, heaviest first, in place (see
+    ``Tracker._merge_and_prune``): each hypothesis ``i`` still alive absorbs the hypotheses
+    ``pb`` of its pairs ``(i, pb)`` (``pa`` sorted, ``pb > pa``) that are still alive, by
+    moment matching with weights ``w_pair`` (the absorbed one's mass over ``i``'s); the
+    lineage keeps the earliest birth, the most confirmations and the latest confirmation.
+
+    Returns which hypotheses are still alive, each absorber's summed relative mass (1 where
+    nothing was absorbed: its log is what its ln mass grows by) and the localized place's
+    id (``localized_id`` -1: none), taken over by the absorber of a hypothesis of that id."""
+    H = mu.shape[0]
+    alive = np.ones(H, dtype=np.bool_)
+    total = np.ones(H)
+    grp = np.empty(H, dtype=np.int64)
+    w = np.empty(H)
+    d = np.empty((H, 3))
+    mean = np.empty(3)
+    n_pairs = pa.shape[0]
+    K = mem_w.shape[1]
+    k = 0
+    while k < n_pairs:
+        i = pa[k]
+        e = k
+        while e < n_pairs and pa[e] == i:
+            e += 1
+        if alive[i]:
+            grp[0] = i
+            w[0] = 1.0
+            n = 1
+            for q in range(k, e):
+                j = pb[q]
+                if alive[j]:
+                    grp[n] = j
+                    w[n] = w_pair[q]
+                    n += 1
+            if n > 1:
+                s = 0.0
+                for a in range(n):
+                    s += w[a]
+                total[i] = s
+                for a in range(n):
+                    w[a] = w[a] / s
+                for c in range(3):
+                    mean[c] = 0.0
+                for a in range(n):
+                    g = grp[a]
+                    d[a, 0] = mu[g, 0] - mu[i, 0]
+                    d[a, 1] = mu[g, 1] - mu[i, 1]
+                    d[a, 2] = wrap_float(mu[g, 2] - mu[i, 2])
+                    for c in range(3):
+                        mean[c] += w[a] * d[a, c]
+                for r in range(3):
+                    for c in range(3):
+                        acc = 0.0
+                        for a in range(n):
+                            acc += w[a] * P[grp[a], r, c]
+                        spread = 0.0
+                        for a in range(n):
+                            spread += w[a] * (d[a, r] - mean[r]) * (d[a, c] - mean[c])
+                        P[i, r, c] = acc + spread
+                for c in range(3):
+                    mu[i, c] = mu[i, c] + mean[c]
+                mu[i, 2] = wrap_float(mu[i, 2])
+                fm = 0.0
+                fn = 0.0
+                for a in range(n):
+                    fm += w[a] * fit_m[grp[a]]
+                    fn += w[a] * fit_n[grp[a]]
+                for c in range(K):
+                    acc = 0.0
+                    for a in range(n):
+                        acc += w[a] * mem_w[grp[a], c]
+                    mem_w[i, c] = acc
+                fit_m[i] = fm
+                fit_n[i] = fn
+                taken = False
+                for a in range(1, n):
+                    g = grp[a]
+                    born[i] = min(born[i], born[g])
+                    conf[i] = max(conf[i], conf[g])
+                    conf_t[i] = max(conf_t[i], conf_t[g])
+                    if ids[g] == localized_id:
+                        taken = True
+                    alive[g] = False
+                if taken:
+                    localized_id = ids[i]
+        k = e
+    return alive, total, localized_id
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

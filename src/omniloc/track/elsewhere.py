@@ -19,8 +19,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from .._kernels.track import covered_kernel
-from .motion import compose
+from .._kernels.track import covered_kernel, particles_move_kernel
 
 __all__ = ["Elsewhere"]
 
@@ -32,6 +31,7 @@ COVERED_CHI2 = 11.34
 
 #: Jitter added to every particle per frame (m, m, rad), so that resampled copies spread.
 JITTER = (0.01, 0.01, math.radians(0.3))
+_JITTER = np.asarray(JITTER, dtype=np.float64)
 
 
 class Elsewhere:
@@ -81,8 +81,15 @@ class Elsewhere:
         vals, vecs = np.linalg.eigh(0.5 * (Q + Q.T))
         root = vecs * np.sqrt(np.maximum(vals, 0.0))
         noise = self._rng.standard_normal((self.n, 3)) @ root.T
-        noise += self._rng.standard_normal((self.n, 3)) * np.asarray(JITTER)
-        self.poses = compose(self.poses, delta[None, :] + noise)
+        z_jitter = self._rng.standard_normal((self.n, 3))
+        # (compose(poses, delta + noise + jitter) in one compiled pass, bit for bit)
+        self.poses = particles_move_kernel(
+            np.ascontiguousarray(self.poses, dtype=np.float64),
+            np.ascontiguousarray(delta, dtype=np.float64).reshape(3),
+            noise,
+            _JITTER,
+            z_jitter,
+        )
 
     def weigh(self, log_ratio: FloatArray) -> float:
         """Weigh the particles by their frame log-likelihood ratios; returns elsewhere's

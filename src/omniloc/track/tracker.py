@@ -75,7 +75,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
-from .._kernels.track import near_pairs, same_of_pairs
+from .._kernels.track import merge_kernel, near_pairs, same_of_pairs
 from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number, shorten
@@ -684,6 +684,8 @@ class Tracker:
         # by the full tests), and whether the last decision kept a frame.
         self._localized_run = 0
         self._kept = False
+        # The best place's estimate as the last decision made it (index, mean, covariance).
+        self._best_place: tuple[int, FloatArray, FloatArray] | None = None
         # The first frame since the last localized one that was not localized (None while
         # localized): kidnap_watch_s runs from there.
         self._unvouched_t: float | None = None
@@ -968,37 +970,29 @@ class Tracker:
         pa, pb = self._same_pairs(self._mu, self._P, self._mu, self._P)
         later = pb > pa
         pa, pb = pa[later], pb[later]
-        starts = np.searchsorted(pa, np.arange(H + 1))
-        # (Only the hypotheses with a pair can absorb: pa is sorted.)
-        for i in np.unique(pa).tolist():
-            if not alive[i]:
-                continue
-            same = pb[starts[i] : starts[i + 1]]
-            same = same[alive[same]]
-            if same.size == 0:
-                continue
-            grp = np.concatenate([[i], same])
-            w = np.exp(self._logw[grp] - self._logw[i])
-            w = w / w.sum()
-            d = self._mu[grp] - self._mu[i]
-            d[:, 2] = np.asarray(wrap(d[:, 2]))
-            mean = w @ d
-            dd = d - mean
-            self._P[i] = np.einsum("n,nij->ij", w, self._P[grp]) + np.einsum(
-                "n,ni,nj->ij", w, dd, dd
+        if pa.size:
+            # (The heaviest of each group absorbs, so the groups' log-sum-exp is its ln mass
+            # plus the log of the summed mass ratios, the same ratios that weigh the merge.)
+            self._mem_w = np.ascontiguousarray(self._mem_w, dtype=np.float64)
+            self._conf = np.ascontiguousarray(self._conf, dtype=np.int64)
+            alive, total, loc = merge_kernel(
+                pa,
+                pb,
+                np.exp(self._logw[pb] - self._logw[pa]),
+                self._mu,
+                self._P,
+                self._born,
+                self._conf,
+                self._conf_t,
+                self._fit_m,
+                self._fit_n,
+                self._mem_w,
+                self._ids,
+                -1 if self._localized_id is None else self._localized_id,
             )
-            self._mu[i] = self._mu[i] + mean
-            self._mu[i, 2] = float(wrap(self._mu[i, 2]))
-            self._logw[i] = _logsumexp(self._logw[grp])
-            self._born[i] = float(self._born[grp].min())
-            self._conf[i] = int(self._conf[grp].max())
-            self._conf_t[i] = float(self._conf_t[grp].max())
-            self._fit_m[i] = float(w @ self._fit_m[grp])
-            self._fit_n[i] = float(w @ self._fit_n[grp])
-            self._mem_w[i] = w @ self._mem_w[grp]
-            if self._localized_id is not None and np.isin(self._localized_id, self._ids[same]):
-                self._localized_id = int(self._ids[i])
-            alive[same] = False
+            self._logw = self._logw + np.log(total)
+            if self._localized_id is not None:
+                self._localized_id = int(loc)
         idx = np.flatnonzero(alive)
         idx = idx[np.argsort(-self._logw[idx], kind="stable")][: c.max_hypotheses]
         self._keep(idx)
@@ -1428,12 +1422,15 @@ class Tracker:
         """(state, reason, index of the best hypothesis)."""
         c = self.config
         self._kept = False
+        self._best_place = None
         out = math.exp(self._log_out)
         H = self.n_hypotheses
         if H == 0:
             return TrackState.LOST, "no hypothesis explains the recent bearings yet", None
         i = int(np.argmax(self._logw))
-        _, P, mass = self._place_estimate(i)
+        mu_i, P, mass = self._place_estimate(i)
+        # (kept for the estimate of this frame: nothing moves the hypotheses in between)
+        self._best_place = (i, mu_i, P)
         p_tol = within_tolerance(P, c.tolerance_m, c.tolerance_heading)
         p = mass * p_tol
         place = self._place(i)
@@ -1527,7 +1524,11 @@ class Tracker:
             )
             for j, k in enumerate(order)
         )
-        mu, P, _ = self._place_estimate(best)
+        if self._best_place is not None and self._best_place[0] == best:
+            _, mu, P = self._best_place
+        else:
+            mu, P, _ = self._place_estimate(best)
+        self._best_place = None
         if state is TrackState.LOST:
             return TrackEstimate(t, state, reason=reason, kidnapped=kidnapped)
         return TrackEstimate(

@@ -1,0 +1,160 @@
+"""The tracker's compiled steps against the numpy formulas they stand for."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from omniloc._kernels.track import merge_kernel, particles_move_kernel
+from omniloc.angles import wrap
+from omniloc.track.elsewhere import JITTER, Elsewhere
+from omniloc.track.motion import compose
+
+
+@settings(max_examples=60, deadline=None)  # (the first call may compile the kernel)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    m=st.integers(0, 40),
+    scale=st.sampled_from([1e-6, 1e-2, 1.0, 10.0]),
+)
+def test_particles_move_is_numpys_compose_bit_for_bit(seed: int, m: int, scale: float) -> None:
+    rng = np.random.default_rng(seed)
+    poses = np.column_stack(
+        [rng.uniform(-10, 10, m), rng.uniform(-10, 10, m), rng.uniform(-math.pi, math.pi, m)]
+    )
+    delta = rng.normal(scale=scale, size=3)
+    noise = rng.normal(scale=scale, size=(m, 3))
+    z_jitter = rng.normal(size=(m, 3))
+    jitter = np.asarray(JITTER)
+    expect = compose(poses, delta[None, :] + (noise + z_jitter * jitter))
+    got = particles_move_kernel(poses, delta, noise, jitter, z_jitter)
+    assert got.shape == (m, 3)
+    assert np.array_equal(got, expect)
+
+
+def test_elsewhere_moves_its_particles_by_the_odometry_and_its_own_draws() -> None:
+    region = (-1.0, 5.0, -2.0, 3.0)
+    e = Elsewhere(region, 500, 0.01, seed=7)
+    twin = Elsewhere(region, 500, 0.01, seed=7)
+    before = e.poses.copy()
+    delta = np.array([0.05, 0.01, 0.02])
+    Q = np.array([[1e-4, 1e-6, 0.0], [1e-6, 4e-5, 2e-6], [0.0, 2e-6, 3e-5]])
+    e.move(delta, Q)
+    # the same draws, in the same order, through numpy
+    vals, vecs = np.linalg.eigh(0.5 * (Q + Q.T))
+    root = vecs * np.sqrt(np.maximum(vals, 0.0))
+    r = twin._rng
+    noise = r.standard_normal((500, 3)) @ root.T
+    noise += r.standard_normal((500, 3)) * np.asarray(JITTER)
+    assert np.array_equal(e.poses, compose(before, delta[None, :] + noise))
+
+
+def _merge_reference(
+    mu: np.ndarray,
+    P: np.ndarray,
+    logw: np.ndarray,
+    rest: dict[str, np.ndarray],
+    pa: np.ndarray,
+    pb: np.ndarray,
+    ids: np.ndarray,
+    localized: int | None,
+) -> tuple[np.ndarray, int | None]:
+    """The merge as numpy wrote it before it was compiled (in place; returns alive and the
+    localized id)."""
+    H = mu.shape[0]
+    alive = np.ones(H, dtype=bool)
+    starts = np.searchsorted(pa, np.arange(H + 1))
+    for i in np.unique(pa).tolist():
+        if not alive[i]:
+            continue
+        same = pb[starts[i] : starts[i + 1]]
+        same = same[alive[same]]
+        if same.size == 0:
+            continue
+        grp = np.concatenate([[i], same])
+        w = np.exp(logw[grp] - logw[i])
+        w = w / w.sum()
+        d = mu[grp] - mu[i]
+        d[:, 2] = np.asarray(wrap(d[:, 2]))
+        mean = w @ d
+        dd = d - mean
+        P[i] = np.einsum("n,nij->ij", w, P[grp]) + np.einsum("n,ni,nj->ij", w, dd, dd)
+        mu[i] = mu[i] + mean
+        mu[i, 2] = float(wrap(mu[i, 2]))
+        top = logw[grp].max()
+        logw[i] = top + math.log(np.exp(logw[grp] - top).sum())
+        rest["born"][i] = rest["born"][grp].min()
+        rest["conf"][i] = rest["conf"][grp].max()
+        rest["conf_t"][i] = rest["conf_t"][grp].max()
+        rest["fit_m"][i] = w @ rest["fit_m"][grp]
+        rest["fit_n"][i] = w @ rest["fit_n"][grp]
+        rest["mem_w"][i] = w @ rest["mem_w"][grp]
+        if localized is not None and np.isin(localized, ids[same]):
+            localized = int(ids[i])
+        alive[same] = False
+    return alive, localized
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), H=st.integers(1, 30), K=st.integers(0, 4))
+def test_merge_kernel_is_the_moment_matching_it_replaces(seed: int, H: int, K: int) -> None:
+    rng = np.random.default_rng(seed)
+    # A few places, several hypotheses at each (headings across the wrap), heaviest first.
+    centres = rng.uniform(-3, 3, (3, 3))
+    mu = centres[rng.integers(0, 3, H)] + rng.normal(scale=0.05, size=(H, 3))
+    mu[:, 2] = np.asarray(wrap(mu[:, 2] + math.pi))
+    A = rng.normal(scale=0.1, size=(H, 3, 3))
+    P = A @ np.swapaxes(A, 1, 2) + 1e-3 * np.eye(3)
+    logw = np.sort(rng.normal(size=H))[::-1].copy()
+    rest = {
+        "born": rng.uniform(0, 100, H),
+        "conf": rng.integers(0, 5, H).astype(np.int64),
+        "conf_t": rng.uniform(0, 100, H),
+        "fit_m": rng.uniform(0, 5, H),
+        "fit_n": rng.uniform(5, 10, H),
+        "mem_w": rng.uniform(0, 1, (H, K)),
+    }
+    ids = rng.integers(0, max(1, H // 2), H).astype(np.int64)  # split copies share an id
+    localized = int(ids[rng.integers(0, H)]) if rng.uniform() < 0.7 else None
+    # pairs (a, b), a < b, ordered: those of nearby hypotheses
+    d = mu[:, None, :2] - mu[None, :, :2]
+    near = np.hypot(d[..., 0], d[..., 1]) < 0.08
+    pa, pb = np.nonzero(np.triu(near, 1))
+    pa, pb = pa.astype(np.int64), pb.astype(np.int64)
+
+    mu0, P0, lw0 = mu.copy(), P.copy(), logw.copy()
+    rest0 = {k: v.copy() for k, v in rest.items()}
+    alive_ref, loc_ref = _merge_reference(mu0, P0, lw0, rest0, pa, pb, ids, localized)
+
+    alive, total, loc = merge_kernel(
+        pa,
+        pb,
+        np.exp(logw[pb] - logw[pa]),
+        mu,
+        P,
+        rest["born"],
+        rest["conf"],
+        rest["conf_t"],
+        rest["fit_m"],
+        rest["fit_n"],
+        rest["mem_w"],
+        ids,
+        -1 if localized is None else localized,
+    )
+    logw = logw + np.log(total)
+    assert np.array_equal(alive, alive_ref)
+    assert (None if localized is None else int(loc)) == loc_ref
+    keep = alive_ref
+    np.testing.assert_allclose(mu[keep], mu0[keep], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(P[keep], P0[keep], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(logw[keep], lw0[keep], rtol=0, atol=1e-12)
+    for k in ("born", "conf", "conf_t"):
+        assert np.array_equal(rest[k][keep], rest0[k][keep]), k
+    for k in ("fit_m", "fit_n", "mem_w"):
+        np.testing.assert_allclose(rest[k][keep], rest0[k][keep], rtol=0, atol=1e-12)
+    # hypotheses that absorbed nothing are as they were
+    untouched = total == 1.0
+    assert np.array_equal(mu[untouched & keep], mu0[untouched & keep])
