@@ -24,6 +24,7 @@ __all__ = [
     "move_kernel",
     "near_pairs",
     "particles_move_kernel",
+    "refine_frames_kernel",
     "same_of_pairs",
 ]
 
@@ -273,6 +274,112 @@ def merge_kernel(
                     localized_id = ids[i]
         k = e
     return alive, total, localized_id
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def refine_frames_kernel(
+    L: FloatArray,
+    rel: FloatArray,
+    z: FloatArray,
+    lm: IntArray,
+    poses: FloatArray,
+    sigma: float,
+    iterations: int,
+) -> tuple[FloatArray, FloatArray]:
+    """Gauss-Newton on C candidate poses (C, 3) of the last frame (see
+    :func:`omniloc.track.relocalize.refine_on_frames`, which says what it means): bearing
+    ``b`` (``z[b]``) seen from the candidate composed with ``rel[b]`` (the odometry from its
+    frame to the last), of landmark row ``lm[c, b]`` (-1: clutter, left out). Returns the
+    refined poses and ``sigma^2 (J^T J)^-1``; a candidate whose pairs do not fix the pose
+    (``|det J^T J|`` at most 1e-12) or whose result is not finite keeps its pose, with
+    ``diag(1, 1, 0.1)``."""
+    C = poses.shape[0]
+    n = z.shape[0]
+    T = poses.copy()
+    covs = np.zeros((C, 3, 3))
+    for k in range(C):
+        x = T[k, 0]
+        y = T[k, 1]
+        t = T[k, 2]
+        h00 = h01 = h02 = h11 = h12 = h22 = 0.0
+        for _ in range(iterations):
+            c = math.cos(t)
+            s = math.sin(t)
+            h00 = h01 = h02 = h11 = h12 = h22 = 0.0
+            g0 = g1 = g2 = 0.0
+            for b in range(n):
+                j = lm[k, b]
+                if j < 0:
+                    continue
+                tx = rel[b, 0]
+                ty = rel[b, 1]
+                px = x + c * tx - s * ty
+                py = y + s * tx + c * ty
+                dx = L[j, 0] - px
+                dy = L[j, 1] - py
+                q = max(dx * dx + dy * dy, 1e-12)
+                r = wrap_float(z[b] - (math.atan2(dy, dx) - (t + rel[b, 2])))
+                j0 = dy / q
+                j1 = -dx / q
+                j2 = j0 * (-s * tx - c * ty) + j1 * (c * tx - s * ty) - 1.0
+                h00 += j0 * j0
+                h01 += j0 * j1
+                h02 += j0 * j2
+                h11 += j1 * j1
+                h12 += j1 * j2
+                h22 += j2 * j2
+                g0 += j0 * r
+                g1 += j1 * r
+                g2 += j2 * r
+            s0 = s1 = s2 = 0.0
+            if abs(det3(h00, h01, h02, h11, h12, h22)) > 1e-12:
+                c00, c01, c02, c11, c12, c22, _ = inv3(h00, h01, h02, h11, h12, h22, 1.0, 0.0)
+                # (a step that is not finite is not taken, coordinate by coordinate)
+                s0 = c00 * g0 + c01 * g1 + c02 * g2
+                s1 = c01 * g0 + c11 * g1 + c12 * g2
+                s2 = c02 * g0 + c12 * g1 + c22 * g2
+                s0 = s0 if math.isfinite(s0) else 0.0
+                s1 = s1 if math.isfinite(s1) else 0.0
+                s2 = s2 if math.isfinite(s2) else 0.0
+            x += s0
+            y += s1
+            t = wrap_float(t + s2)
+        good = (
+            abs(det3(h00, h01, h02, h11, h12, h22)) > 1e-12
+            and math.isfinite(x)
+            and math.isfinite(y)
+            and math.isfinite(t)
+        )
+        c00 = c01 = c02 = c11 = c12 = c22 = 0.0
+        if good:
+            v = sigma * sigma
+            c00, c01, c02, c11, c12, c22, _ = inv3(h00, h01, h02, h11, h12, h22, v, 0.0)
+            good = (
+                math.isfinite(c00)
+                and math.isfinite(c01)
+                and math.isfinite(c02)
+                and math.isfinite(c11)
+                and math.isfinite(c12)
+                and math.isfinite(c22)
+            )
+        if good:
+            T[k, 0] = x
+            T[k, 1] = y
+            T[k, 2] = t
+            covs[k, 0, 0] = c00
+            covs[k, 0, 1] = c01
+            covs[k, 1, 0] = c01
+            covs[k, 0, 2] = c02
+            covs[k, 2, 0] = c02
+            covs[k, 1, 1] = c11
+            covs[k, 1, 2] = c12
+            covs[k, 2, 1] = c12
+            covs[k, 2, 2] = c22
+        else:
+            covs[k, 0, 0] = 1.0
+            covs[k, 1, 1] = 1.0
+            covs[k, 2, 2] = 0.1
+    return T, covs
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

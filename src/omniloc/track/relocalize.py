@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..angles import wrap
+from .._kernels.track import refine_frames_kernel
 from ..errors import OmnilocError
 from ..maps import LandmarkMap
 from ..search import localize
@@ -179,7 +179,6 @@ def refine_on_frames(
         keeps its pose, with a wide covariance).
     """
     C = poses.shape[0]
-    wide = np.diag([1.0, 1.0, 0.1])
     if C == 0:
         return poses, np.zeros((0, 3, 3))
     ref = frames[-1].odom
@@ -190,41 +189,12 @@ def refine_on_frames(
     use = member >= 0
     rel, z, member = rel[use], z[use], member[use]
     lm = np.where(member[None, :] >= 0, assign[:, member], -1)  # (C, n)
-    ok = lm >= 0
-    Lx = np.where(ok, landmarks_xy[np.maximum(lm, 0), 0], 0.0)
-    Ly = np.where(ok, landmarks_xy[np.maximum(lm, 0), 1], 0.0)
-    T = poses.copy()
-    tx, ty, phi = rel[:, 0], rel[:, 1], rel[:, 2]
-    info = np.zeros((C, 3, 3))
-    for _ in range(iterations):
-        c, s_ = np.cos(T[:, 2])[:, None], np.sin(T[:, 2])[:, None]
-        px = T[:, 0:1] + c * tx - s_ * ty
-        py = T[:, 1:2] + s_ * tx + c * ty
-        dx, dy = Lx - px, Ly - py
-        q = np.maximum(dx * dx + dy * dy, 1e-12)
-        h = np.arctan2(dy, dx) - (T[:, 2:3] + phi)
-        r = np.where(ok, np.asarray(wrap(z - h)), 0.0)
-        J = np.empty((C, z.size, 3))
-        J[..., 0] = dy / q
-        J[..., 1] = -dx / q
-        dpx = -s_ * tx - c * ty
-        dpy = c * tx - s_ * ty
-        J[..., 2] = J[..., 0] * dpx + J[..., 1] * dpy - 1.0
-        J[~ok] = 0.0
-        info = np.einsum("cni,cnj->cij", J, J)
-        g = np.einsum("cni,cn->ci", J, r)
-        good = np.abs(np.linalg.det(info)) > 1e-12
-        step = np.zeros((C, 3))
-        if good.any():
-            step[good] = np.linalg.solve(info[good], g[good][..., None])[..., 0]
-        step = np.where(np.isfinite(step), step, 0.0)
-        T = T + step
-        T[:, 2] = np.asarray(wrap(T[:, 2]))
-    covs = np.repeat(wide[None], C, axis=0)
-    good = (np.abs(np.linalg.det(info)) > 1e-12) & np.isfinite(T).all(axis=1)
-    if good.any():
-        covs[good] = sigma * sigma * np.linalg.inv(info[good])
-    bad = ~good | ~np.isfinite(covs).all(axis=(1, 2))
-    T[bad] = poses[bad]
-    covs[bad] = wide
-    return T, covs
+    return refine_frames_kernel(
+        np.ascontiguousarray(landmarks_xy, dtype=np.float64),
+        np.ascontiguousarray(rel, dtype=np.float64),
+        np.ascontiguousarray(z, dtype=np.float64),
+        np.ascontiguousarray(lm, dtype=np.int64),
+        np.ascontiguousarray(poses, dtype=np.float64),
+        float(sigma),
+        int(iterations),
+    )
