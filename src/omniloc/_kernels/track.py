@@ -398,6 +398,12 @@ def _reading(share: float, rho: float, nu: float, S: float, norm: float) -> floa
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _reading_root(share: float, rho: float, nu: float, S: float, root: float, norm: float) -> float:
+    """:func:`_reading` with ``math.sqrt(S)`` given (``root``), bit for bit."""
+    return share * rho * _exp(-0.5 * nu * nu / S) / root * norm
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _in_view(e: float, sd: float) -> float:
     """The probability that a bearing predicted ``e`` radians inside the edge of the view
     (negative: outside), with standard deviation ``sd``, is in view: ``0.5 erfc(-e / (sd
@@ -427,11 +433,13 @@ def _predict_one(
     var: FloatArray,
     d: FloatArray,
     tan_out: float,
+    exact: bool,
 ) -> None:
     """One hypothesis's predicted bearings ``h``, their Jacobians ``J`` (N, 3), variances
     from the pose ``var`` and detection probabilities ``d``, written in place
     (``half_fov`` < 0: no field of view). For a landmark out of range only ``d`` (0) is
-    written.
+    written. ``exact`` (``P`` zero, an exactly known pose): ``J`` is not written and every
+    variance is 0.
 
     ``tan_out`` >= 0 (an exactly known pose, ``P`` zero, and a field of view narrower than
     a half turn): a landmark whose direction is more than ``atan(tan_out)`` (a shade beyond
@@ -454,14 +462,19 @@ def _predict_one(
                 d[n] = 0.0
                 continue
         h[n] = wrap_float(math.atan2(dy, dx) - mu[2])
-        J[n, 0] = dy / q
-        J[n, 1] = -dx / q
-        J[n, 2] = -1.0
-        v = 0.0
-        for i in range(3):
-            for j in range(3):
-                v += J[n, i] * P[i, j] * J[n, j]
-        var[n] = max(v, 0.0)
+        if exact:
+            # (An exactly known pose: no Jacobian is read, and the variance from the pose is
+            # 0, what J 0 J^T gives.)
+            var[n] = 0.0
+        else:
+            J[n, 0] = dy / q
+            J[n, 1] = -dx / q
+            J[n, 2] = -1.0
+            v = 0.0
+            for i in range(3):
+                for j in range(3):
+                    v += J[n, i] * P[i, j] * J[n, j]
+            var[n] = max(v, 0.0)
         if half_fov < 0.0:
             vis = 1.0
         elif var[n] == 0.0:
@@ -566,6 +579,10 @@ def frame_update_kernel(
     mean = np.empty(3)
     M = np.empty((3, 3))
     norm = 1.0 / (math.sqrt(2.0 * math.pi) * kappa)
+    # (0 + sigma2 is sigma2: an exactly known pose's readings use these roots, bit for bit
+    # the ones _reading takes.)
+    root_wide = math.sqrt(sigma2)
+    root_core = math.sqrt(core_sigma2)
     # Exactly known poses and a view narrower than a half turn: the cheap test of who is out
     # of view (see _predict_one), with a margin of 1e-7 rad beyond the edge.
     edge = half_fov + 1e-7
@@ -583,7 +600,20 @@ def frame_update_kernel(
         m = mu[k]
         C = P[k]
         _predict_one(
-            m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d, tan_out
+            m,
+            C,
+            L,
+            p_detect,
+            half_fov,
+            max_range2,
+            min_range2,
+            min_q,
+            h,
+            J,
+            var,
+            d,
+            tan_out,
+            not update,
         )
         s = 0.0
         for n in range(N):
@@ -609,7 +639,20 @@ def frame_update_kernel(
             z = bearings[iz]
             if update and moved:
                 _predict_one(
-                    m, C, L, p_detect, half_fov, max_range2, min_range2, min_q, h, J, var, d, -1.0
+                    m,
+                    C,
+                    L,
+                    p_detect,
+                    half_fov,
+                    max_range2,
+                    min_range2,
+                    min_q,
+                    h,
+                    J,
+                    var,
+                    d,
+                    -1.0,
+                    False,
                 )
                 moved = False
             base = fresh
@@ -631,6 +674,16 @@ def frame_update_kernel(
                     if miss_weight == 1.0
                     else d[n] / max((1.0 - d[n]) ** miss_weight, 1e-12)
                 )
+                if not update:
+                    # An exactly known pose: the variances are the sensor's (var 0), their
+                    # square roots taken once; the readings are not kept (nothing moves).
+                    if core_share > 0.0:
+                        total += _reading_root(
+                            wide, rho, nu[n], sigma2, root_wide, norm
+                        ) + _reading_root(core_share, rho, nu[n], core_sigma2, root_core, norm)
+                    else:
+                        total += _reading_root(1.0, rho, nu[n], sigma2, root_wide, norm)
+                    continue
                 if core_share > 0.0:
                     a[n] = _reading(wide, rho, nu[n], S, norm)
                     ac[n] = _reading(core_share, rho, nu[n], var[n] + core_sigma2, norm)
