@@ -519,8 +519,9 @@ def frame_update_kernel(
     hypothesis updated by the mixture of each bearing's readings, one bearing at a time
     (see :mod:`omniloc.track.likelihood`), and each bearing's posterior probability of
     being clutter (H, k).
-    ``update`` False: exactly known poses (particles, ``P`` zero), which no bearing moves --
-    the ratio only, from one prediction per pose.
+    ``update`` False: exactly known poses (particles, ``P`` zero: one (1, 3, 3) zero matrix
+    is enough), which no bearing moves -- the ratio only, from one prediction per pose;
+    ``mu`` and ``P`` are returned as given.
 
     Clutter with memory: the clutter density at a bearing is ``kappa`` times ``fresh`` plus,
     for each object ``o`` of the previous frame (its bearing ``obj_b[o]`` in this frame, its
@@ -548,8 +549,10 @@ def frame_update_kernel(
     frames with a detection); with at least one bearing, its likelihood (and the null's) is
     conditioned on that: each ratio is multiplied by ``P_null(some bearing) / P_k(some
     bearing)``, where ``P_k(no bearing) = prod (1 - d_n) exp(-clutter expected)``."""
-    mu = mu.copy()
-    P = P.copy() if update else P  # (exactly known poses: P is neither changed nor read back)
+    # (Exactly known poses: neither mu nor P is changed, and P may be a single zero
+    # covariance shared by every pose.)
+    mu = mu.copy() if update else mu
+    P = P.copy() if update else P
     H = mu.shape[0]
     N = L.shape[0]
     K = obj_b.shape[0]
@@ -598,7 +601,7 @@ def frame_update_kernel(
             obj_g[iz, o] = _exp(-0.5 * e * e / obj_var)
     for k in range(H):
         m = mu[k]
-        C = P[k]
+        C = P[k] if update else P[0]
         _predict_one(
             m,
             C,

@@ -60,6 +60,11 @@ FloatArray = NDArray[np.float64]
 #: share of the mixture is negligible).
 MIN_READING_PROBABILITY = 1e-6
 
+#: The covariance of exactly known poses (particles): one zero matrix, which the compiled
+#: kernel reads for every pose when it does not update (``frame_update_kernel``; it is
+#: never written).
+_NO_COVARIANCE = np.zeros((1, 3, 3))
+
 #: From this many hypotheses (or particles) on, a frame runs in two halves side by side (the
 #: compiled kernel releases the GIL; each hypothesis is computed alone, so the results are
 #: the same bit for bit). Below it, a thread's hand-off costs more than it saves.
@@ -257,9 +262,7 @@ def log_ratios_clutter(
     posterior probability of being clutter at each pose, shape (M, k)."""
     if poses.shape[0] == 0:
         return np.zeros(0), np.zeros((0, np.asarray(bearings).size))
-    out = _kernel(
-        poses, np.zeros((poses.shape[0], 3, 3)), bearings, L, model, update=False, objects=objects
-    )
+    out = _kernel(poses, _NO_COVARIANCE, bearings, L, model, update=False, objects=objects)
     return out[2], out[4]
 
 
@@ -312,12 +315,15 @@ def _kernel(
     if pool is None:
         return frame_update_kernel(mu, P, *rest, ow, var)
     half = H // 2
-    first = pool.submit(frame_update_kernel, mu[:half], P[:half], *rest, ow[:half], var)
-    second = frame_update_kernel(mu[half:], P[half:], *rest, ow[half:], var)
+    # (Exactly known poses: P is the one zero covariance, shared by both halves; mu and P
+    # come back as they were given.)
+    Pa, Pb = (P[:half], P[half:]) if update else (P, P)
+    first = pool.submit(frame_update_kernel, mu[:half], Pa, *rest, ow[:half], var)
+    second = frame_update_kernel(mu[half:], Pb, *rest, ow[half:], var)
     a = first.result()
     return (
-        np.concatenate([a[0], second[0]]),
-        np.concatenate([a[1], second[1]]),
+        np.concatenate([a[0], second[0]]) if update else mu,
+        np.concatenate([a[1], second[1]]) if update else P,
         np.concatenate([a[2], second[2]]),
         np.concatenate([a[3], second[3]]),
         np.concatenate([a[4], second[4]]),
@@ -343,4 +349,4 @@ def log_ratios(
     if poses.shape[0] == 0:
         return np.zeros(0)
     # An exactly known pose is a hypothesis without covariance, which no bearing moves.
-    return _kernel(poses, np.zeros((poses.shape[0], 3, 3)), bearings, L, model, update=False)[2]
+    return _kernel(poses, _NO_COVARIANCE, bearings, L, model, update=False)[2]
