@@ -2,7 +2,7 @@
 runs it (the ``mrclam`` preset), elapsed and processor time.
 
 Run:  python benchmarks/track_speed.py [--data PATH] [--robots 1 2 3 4 5] [--repeat N]
-      [--frames N] [--out PATH]
+      [--frames N] [--out PATH] [--against OTHER/src]
 
 The issue's target is a whole ~900 s run in <= 9 s on a 2-core machine (>= 100x real time,
 elapsed). ``omniloc evaluate --dataset mrclam-track`` and ``track_baselines.py`` report
@@ -19,14 +19,24 @@ numpy calls, the mix of the tracker's own per-frame work -- is timed before and 
 runs (the median of 7 each) and written beside them: tables of different days compare by
 it, not by their dates.
 
+With ``--against SRC`` (another checkout's ``src`` folder, e.g. a ``git worktree`` of the
+commit before a change), each robot's run is timed ``--repeat`` times in fresh processes,
+alternating this checkout's ``src`` with ``SRC`` run by run, and the medians are compared:
+the way to tell a change's speed from the machine's (whose load moves a run by 10-20 %
+from one minute to the next). Each process checks that it imported the tree it was given
+(a helper that puts another ``src`` first on the path would otherwise time one tree
+twice). Writes ``results_track_speed_against.json`` then.
+
 Writes ``results_track_speed.json`` and ``.md`` beside this file.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import statistics
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -101,6 +111,88 @@ def reference_ms(repeat: int = 7) -> dict[str, float]:
     return out
 
 
+#: What each process of ``--against`` runs: import omniloc from the tree given, check it,
+#: load the kernels, time one robot, print its row as JSON.
+_ONE_RUN = """
+import json, sys
+from pathlib import Path
+src, here, data, robot, frames = sys.argv[1:6]
+sys.path.insert(0, src)
+import omniloc
+import omniloc.track
+sys.path.insert(1, here)
+import track_speed
+for m in (omniloc, omniloc.track):
+    if not str(Path(m.__file__).resolve()).startswith(str(Path(src).resolve())):
+        raise SystemExit(f"imported {m.__file__}, not from {src}")
+track_speed.run_robot(Path(data), 1, limit=200)
+row = track_speed.run_robot(Path(data), int(robot), None if frames == "-" else int(frames))
+print(json.dumps(row))
+"""
+
+
+def run_in(src: Path, data: Path, robot: int, frames: int | None) -> dict[str, float]:
+    """One robot's run in a fresh process that imports omniloc from ``src``."""
+    out = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            _ONE_RUN,
+            str(src),
+            str(HERE),
+            str(data),
+            str(robot),
+            "-" if frames is None else str(frames),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if out.returncode:
+        raise SystemExit(f"a run with {src} failed:\n{out.stderr[-2000:]}")
+    row: dict[str, float] = json.loads(out.stdout.strip().splitlines()[-1])
+    return row
+
+
+def against(args: argparse.Namespace, argv: list[str] | None) -> int:
+    """``--against``: this checkout's ``src`` and another, alternated run by run."""
+    mine = (HERE.parent / "src").resolve()
+    other = args.against.resolve()
+    if not (other / "omniloc" / "__init__.py").is_file():
+        raise SystemExit(f"--against {args.against}: no omniloc package in it (give a src folder)")
+    n = max(1, args.repeat)
+    out: list[dict[str, object]] = []
+    for r in args.robots:
+        times: dict[str, list[float]] = {"this": [], "other": []}
+        for _ in range(n):
+            for name, src in (("other", other), ("this", mine)):
+                times[name].append(run_in(src, args.data, r, args.frames)["wall_s"])
+        med = {k: statistics.median(v) for k, v in times.items()}
+        change = med["this"] / med["other"] - 1.0
+        print(
+            f"robot{r}: {med['this']:.2f} s here against {med['other']:.2f} s "
+            f"({100 * change:+.1f} %; medians of {n}: here "
+            + ", ".join(f"{t:.2f}" for t in times["this"])
+            + "; other "
+            + ", ".join(f"{t:.2f}" for t in times["other"])
+            + ")"
+        )
+        out.append(
+            {
+                "robot": r,
+                "here_s": times["this"],
+                "other_s": times["other"],
+                "median_here_s": med["this"],
+                "median_other_s": med["other"],
+            }
+        )
+    meta = run_meta("track_speed.py", argv, repeat=n, against=str(other))
+    path = args.out.with_name(args.out.name + "_against").with_suffix(".json")
+    write_results(path, meta, robots=out)
+    print(f"wrote {path}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--data", type=Path, default=DATA, help="the mrclam-ds6 folder")
@@ -108,7 +200,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=1, help="runs of each robot (fastest kept)")
     ap.add_argument("--frames", type=int, default=None, help="only each run's first N frames")
     ap.add_argument("--out", type=Path, default=HERE / "results_track_speed")
+    ap.add_argument(
+        "--against",
+        type=Path,
+        default=None,
+        metavar="SRC",
+        help="another checkout's src folder: alternate runs with it and compare medians",
+    )
     args = ap.parse_args(argv)
+    if args.against is not None:
+        return against(args, argv)
     run_robot(args.data, 1, limit=200)  # loads (or compiles) every kernel: not timed
     before = reference_ms()
     rows = []
