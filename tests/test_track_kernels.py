@@ -240,3 +240,60 @@ def test_refine_kernel_is_the_gauss_newton_it_replaces(seed: int, C: int, n: int
     assert (np.abs(T - T_ref) <= 1e-9 + 1e-4 * sd)[on_map].all()
     size = np.abs(covs_ref).max(axis=(1, 2), initial=0.0)[:, None, None]
     assert (np.abs(covs - covs_ref) <= 1e-4 * size)[on_map].all()
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    N=st.integers(64, 400),
+    reach=st.floats(0.5, 30.0),
+    side=st.floats(1.0, 200.0),
+)
+def test_the_range_grid_hands_out_every_landmark_in_range_in_order(
+    seed: int, N: int, reach: float, side: float
+) -> None:
+    from omniloc._kernels.track import _in_range, _range_grid
+
+    rng = np.random.default_rng(seed)
+    L = rng.uniform(0.0, side, (N, 2))
+    L[: N // 4] = np.round(L[: N // 4] / reach) * reach  # some on the cells' edges
+    grid = _range_grid(L, reach * reach)
+    cand = np.empty(N, dtype=np.int64)
+    for x, y in rng.uniform(-2 * reach, side + 2 * reach, (20, 2)):
+        nc = _in_range(x, y, L, grid, cand)
+        got = cand[:nc]
+        assert np.all(np.diff(got) > 0)  # ascending, no repeats
+        d2 = (L[:, 0] - x) ** 2 + (L[:, 1] - y) ** 2
+        assert set(np.flatnonzero(d2 <= reach * reach).tolist()) <= set(got.tolist())
+
+
+def test_a_large_map_weighs_the_frame_as_a_plain_scan_would() -> None:
+    # The grid (from GRID_MIN landmarks with a range) is a shortcut: one far landmark more
+    # spreads the map so thin that no grid is built, and adds nothing in range -- the two
+    # must agree bit for bit, particles and updated hypotheses alike.
+    from omniloc.track.likelihood import FrameModel, Objects, frame_update_clutter, log_ratios
+
+    rng = np.random.default_rng(3)
+    L = rng.uniform(0.0, 60.0, (2000, 2))
+    far = np.vstack([L, [[1e7, 1e7]]])
+    model = FrameModel(
+        sigma2=np.deg2rad(1.0) ** 2,
+        log_kappa=math.log(0.2 / np.deg2rad(65.0)),
+        p_detect=0.4,
+        half_fov=np.deg2rad(32.5),
+        max_range=7.0,
+        min_range=0.5,
+    )
+    poses = np.column_stack(
+        [rng.uniform(-5, 65, 500), rng.uniform(-5, 65, 500), rng.uniform(-3, 3, 500)]
+    )
+    b = np.array([0.1, -0.3, 0.25])
+    assert np.array_equal(log_ratios(poses, b, L, model), log_ratios(poses, b, far, model))
+    P = np.repeat(np.diag([0.3, 0.3, 0.05])[None], 500, axis=0)
+    ob = Objects(np.array([0.12]), rng.uniform(0, 1, (500, 1)))
+    for x, y in zip(
+        frame_update_clutter(poses, P, b, L, model, ob),
+        frame_update_clutter(poses, P, b, far, model, ob),
+        strict=True,
+    ):
+        assert np.array_equal(x, y)
