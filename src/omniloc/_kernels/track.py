@@ -452,11 +452,15 @@ def _range_grid(L: FloatArray, max_range2: float) -> Grid:
     # (a shade wider than the range: a landmark in range is in the pose's cell or next to it,
     # whatever the rounding)
     cell = math.sqrt(max_range2) * (1.0 + 1e-9) + 1e-12
-    nx = int((x1 - x0) / cell) + 1
-    ny = int((y1 - y0) / cell) + 1
-    if nx * ny > 4 * N + 16 or nx * ny < GRID_MIN_CELLS:
-        # a sparse map over a huge area (the cells would outnumber the landmarks), or a map
-        # within a few ranges (the cells around a pose would hold most of it)
+    fx = (x1 - x0) / cell + 1.0
+    fy = (y1 - y0) / cell + 1.0
+    if fx * fy > 4.0 * N + 16.0:
+        # a sparse map over a huge area: the cells would outnumber the landmarks
+        return 0.0, 0.0, 1.0, 0, 0, empty, empty, max_range2
+    nx = int(fx)
+    ny = int(fy)
+    if nx * ny < GRID_MIN_CELLS:
+        # a map within a few ranges: the cells around a pose would hold most of it
         return 0.0, 0.0, 1.0, 0, 0, empty, empty, max_range2
     ids = np.empty(N, dtype=np.int64)
     count = np.zeros(nx * ny + 1, dtype=np.int64)
