@@ -297,3 +297,16 @@ def test_a_large_map_weighs_the_frame_as_a_plain_scan_would() -> None:
         strict=True,
     ):
         assert np.array_equal(x, y)
+
+
+def test_no_grid_for_a_map_spread_over_a_huge_area_or_without_a_range() -> None:
+    from omniloc._kernels.track import _range_grid
+
+    rng = np.random.default_rng(4)
+    L = rng.uniform(0.0, 50.0, (100, 2))
+    assert _range_grid(L, 49.0)[3] > 0  # a grid: 8 x 8 cells of 7 m
+    for far in (1e7, 1e300):
+        spread = np.vstack([L, [[far, -far]]])
+        assert _range_grid(spread, 49.0)[3] == 0
+    assert _range_grid(L, math.inf)[3] == 0
+    assert _range_grid(L[:10], 49.0)[3] == 0  # below GRID_MIN
