@@ -30,8 +30,6 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-#: The landmarks in cells (see _range_grid).
-Grid = tuple[float, float, float, int, int, IntArray, IntArray, float]
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -420,105 +418,6 @@ def _in_view(e: float, sd: float) -> float:
     return 0.5 * math.erfc(x)
 
 
-#: From this many landmarks on (and with a range), the frame kernel looks only at the
-#: landmarks in the grid cells around a pose (:func:`_range_grid`); below it, at all of them.
-GRID_MIN = 64
-#: ... and from this many cells on (a 3 x 3 block of them is then at most 9/16 of the map).
-GRID_MIN_CELLS = 16
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _range_grid(L: FloatArray, max_range2: float) -> Grid:
-    """The landmarks bucketed in square cells a little wider than the range: ``(x0, y0,
-    cell, nx, ny, start, order, max_range2)``, the landmarks of cell ``(i, j)`` being
-    ``order[start[i * ny + j]:start[i * ny + j + 1]]`` in ascending order. ``nx`` 0: no grid
-    (no range, fewer than GRID_MIN landmarks, or a map so sparse that the cells would
-    outnumber its landmarks)."""
-    N = L.shape[0]
-    empty = np.zeros(1, dtype=np.int64)
-    if N < GRID_MIN or not max_range2 < math.inf or not max_range2 > 0.0:
-        return 0.0, 0.0, 1.0, 0, 0, empty, empty, max_range2
-    x0 = L[0, 0]
-    y0 = L[0, 1]
-    x1 = x0
-    y1 = y0
-    for n in range(N):
-        x0 = min(x0, L[n, 0])
-        x1 = max(x1, L[n, 0])
-        y0 = min(y0, L[n, 1])
-        y1 = max(y1, L[n, 1])
-    if not (math.isfinite(x0) and math.isfinite(x1) and math.isfinite(y0) and math.isfinite(y1)):
-        return 0.0, 0.0, 1.0, 0, 0, empty, empty, max_range2
-    # (a shade wider than the range: a landmark in range is in the pose's cell or next to it,
-    # whatever the rounding)
-    cell = math.sqrt(max_range2) * (1.0 + 1e-9) + 1e-12
-    fx = (x1 - x0) / cell + 1.0
-    fy = (y1 - y0) / cell + 1.0
-    if fx * fy > 4.0 * N + 16.0:
-        # a sparse map over a huge area: the cells would outnumber the landmarks
-        return 0.0, 0.0, 1.0, 0, 0, empty, empty, max_range2
-    nx = int(fx)
-    ny = int(fy)
-    if nx * ny < GRID_MIN_CELLS:
-        # a map within a few ranges: the cells around a pose would hold most of it
-        return 0.0, 0.0, 1.0, 0, 0, empty, empty, max_range2
-    ids = np.empty(N, dtype=np.int64)
-    count = np.zeros(nx * ny + 1, dtype=np.int64)
-    for n in range(N):
-        i = min(int((L[n, 0] - x0) / cell), nx - 1)
-        j = min(int((L[n, 1] - y0) / cell), ny - 1)
-        ids[n] = i * ny + j
-        count[ids[n] + 1] += 1
-    start = np.cumsum(count)
-    fill = start[:-1].copy()
-    order = np.empty(N, dtype=np.int64)
-    for n in range(N):  # (in ascending order within each cell)
-        order[fill[ids[n]]] = n
-        fill[ids[n]] += 1
-    return x0, y0, cell, nx, ny, start, order, max_range2
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _in_range(
-    x: float,
-    y: float,
-    L: FloatArray,
-    grid: Grid,
-    cand: IntArray,
-) -> int:
-    """Write into ``cand`` the landmarks that may be in range of ``(x, y)``, in ascending
-    order (all of them without a grid; with one, those of the 3 x 3 cells around it: every
-    landmark in range is among them, and the others contribute nothing to a frame's
-    likelihood, so the sums over them are the same, bit for bit). Returns their number."""
-    x0, y0, cell, nx, ny, start, order, reach2 = grid
-    if nx == 0 or not (math.isfinite(x) and math.isfinite(y)):
-        for n in range(L.shape[0]):
-            cand[n] = n
-        return L.shape[0]
-    fi = math.floor((x - x0) / cell)
-    fj = math.floor((y - y0) / cell)
-    nc = 0
-    if fi < -1.0 or fj < -1.0 or fi > nx or fj > ny:
-        return 0
-    ci = int(fi)
-    cj = int(fj)
-    for i in range(max(ci - 1, 0), min(ci + 1, nx - 1) + 1):
-        for j in range(max(cj - 1, 0), min(cj + 1, ny - 1) + 1):
-            c = i * ny + j
-            for q in range(start[c], start[c + 1]):
-                n = order[q]
-                # (the squared distance as _predict_one computes it before its range test:
-                # a landmark dropped here is one it drops; fewer to put in order)
-                dx = L[n, 0] - x
-                dy = L[n, 1] - y
-                if dx * dx + dy * dy > reach2:
-                    continue
-                cand[nc] = n
-                nc += 1
-    cand[:nc].sort()
-    return nc
-
-
 @njit(cache=True, error_model="numpy", nogil=True)
 def _predict_one(
     mu: FloatArray,
@@ -535,15 +434,12 @@ def _predict_one(
     d: FloatArray,
     tan_out: float,
     exact: bool,
-    cand: IntArray,
-    nc: int,
 ) -> None:
     """One hypothesis's predicted bearings ``h``, their Jacobians ``J`` (N, 3), variances
     from the pose ``var`` and detection probabilities ``d``, written in place
     (``half_fov`` < 0: no field of view). For a landmark out of range only ``d`` (0) is
     written. ``exact`` (``P`` zero, an exactly known pose): ``J`` is not written and every
-    variance is 0. Only the landmarks ``cand[:nc]`` are looked at (the others are out of
-    range: see :func:`_in_range`).
+    variance is 0.
 
     ``tan_out`` >= 0 (an exactly known pose, ``P`` zero, and a field of view narrower than
     a half turn): a landmark whose direction is more than ``atan(tan_out)`` (a shade beyond
@@ -552,8 +448,7 @@ def _predict_one(
     results are the same, bit for bit."""
     c = math.cos(mu[2]) if tan_out >= 0.0 else 1.0
     s = math.sin(mu[2]) if tan_out >= 0.0 else 0.0
-    for ci in range(nc):
-        n = cand[ci]
+    for n in range(L.shape[0]):
         dx = L[n, 0] - mu[0]
         dy = L[n, 1] - mu[1]
         q = max(dx * dx + dy * dy, min_q)
@@ -661,8 +556,6 @@ def frame_update_kernel(
     H = mu.shape[0]
     N = L.shape[0]
     K = obj_b.shape[0]
-    grid = _range_grid(L, max_range2)
-    cand = np.empty(N, dtype=np.int64)
     log_ratio = np.zeros(H)
     explained = np.zeros(H)
     clutter_post = np.zeros((H, bearings.shape[0]))
@@ -709,7 +602,6 @@ def frame_update_kernel(
     for k in range(H):
         m = mu[k]
         C = P[k] if update else P[0]
-        nc = _in_range(m[0], m[1], L, grid, cand)
         _predict_one(
             m,
             C,
@@ -725,12 +617,9 @@ def frame_update_kernel(
             d,
             tan_out,
             not update,
-            cand,
-            nc,
         )
         s = 0.0
-        for ci in range(nc):
-            n = cand[ci]
+        for n in range(N):
             if d[n] > 0.0:
                 # (Exactly known poses give every landmark in view the same d: its log1p is
                 # computed once.)
@@ -752,7 +641,6 @@ def frame_update_kernel(
         for iz in range(bearings.shape[0]):
             z = bearings[iz]
             if update and moved:
-                nc = _in_range(m[0], m[1], L, grid, cand)
                 _predict_one(
                     m,
                     C,
@@ -768,8 +656,6 @@ def frame_update_kernel(
                     d,
                     -1.0,
                     False,
-                    cand,
-                    nc,
                 )
                 moved = False
             base = fresh
@@ -777,8 +663,7 @@ def frame_update_kernel(
                 if obj_w[k, o] > 0.0:
                     base += obj_w[k, o] * obj_g[iz, o] * obj_norm
             total = base
-            for ci in range(nc):
-                n = cand[ci]
+            for n in range(N):
                 if d[n] == 0.0:
                     a[n] = 0.0
                     ac[n] = 0.0
@@ -817,8 +702,7 @@ def frame_update_kernel(
             mean[:] = 0.0
             M[:, :] = 0.0  # minus the shrink plus the spread of the readings
             used = False
-            for ci in range(nc):
-                n = cand[ci]
+            for n in range(N):
                 for comp in range(components):
                     if comp == 0:
                         b = (a[n] if components == 2 else a[n] + ac[n]) / total
