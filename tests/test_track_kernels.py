@@ -240,3 +240,33 @@ def test_refine_kernel_is_the_gauss_newton_it_replaces(seed: int, C: int, n: int
     assert (np.abs(T - T_ref) <= 1e-9 + 1e-4 * sd)[on_map].all()
     size = np.abs(covs_ref).max(axis=(1, 2), initial=0.0)[:, None, None]
     assert (np.abs(covs - covs_ref) <= 1e-4 * size)[on_map].all()
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), H=st.integers(1, 20))
+def test_a_places_estimate_is_the_moment_matching_of_its_hypotheses(seed: int, H: int) -> None:
+    from omniloc._kernels.track import place_kernel
+
+    rng = np.random.default_rng(seed)
+    mu = np.column_stack(
+        [rng.normal(scale=0.1, size=(H, 2)), np.asarray(wrap(math.pi + rng.normal(0, 0.05, H)))]
+    )
+    A = rng.normal(scale=0.1, size=(H, 3, 3))
+    P = A @ np.swapaxes(A, 1, 2) + 1e-3 * np.eye(3)
+    near = np.sort(rng.choice(H, size=int(rng.integers(1, H + 1)), replace=False))
+    i = int(near[0])
+    w = np.exp(rng.normal(size=near.size))
+    # numpy, as _place_estimate wrote it before it was compiled
+    wn = w / w.sum()
+    d = mu[near] - mu[i]
+    d[:, 2] = np.asarray(wrap(d[:, 2]))
+    mean = wn @ d
+    dd = d - mean
+    P_ref = np.einsum("n,nij->ij", wn, P[near]) + np.einsum("n,ni,nj->ij", wn, dd, dd)
+    mu_ref = mu[i] + mean
+    mu_ref[2] = float(wrap(mu_ref[2]))
+    w0 = w.copy()
+    got_mu, got_P = place_kernel(near, w, mu, P, i)
+    np.testing.assert_allclose(got_mu, mu_ref, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(got_P, P_ref, rtol=0, atol=1e-12)
+    assert np.array_equal(w, w0)  # the weights given are left as they were

@@ -24,6 +24,7 @@ __all__ = [
     "move_kernel",
     "near_pairs",
     "particles_move_kernel",
+    "place_kernel",
     "refine_frames_kernel",
     "same_of_pairs",
 ]
@@ -96,6 +97,18 @@ def integrate_pieces(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _compose_into(
+    out: FloatArray, k: int, pose: FloatArray, c: float, s: float, d0: float, d1: float, d2: float
+) -> None:
+    """``out[k] = pose (+) (d0, d1, d2)`` for a pose whose heading has cosine ``c`` and sine
+    ``s`` (the heading wrapped): :func:`omniloc.track.motion.compose`'s formula, bit for
+    bit."""
+    out[k, 0] = pose[0] + c * d0 - s * d1
+    out[k, 1] = pose[1] + s * d0 + c * d1
+    out[k, 2] = wrap_float(pose[2] + d2)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def move_kernel(
     poses: FloatArray, covs: FloatArray, delta: FloatArray, Q: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
@@ -115,9 +128,7 @@ def move_kernel(
     for k in range(H):
         c = math.cos(poses[k, 2])
         s = math.sin(poses[k, 2])
-        new[k, 0] = poses[k, 0] + c * dx - s * dy
-        new[k, 1] = poses[k, 1] + s * dx + c * dy
-        new[k, 2] = wrap_float(poses[k, 2] + delta[2])
+        _compose_into(new, k, poses[k], c, s, dx, dy, delta[2])
         _jacobians(c, s, dx, dy, Jp, Jd)
         for i in range(3):
             for j in range(3):
@@ -163,12 +174,64 @@ def particles_move_kernel(
     for m in range(M):
         for j in range(3):
             d[j] = delta[j] + (noise[m, j] + z_jitter[m, j] * jitter[j])
-        c = math.cos(poses[m, 2])
-        s = math.sin(poses[m, 2])
-        out[m, 0] = poses[m, 0] + c * d[0] - s * d[1]
-        out[m, 1] = poses[m, 1] + s * d[0] + c * d[1]
-        out[m, 2] = wrap_float(poses[m, 2] + d[2])
+        _compose_into(
+            out, m, poses[m], math.cos(poses[m, 2]), math.sin(poses[m, 2]), d[0], d[1], d[2]
+        )
     return out
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _moment_match(
+    grp: IntArray, n: int, w: FloatArray, mu: FloatArray, P: FloatArray, i: int, d: FloatArray
+) -> tuple[float, float, float, FloatArray]:
+    """The Gaussian that matches the mixture of hypotheses ``grp[:n]`` (means ``mu``,
+    covariances ``P``) with weights ``w[:n]`` (normalised here, in place), about hypothesis
+    ``i``: the mean's offset from ``mu[i]`` (heading differences wrapped) and the covariance
+    (the weighted covariances plus the spread of the means). ``d`` (at least (n, 3)) is
+    scratch, left holding each member's offset."""
+    s = 0.0
+    for a in range(n):
+        s += w[a]
+    for a in range(n):
+        w[a] = w[a] / s
+    m0 = m1 = m2 = 0.0
+    for a in range(n):
+        g = grp[a]
+        d[a, 0] = mu[g, 0] - mu[i, 0]
+        d[a, 1] = mu[g, 1] - mu[i, 1]
+        d[a, 2] = wrap_float(mu[g, 2] - mu[i, 2])
+        m0 += w[a] * d[a, 0]
+        m1 += w[a] * d[a, 1]
+        m2 += w[a] * d[a, 2]
+    mean = (m0, m1, m2)
+    cov = np.empty((3, 3))
+    for r in range(3):
+        for c in range(3):
+            acc = 0.0
+            for a in range(n):
+                acc += w[a] * P[grp[a], r, c]
+            spread = 0.0
+            for a in range(n):
+                spread += w[a] * (d[a, r] - mean[r]) * (d[a, c] - mean[c])
+            cov[r, c] = acc + spread
+    return m0, m1, m2, cov
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def place_kernel(
+    near: IntArray, w: FloatArray, mu: FloatArray, P: FloatArray, i: int
+) -> tuple[FloatArray, FloatArray]:
+    """The mean (heading wrapped) and covariance that match the hypotheses ``near`` with
+    weights ``w`` (any positive scale), about hypothesis ``i`` (see :func:`_moment_match`)."""
+    n = near.shape[0]
+    ww = w.copy()
+    d = np.empty((n, 3))
+    m0, m1, m2, cov = _moment_match(near, n, ww, mu, P, i, d)
+    out = np.empty(3)
+    out[0] = mu[i, 0] + m0
+    out[1] = mu[i, 1] + m1
+    out[2] = wrap_float(mu[i, 2] + m2)
+    return out, cov
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -202,7 +265,6 @@ def merge_kernel(
     grp = np.empty(H, dtype=np.int64)
     w = np.empty(H)
     d = np.empty((H, 3))
-    mean = np.empty(3)
     n_pairs = pa.shape[0]
     K = mem_w.shape[1]
     k = 0
@@ -226,29 +288,11 @@ def merge_kernel(
                 for a in range(n):
                     s += w[a]
                 total[i] = s
-                for a in range(n):
-                    w[a] = w[a] / s
-                for c in range(3):
-                    mean[c] = 0.0
-                for a in range(n):
-                    g = grp[a]
-                    d[a, 0] = mu[g, 0] - mu[i, 0]
-                    d[a, 1] = mu[g, 1] - mu[i, 1]
-                    d[a, 2] = wrap_float(mu[g, 2] - mu[i, 2])
-                    for c in range(3):
-                        mean[c] += w[a] * d[a, c]
-                for r in range(3):
-                    for c in range(3):
-                        acc = 0.0
-                        for a in range(n):
-                            acc += w[a] * P[grp[a], r, c]
-                        spread = 0.0
-                        for a in range(n):
-                            spread += w[a] * (d[a, r] - mean[r]) * (d[a, c] - mean[c])
-                        P[i, r, c] = acc + spread
-                for c in range(3):
-                    mu[i, c] = mu[i, c] + mean[c]
-                mu[i, 2] = wrap_float(mu[i, 2])
+                m0, m1, m2, cov = _moment_match(grp, n, w, mu, P, i, d)
+                P[i] = cov
+                mu[i, 0] = mu[i, 0] + m0
+                mu[i, 1] = mu[i, 1] + m1
+                mu[i, 2] = wrap_float(mu[i, 2] + m2)
                 fm = 0.0
                 fn = 0.0
                 for a in range(n):

@@ -75,7 +75,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
-from .._kernels.track import merge_kernel, near_pairs, same_of_pairs
+from .._kernels.track import merge_kernel, near_pairs, place_kernel, same_of_pairs
 from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number, shorten
@@ -1405,18 +1405,10 @@ class Tracker:
         place of hypothesis ``i``."""
         near = np.flatnonzero(self._place(i))
         w = np.exp(self._logw[near])
-        mass = float(w.sum())
-        w = w / w.sum()
-        d = self._mu[near] - self._mu[i]
-        d[:, 2] = np.asarray(wrap(d[:, 2]))
-        mean = w @ d
-        dd = d - mean
-        P = np.einsum("n,nij->ij", w, self._P[near]) + np.einsum("n,ni,nj->ij", w, dd, dd)
+        mu, P = place_kernel(near, w, self._mu, self._P, i)
         if self.config.covariance_inflation != 1.0:
             P = P * self.config.covariance_inflation
-        mu = self._mu[i] + mean
-        mu[2] = float(wrap(mu[2]))
-        return mu, P, mass
+        return mu, P, float(w.sum())
 
     def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
         """(state, reason, index of the best hypothesis)."""
