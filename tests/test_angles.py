@@ -36,8 +36,19 @@ def _angle_cases(rng: np.random.Generator) -> np.ndarray:
     edges += [np.nextafter(pi, 0), np.nextafter(pi, 4), np.nextafter(-pi, 0)]
     edges += [np.nextafter(-pi, -4), np.nextafter(-3 * pi, 0), 1e10, -1e10, 1e300, -1e300]
     edges += [np.inf, -np.inf, np.nan]
-    near = np.concatenate([pi + rng.normal(0, 1e-15, 200), -pi + rng.normal(0, 1e-15, 200)])
-    return np.concatenate([edges, near, rng.uniform(-10, 10, 5000), rng.normal(0, 1e3, 500)])
+    # One turn out either way (the difference of two wrapped angles), and its edges.
+    edges += [3 * pi, np.nextafter(3 * pi, 0), np.nextafter(3 * pi, 10), -3 * pi]
+    edges += [np.nextafter(-3 * pi, -10), -pi - 1e-17, -pi - 1e-300, np.nextafter(-pi, -4)]
+    near = np.concatenate(
+        [pi + rng.normal(0, 1e-15, 200), -pi + rng.normal(0, 1e-15, 200)]
+        + [c + rng.normal(0, 1e-15, 200) for c in (3 * pi, -3 * pi)]
+    )
+    ends = np.array([-pi, np.nextafter(pi, 0), 0.0, -1e-300, 1e-300])
+    turns = np.subtract.outer(ends, ends).ravel()
+    diffs = rng.uniform(-pi, pi, 3000) - rng.uniform(-pi, pi, 3000)
+    return np.concatenate(
+        [edges, near, turns, diffs, rng.uniform(-10, 10, 5000), rng.normal(0, 1e3, 500)]
+    )
 
 
 def test_wrap_float_is_wrap_angle_bit_for_bit(rng: np.random.Generator) -> None:

@@ -270,3 +270,78 @@ def test_a_places_estimate_is_the_moment_matching_of_its_hypotheses(seed: int, H
     np.testing.assert_allclose(got_mu, mu_ref, rtol=0, atol=1e-12)
     np.testing.assert_allclose(got_P, P_ref, rtol=0, atol=1e-12)
     assert np.array_equal(w, w0)  # the weights given are left as they were
+
+
+def _kernel_without_faint_readings():  # type: ignore[no-untyped-def]
+    """The frame kernel compiled again with no reading faint (every one computed): the
+    oracle of its faint-reading skip."""
+    import types
+
+    from numba import njit
+
+    from omniloc._kernels import track as kt
+
+    @njit
+    def no_cut(fresh: float, share: float, rho_max: float, root_min: float, norm: float) -> float:
+        return -math.inf
+
+    f = kt.frame_update_kernel.py_func
+    namespace = {**f.__globals__, "_faint_cut": no_cut}
+    return njit(error_model="numpy")(types.FunctionType(f.__code__, namespace, f.__name__))
+
+
+_PLAIN_KERNEL: list[object] = []
+
+
+@settings(max_examples=40, deadline=None)  # (the first example compiles the oracle)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    update=st.booleans(),
+    core=st.sampled_from([(0.0, False), (0.43, False), (0.43, True)]),
+    core_scale=st.sampled_from([1 / 3, 3.0]),
+    fresh=st.sampled_from([1.0, 0.25, 1e-3]),
+    miss_weight=st.sampled_from([1.0, 0.5]),
+    K=st.integers(0, 3),
+)
+def test_faint_readings_are_skipped_without_changing_a_bit(
+    seed: int,
+    update: bool,
+    core: tuple[float, bool],
+    core_scale: float,
+    fresh: float,
+    miss_weight: float,
+    K: int,
+) -> None:
+    # The frame kernel does not compute a reading below fresh * 2^-60 (it rounds away in the
+    # bearing's sum): every output must be the kernel's that computes them all, bit for
+    # bit, for bearings from on a landmark to many sigmas off it (around the cut), with a
+    # core narrower than the tail and one wider (each reading's cut is its own).
+    from omniloc._kernels.track import frame_update_kernel
+
+    if not _PLAIN_KERNEL:
+        _PLAIN_KERNEL.append(_kernel_without_faint_readings())
+    plain = _PLAIN_KERNEL[0]
+    rng = np.random.default_rng(seed)
+    H, N, k = 12, 8, 5
+    L = rng.uniform(-5, 5, (N, 2))
+    mu = np.column_stack(
+        [rng.uniform(-3, 3, H), rng.uniform(-3, 3, H), rng.uniform(-math.pi, math.pi, H)]
+    )
+    A = rng.normal(scale=10.0 ** rng.uniform(-3, -1), size=(H, 3, 3))
+    P = A @ np.swapaxes(A, 1, 2) if update else np.zeros((1, 3, 3))
+    sigma = math.radians(rng.uniform(0.2, 2.0))
+    # Bearings at the first pose's landmarks, 0-60 sigmas off them (the cut is near 10).
+    to = np.arctan2(L[:k, 1] - mu[0, 1], L[:k, 0] - mu[0, 0]) - mu[0, 2]
+    bearings = np.asarray(wrap(to + sigma * rng.uniform(-60, 60, k)), dtype=np.float64)
+    core_share, core_update = core
+    obj_b = rng.uniform(-math.pi, math.pi, K)
+    obj_w = rng.uniform(0, 1, (H, K))
+    args = (
+        bearings, L, sigma**2, 0.2, 0.6, math.radians(60.0), 49.0, 0.0, 1e-12, 1e-6, update,
+        fresh, core_share, (sigma * core_scale) ** 2, core_update, 1.0, True, miss_weight,
+        obj_b, obj_w, (sigma * 2) ** 2,
+    )  # fmt: skip
+    got = frame_update_kernel(mu, P, *args)
+    expect = plain(mu, P, *args)  # type: ignore[operator]
+    for g, e in zip(got, expect, strict=True):
+        assert np.array_equal(g, e, equal_nan=True)

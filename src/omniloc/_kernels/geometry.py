@@ -105,11 +105,20 @@ def wrap_float(a: float) -> float:
     """:func:`wrap_angle` of one float, bit for bit, without its ``%`` (a call of libm's
     ``fmod``, the costliest step of the tracker's frame kernel) where that changes nothing:
     for ``0 <= s = a + pi < 2 pi``, ``s % (2 pi)`` is ``s`` exactly, and ``s - pi`` is below
-    pi (exact for ``s >= pi / 2``, Sterbenz), so nothing is moved down."""
+    pi (exact for ``s >= pi / 2``, Sterbenz), so nothing is moved down. One turn further
+    either way (the difference of two wrapped angles), ``fmod`` returns ``s`` itself
+    (``-2 pi < s < 0``, to which ``%`` then adds 2 pi) or ``s - 2 pi`` (exact, Sterbenz):
+    those sums are taken here without it, and moved down as :func:`wrap_angle` moves them."""
     s = a + np.pi
     if s >= 0.0 and s < TWO_PI:
         return s - np.pi
-    return wrap_angle(a)  # NaN, infinities and angles outside [-pi, pi)
+    if s < 0.0 and s > -TWO_PI:
+        t = (s + TWO_PI) - np.pi
+    elif s >= TWO_PI and s < 2.0 * TWO_PI:
+        t = (s - TWO_PI) - np.pi
+    else:
+        return wrap_angle(a)  # NaN, infinities and angles more than a turn outside
+    return t - TWO_PI if t >= np.pi else t
 
 
 @_jit

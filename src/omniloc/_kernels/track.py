@@ -532,6 +532,27 @@ def _predict_one(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _odds(d: float, miss_weight: float) -> float:
+    """A reading's detection odds: it takes its landmark's miss term back, and with the
+    misses weighed by ``miss_weight`` what it takes back is the weighed term."""
+    if miss_weight == 1.0:
+        return d / max(1.0 - d, 1e-12)
+    return d / max((1.0 - d) ** miss_weight, 1e-12)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _faint_cut(fresh: float, share: float, rho_max: float, root_min: float, norm: float) -> float:
+    """The exponent below which a reading (:func:`_reading`, of weight ``share``, odds at most
+    ``rho_max``, a variance whose root is at least ``root_min``) is below ``fresh`` times
+    2^-60: added to a sum that already holds ``fresh`` or more, it rounds away, so that the
+    sum is the same bit for bit without it. -inf (nothing is faint) without a positive
+    ``fresh`` or ``share``."""
+    if not (fresh > 0.0 and share > 0.0 and rho_max > 0.0 and math.isfinite(rho_max)):
+        return -math.inf
+    return math.log(fresh) - 60.0 * math.log(2.0) - math.log(share * rho_max * norm / root_min)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def frame_update_kernel(
     mu: FloatArray,
     P: FloatArray,
@@ -636,6 +657,22 @@ def frame_update_kernel(
     tan_out = math.tan(edge) if not update and 0.0 <= half_fov and edge < 1.5 else -1.0
     last_d = -1.0
     last_log = 0.0
+    # Faint readings: a bearing's sum of readings starts at its clutter density, at least
+    # ``fresh``; a reading below fresh * 2^-60 rounds away in it and, as a share of it, is
+    # below any ``min_reading`` that moves a hypothesis -- it is not computed (the results
+    # are the same, bit for bit). Its exponent's cut follows from the largest odds (a
+    # landmark fully in view: d = p_detect, the odds growing with d for miss_weight >= 0)
+    # and the smallest variance (the sensor's alone).
+    rho_max = _odds(p_detect, miss_weight)
+    if not (miss_weight >= 0.0 and min_reading >= 2.0**-50):
+        rho_max = 0.0
+    cut_wide = _faint_cut(fresh, wide, rho_max, root_wide, norm)
+    cut_core = _faint_cut(fresh, core_share, rho_max, root_core, norm)
+    inv_wide = 1.0 / sigma2 if sigma2 > 0.0 else 0.0
+    inv_core = 1.0 / core_sigma2 if core_sigma2 > 0.0 else 0.0
+    # (Exactly known poses: the landmarks in view, and their odds.)
+    view = np.empty(N, dtype=np.int64)
+    view_rho = np.empty(N)
     # Each object's Gaussian at each bearing (the same for every hypothesis; each
     # hypothesis weighs it by its own expected count).
     obj_g = np.empty((bearings.shape[0], K))
@@ -679,6 +716,13 @@ def frame_update_kernel(
             # ln P(no bearing) = s - fresh clutter expected (the misses weighed as above);
             # the null's: - null_rate.
             log_ratio[k] += null_some - math.log(-math.expm1(s - fresh_rate))
+        n_view = 0
+        if not update:
+            for n in range(N):
+                if d[n] != 0.0:
+                    view[n_view] = n
+                    view_rho[n_view] = _odds(d[n], miss_weight)
+                    n_view += 1
         # The prediction is redone only after a bearing has moved the hypothesis (the same
         # pose and covariance predict the same, bit for bit).
         moved = False
@@ -707,30 +751,38 @@ def frame_update_kernel(
                 if obj_w[k, o] > 0.0:
                     base += obj_w[k, o] * obj_g[iz, o] * obj_norm
             total = base
-            for n in range(N):
+            if not update:
+                # An exactly known pose: the landmarks in view and their odds are those of
+                # the one prediction; the variances are the sensor's (var 0), their square
+                # roots taken once; the readings are not kept (nothing moves).
+                for j in range(n_view):
+                    n = view[j]
+                    e = wrap_float(z - h[n])
+                    q = -0.5 * e * e
+                    if q * inv_wide < cut_wide and (core_share <= 0.0 or q * inv_core < cut_core):
+                        continue  # both readings faint (see above)
+                    if core_share > 0.0:
+                        total += _reading_root(
+                            wide, view_rho[j], e, sigma2, root_wide, norm
+                        ) + _reading_root(core_share, view_rho[j], e, core_sigma2, root_core, norm)
+                    else:
+                        total += _reading_root(1.0, view_rho[j], e, sigma2, root_wide, norm)
+            for n in range(N if update else 0):
                 if d[n] == 0.0:
                     a[n] = 0.0
                     ac[n] = 0.0
                     continue
                 S = var[n] + sigma2
                 nu[n] = wrap_float(z - h[n])
-                # (A reading takes its landmark's miss term back: with the misses weighed
-                # by miss_weight, what it takes back is the weighed term.)
-                rho = (
-                    d[n] / max(1.0 - d[n], 1e-12)
-                    if miss_weight == 1.0
-                    else d[n] / max((1.0 - d[n]) ** miss_weight, 1e-12)
-                )
-                if not update:
-                    # An exactly known pose: the variances are the sensor's (var 0), their
-                    # square roots taken once; the readings are not kept (nothing moves).
-                    if core_share > 0.0:
-                        total += _reading_root(
-                            wide, rho, nu[n], sigma2, root_wide, norm
-                        ) + _reading_root(core_share, rho, nu[n], core_sigma2, root_core, norm)
-                    else:
-                        total += _reading_root(1.0, rho, nu[n], sigma2, root_wide, norm)
+                q = -0.5 * nu[n] * nu[n]
+                if q / S < cut_wide and (
+                    core_share <= 0.0 or q / (var[n] + core_sigma2) < cut_core
+                ):
+                    # Both readings faint (see above).
+                    a[n] = 0.0
+                    ac[n] = 0.0
                     continue
+                rho = _odds(d[n], miss_weight)
                 if core_share > 0.0:
                     a[n] = _reading(wide, rho, nu[n], S, norm)
                     ac[n] = _reading(core_share, rho, nu[n], var[n] + core_sigma2, norm)
