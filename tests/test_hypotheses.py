@@ -432,6 +432,39 @@ def test_compiled_merge_matches_numpy(seed: int) -> None:
     assert 6 <= len(fast) < K - 50  # merges happened, and not everything merged
 
 
+@settings(max_examples=80, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), log_cond=st.floats(0.0, 16.0))
+def test_fixed_covariances_are_what_their_eigenvalues_say(seed: int, log_cond: float) -> None:
+    """_fixed tells most covariances without their eigenvalues; it must say what
+    eigvalsh says for every one: well and badly conditioned ones (around the limit of
+    1e12 and its own 1e10), singular, indefinite, negative, asymmetric (eigvalsh reads the
+    lower triangle) and not finite."""
+    from omniloc.pose import MAX_CONDITION
+
+    rng = np.random.default_rng(seed)
+    K = 200
+    Q = np.linalg.qr(rng.normal(size=(K, 3, 3)))[0]
+    lam = 10.0 ** rng.uniform(-8, 2, (K, 1)) * 10.0 ** np.stack(
+        [-log_cond * rng.uniform(0.9, 1.1, K), -rng.uniform(0, log_cond, K), np.zeros(K)], 1
+    )
+    kind = rng.integers(0, 10, K)
+    lam[kind == 1, 0] = 0.0
+    lam[kind == 2, 0] *= -1.0
+    lam[kind == 3] *= -1.0
+    lam[kind == 4, :2] *= -1.0  # two negative: its determinant is positive
+    lam[kind == 5] = [10.0**-11, 1.0, 1.0]  # between its own bound and the limit
+    cov = np.einsum("kij,kj,klj->kil", Q, lam, Q)
+    # Lower triangle made indefinite, the upper one (which eigvalsh does not read) not.
+    cov[kind == 6, 2, 0] += 1e3 * np.abs(cov[kind == 6].max(axis=(1, 2)))
+    cov[kind == 7, 1, 1] = np.nan
+    cov[kind == 8, 2, 0] = np.inf
+    cov[kind == 9] = np.diag([1.0, 1.0, 10.0**-log_cond])
+    ok = np.isfinite(cov).all(axis=(1, 2))
+    w = np.linalg.eigvalsh(np.where(ok[:, None, None], cov, np.eye(3)))
+    want = ok & (w[:, 0] > 0) & (w[:, -1] <= MAX_CONDITION * w[:, 0])
+    assert scoring._fixed(cov).tolist() == want.tolist()
+
+
 def test_first_fit_polish_moves_a_landmark_to_the_better_bearing() -> None:
     # A spurious bearing just beside a true one took the true one's landmark (the first fit
     # checks bearings in a fixed order): the polish gives it back.
