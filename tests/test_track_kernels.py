@@ -345,3 +345,58 @@ def test_faint_readings_are_skipped_without_changing_a_bit(
     expect = plain(mu, P, *args)  # type: ignore[operator]
     for g, e in zip(got, expect, strict=True):
         assert np.array_equal(g, e, equal_nan=True)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    A=st.integers(0, 60),
+    B=st.integers(0, 60),
+    r=st.sampled_from([0.05, 0.3, 1.0]),
+    spread=st.sampled_from([0.5, 5.0, 50.0]),
+)
+def test_grid_pairs_are_the_pairs_of_every_pair_tried(
+    seed: int, A: int, B: int, r: float, spread: float
+) -> None:
+    # Poses in cells find the same pairs, in the same order, as every pair tried: in
+    # clusters, at exactly the distance (along an axis and a diagonal) and just beyond it,
+    # far from every other pose, and not finite.
+    from omniloc._kernels.track import grid_pairs, near_pairs
+
+    rng = np.random.default_rng(seed)
+
+    def poses(n: int) -> tuple[np.ndarray, np.ndarray]:
+        centres = rng.uniform(-spread, spread, (4, 2))
+        xy = centres[rng.integers(0, 4, n)] + rng.normal(scale=r, size=(n, 2))
+        mu = np.column_stack([xy, rng.normal(scale=0.3, size=n)])
+        A_ = rng.normal(scale=0.3, size=(n, 3, 3))
+        return mu, A_ @ np.swapaxes(A_, 1, 2) + 1e-3 * np.eye(3)
+
+    mu_a, P_a = poses(A)
+    mu_b, P_b = poses(B)
+    if A and B:
+        k = min(A, B) // 2
+        step = rng.choice([r, np.nextafter(r, 1.0), r / math.sqrt(2.0)], size=(k, 1))
+        direction = rng.choice([-1.0, 1.0], size=(k, 2)) * rng.integers(0, 2, (k, 2))
+        mu_a[:k, :2] = mu_b[:k, :2] + step * direction
+        mu_a[:k, 2] = mu_b[:k, 2]
+        P_a[:k] = P_b[:k]
+        mu_a[-1, :2] = 1e4  # far from all
+        mu_b[0, 0] = [np.nan, np.inf, -np.inf][seed % 3]
+    args = (r * r, 0.5, 30.0)
+    ia, ib, done = grid_pairs(mu_a, P_a, mu_b, P_b, *args)
+    ja, jb = near_pairs(mu_a, P_a, mu_b, P_b, *args)
+    assert done
+    assert ia.tolist() == ja.tolist()
+    assert ib.tolist() == jb.tolist()
+
+
+def test_grid_pairs_decline_a_spread_of_too_many_cells() -> None:
+    from omniloc._kernels.track import grid_pairs
+
+    mu = np.array([[0.0, 0.0, 0.0], [1e9, 0.0, 0.0]])
+    P = np.broadcast_to(np.eye(3), (2, 3, 3)).copy()
+    ia, ib, done = grid_pairs(mu, P, mu, P, 0.01, 0.5, 30.0)
+    assert not done and ia.size == 0 and ib.size == 0
+    ia, ib, done = grid_pairs(mu, P, mu, P, 0.0, 0.5, 30.0)
+    assert not done

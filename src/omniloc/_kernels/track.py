@@ -950,3 +950,111 @@ def near_pairs(
                 ib[n] = b
                 n += 1
     return ia[:n].copy(), ib[:n].copy()
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def grid_pairs(
+    mu_a: FloatArray,
+    Pa: FloatArray,
+    mu_b: FloatArray,
+    Pb: FloatArray,
+    max_d2: float,
+    max_heading: float,
+    max_form: float,
+) -> tuple[IntArray, IntArray, bool]:
+    """:func:`near_pairs` for large sets: the poses ``mu_b`` are put in square cells as wide
+    as the largest distance, and each pose of ``mu_a`` tries those in the 3 x 3 cells around
+    its own only (the same test, the same pairs in the same order). Returns the pairs and
+    True, or empty arrays and False when the cells would be too many (a spread beyond 2^20
+    cells either way; the caller then looks for the pairs another way).
+
+    The cells are a millionth wider than the distance: two poses within it are then in
+    neighbouring cells whatever the rounding of their cell numbers (below 2^20, it is
+    under 1e-9 of a cell)."""
+    none = np.empty(0, dtype=np.int64)
+    A = mu_a.shape[0]
+    B = mu_b.shape[0]
+    cell = math.sqrt(max_d2) * (1.0 + 1e-6)
+    if not (cell > 0.0 and math.isfinite(cell)):
+        return none, none, False
+    # Cells of the poses of b with a finite position (no other can pass the distance test).
+    x0 = math.inf
+    y0 = math.inf
+    x1 = -math.inf
+    y1 = -math.inf
+    for b in range(B):
+        x, y = mu_b[b, 0], mu_b[b, 1]
+        if math.isfinite(x) and math.isfinite(y):
+            x0, x1 = min(x0, x), max(x1, x)
+            y0, y1 = min(y0, y), max(y1, y)
+    if not x0 <= x1:
+        return none, none, True  # no b with a finite position: no pair
+    nx = math.floor((x1 - x0) / cell) + 3.0
+    ny = math.floor((y1 - y0) / cell) + 3.0
+    if not (nx < 2.0**20 and ny < 2.0**20):
+        return none, none, False
+    w = np.int64(ny)
+    keys = np.empty(B, dtype=np.int64)
+    n_in = 0
+    members = np.empty(B, dtype=np.int64)
+    for b in range(B):
+        x, y = mu_b[b, 0], mu_b[b, 1]
+        if math.isfinite(x) and math.isfinite(y):
+            # (Cells numbered from 1: the cells around any of them are numbered too.)
+            cx = np.int64(math.floor((x - x0) / cell)) + 1
+            cy = np.int64(math.floor((y - y0) / cell)) + 1
+            keys[n_in] = cx * w + cy
+            members[n_in] = b
+            n_in += 1
+    keys = keys[:n_in]
+    members = members[:n_in]
+    order = np.argsort(keys, kind="mergesort")
+    keys = keys[order]
+    members = members[order]
+    ia = np.empty(16, dtype=np.int64)
+    ib = np.empty(16, dtype=np.int64)
+    found = np.empty(B, dtype=np.int64)
+    n = 0
+    for a in range(A):
+        x, y = mu_a[a, 0], mu_a[a, 1]
+        if not (math.isfinite(x) and math.isfinite(y)):
+            continue
+        fx = math.floor((x - x0) / cell) + 1.0
+        fy = math.floor((y - y0) / cell) + 1.0
+        if not (-1.0 <= fx <= nx and -1.0 <= fy <= ny):
+            continue  # more than a cell beyond every b: no pair
+        cx = np.int64(fx)
+        cy = np.int64(fy)
+        m = 0
+        for ddx in range(-1, 2):
+            for ddy in range(-1, 2):
+                kx, ky = cx + ddx, cy + ddy
+                if kx < 0 or ky < 0 or ky >= w:
+                    continue
+                key = kx * w + ky
+                j = np.searchsorted(keys, key)
+                while j < n_in and keys[j] == key:
+                    b = members[j]
+                    j += 1
+                    g0 = x - mu_b[b, 0]
+                    g1 = y - mu_b[b, 1]
+                    if not g0 * g0 + g1 * g1 <= max_d2:
+                        continue
+                    if _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_heading, max_form):
+                        found[m] = b
+                        m += 1
+        if m == 0:
+            continue
+        found[:m].sort()
+        if n + m > ia.shape[0]:
+            size = max(2 * ia.shape[0], n + m)
+            grown_a = np.empty(size, dtype=np.int64)
+            grown_b = np.empty(size, dtype=np.int64)
+            grown_a[:n] = ia[:n]
+            grown_b[:n] = ib[:n]
+            ia, ib = grown_a, grown_b
+        for t in range(m):
+            ia[n] = a
+            ib[n] = found[t]
+            n += 1
+    return ia[:n].copy(), ib[:n].copy(), True

@@ -75,7 +75,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 from scipy.special import erf
 
-from .._kernels.track import merge_kernel, near_pairs, place_kernel, same_of_pairs
+from .._kernels.track import grid_pairs, merge_kernel, near_pairs, place_kernel, same_of_pairs
 from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number, shorten
@@ -931,7 +931,7 @@ class Tracker:
     ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
         """The pairs ``(a, b)`` of poses of ``mu_a`` and ``mu_b`` (covariances ``P_a``, ``P_b``)
         that are the same pose, ordered by ``a`` then ``b``: within ``merge_position_m`` (found
-        by a k-d tree, or directly for small sets) and ``merge_heading`` of each other, and
+        in cells of that size, or directly for small sets) and ``merge_heading`` of each other, and
         within ``merge_chi2`` in the Mahalanobis distance of their summed covariances."""
         c = self.config
         none = np.zeros(0, dtype=np.int64)
@@ -945,6 +945,12 @@ class Tracker:
             return near_pairs(
                 mu_a, P_a, mu_b, P_b, c.merge_position_m**2, c.merge_heading, c.merge_chi2
             )
+        ia, ib, done = grid_pairs(
+            mu_a, P_a, mu_b, P_b, c.merge_position_m**2, c.merge_heading, c.merge_chi2
+        )
+        if done:
+            return ia, ib
+        # (Poses spread over more than 2^20 cells of merge_position_m.)
         near = cKDTree(mu_a[:, :2]).sparse_distance_matrix(
             cKDTree(mu_b[:, :2]), c.merge_position_m, output_type="ndarray"
         )
