@@ -52,6 +52,70 @@ def test_elsewhere_moves_its_particles_by_the_odometry_and_its_own_draws() -> No
     assert np.array_equal(e.poses, compose(before, delta[None, :] + noise))
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(2, 400),
+    K=st.integers(0, 3),
+    inject=st.sampled_from([0.0, 0.01, 0.3]),
+    skew=st.sampled_from([1.0, 5.0, 50.0]),
+)
+def test_resampling_copies_the_particles_numpys_searchsorted_picks(
+    seed: int, n: int, K: int, inject: float, skew: float
+) -> None:
+    # Elsewhere's systematic resampling (its copies in one compiled pass) against the
+    # numpy it replaces, with the same draws: weights from even to one particle holding
+    # nearly all, some particles with none (excluded), memory of 0-3 objects.
+    rng = np.random.default_rng(seed)
+    region = (-1.0, 5.0, -2.0, 3.0)
+    e = Elsewhere(region, n, inject, seed=seed)
+    twin = Elsewhere(region, n, inject, seed=seed)
+    logw = rng.normal(scale=skew, size=n)
+    logw[rng.random(n) < 0.2] = -np.inf
+    logw[0] = 0.0
+    logw -= math.log(float(np.exp(logw).sum()))
+    memory = rng.random((n, K))
+    for x in (e, twin):
+        x.logw, x.memory = logw.copy(), memory.copy()
+    e.resample()
+    # numpy, with the twin's generator
+    w = np.exp(logw)
+    w = w / w.sum()
+    if 1.0 / float(np.sum(w * w)) >= 0.5 * n:
+        assert np.array_equal(e.poses, twin.poses) and np.array_equal(e.logw, logw)
+        return
+    m_new = round(inject * n)
+    m_keep = n - m_new
+    u = (twin._rng.uniform() + np.arange(m_keep)) / m_keep
+    idx = np.minimum(np.searchsorted(np.cumsum(w), u), n - 1)
+    poses = np.concatenate([twin.poses[idx], twin._uniform(m_new)])
+    mem = np.concatenate([memory[idx], np.zeros((m_new, K))])
+    assert np.array_equal(e.poses, poses)
+    assert np.array_equal(e.memory, mem)
+    assert np.array_equal(e.logw, np.full(n, -math.log(n)))
+    # the generators are at the same place afterwards
+    assert e._rng.uniform() == twin._rng.uniform()
+
+
+def test_resampling_takes_searchsorteds_side_on_ties_and_nans() -> None:
+    # Running sums equal to some u_j (ties go to the first such particle, searchsorted's
+    # left side), a particle of zero weight between, and a sum that is NaN from some point.
+    from omniloc._kernels.track import resample_kernel
+
+    poses = np.arange(18, dtype=np.float64).reshape(6, 3)
+    memory = np.arange(6, dtype=np.float64).reshape(6, 1)
+    for cum in (
+        np.array([0.25, 0.25, 0.5, 0.75, 1.0, 1.0]),
+        np.array([0.0, 0.5, 0.5, 0.75, np.nan, np.nan]),
+    ):
+        for u0 in (0.0, 0.5, 0.999):
+            u = (u0 + np.arange(4)) / 4
+            idx = np.minimum(np.searchsorted(cum, u), 5)
+            got_p, got_m = resample_kernel(cum, u0, 4, poses, memory, 2)
+            assert np.array_equal(got_p[:4], poses[idx]), (cum, u0)
+            assert np.array_equal(got_m, np.concatenate([memory[idx], np.zeros((2, 1))]))
+
+
 def _merge_reference(
     mu: np.ndarray,
     P: np.ndarray,

@@ -835,6 +835,33 @@ def frame_update_kernel(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def resample_kernel(
+    cum: FloatArray, u0: float, m_keep: int, poses: FloatArray, memory: FloatArray, m_new: int
+) -> tuple[FloatArray, FloatArray]:
+    """Systematic resampling's copies: for ``u_j = (u0 + j) / m_keep``, ``j < m_keep``, the
+    particle ``min(searchsorted(cum, u_j), n - 1)`` (``cum`` the weights' running sum), its
+    pose and memory row copied in one pass over the sorted ``u_j``. Returns ``m_keep +
+    m_new`` poses and memory rows, the last ``m_new`` poses unwritten (the fresh draws') and
+    memory rows zero."""
+    n = cum.shape[0]
+    out_p = np.empty((m_keep + m_new, 3))
+    out_m = np.zeros((m_keep + m_new, memory.shape[1]))
+    i = 0
+    for j in range(m_keep):
+        u = (u0 + j) / m_keep
+        # (searchsorted's left side: the first i with cum[i] >= u; a NaN is never below u.)
+        while i < n and cum[i] < u:
+            i += 1
+        k = min(i, n - 1)
+        out_p[j, 0] = poses[k, 0]
+        out_p[j, 1] = poses[k, 1]
+        out_p[j, 2] = poses[k, 2]
+        for o in range(memory.shape[1]):
+            out_m[j, o] = memory[k, o]
+    return out_p, out_m
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def covered_kernel(
     poses: FloatArray, mu: FloatArray, Pinv: FloatArray, radius: FloatArray, chi2: float
 ) -> NDArray[np.bool_]:

@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from .._kernels.track import covered_kernel, particles_move_kernel
+from .._kernels.track import covered_kernel, particles_move_kernel, resample_kernel
 
 __all__ = ["Elsewhere"]
 
@@ -140,8 +140,16 @@ class Elsewhere:
             return
         m_new = round(self.inject * self.n)
         m_keep = self.n - m_new
-        u = (self._rng.uniform() + np.arange(m_keep)) / m_keep
-        idx = np.minimum(np.searchsorted(np.cumsum(w), u), self.n - 1)
-        self.poses = np.concatenate([self.poses[idx], self._uniform(m_new)])
-        self.memory = np.concatenate([self.memory[idx], np.zeros((m_new, self.memory.shape[1]))])
+        # The copies of u_j = (u + j) / m_keep, j < m_keep, in one compiled pass (the same
+        # as np.searchsorted(np.cumsum(w), u_j) and fancy indexing, bit for bit).
+        poses, self.memory = resample_kernel(
+            np.cumsum(w),
+            self._rng.uniform(),
+            m_keep,
+            np.ascontiguousarray(self.poses, dtype=np.float64),
+            np.ascontiguousarray(self.memory, dtype=np.float64),
+            m_new,
+        )
+        poses[m_keep:] = self._uniform(m_new)
+        self.poses = poses
         self.logw = np.full(self.n, -math.log(self.n))
