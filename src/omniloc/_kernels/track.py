@@ -182,13 +182,21 @@ def particles_move_kernel(
 
 @njit(cache=True, error_model="numpy", nogil=True)
 def _moment_match(
-    grp: IntArray, n: int, w: FloatArray, mu: FloatArray, P: FloatArray, i: int, d: FloatArray
-) -> tuple[float, float, float, FloatArray]:
+    grp: IntArray,
+    n: int,
+    w: FloatArray,
+    mu: FloatArray,
+    P: FloatArray,
+    i: int,
+    d: FloatArray,
+    mean: FloatArray,
+) -> FloatArray:
     """The Gaussian that matches the mixture of hypotheses ``grp[:n]`` (means ``mu``,
     covariances ``P``) with weights ``w[:n]`` (normalised here, in place), about hypothesis
-    ``i``: the mean's offset from ``mu[i]`` (heading differences wrapped) and the covariance
-    (the weighted covariances plus the spread of the means). ``d`` (at least (n, 3)) is
-    scratch, left holding each member's offset."""
+    ``i``: its mean is written to ``mean`` (3,) (``mu[i]`` plus the weighted offsets, heading
+    differences wrapped; ``mean`` may be ``mu[i]`` itself, written after every read), its
+    covariance returned (the weighted covariances plus the spread of the means). ``d`` (at
+    least (n, 3)) is scratch, left holding each member's offset."""
     s = 0.0
     for a in range(n):
         s += w[a]
@@ -203,7 +211,7 @@ def _moment_match(
         m0 += w[a] * d[a, 0]
         m1 += w[a] * d[a, 1]
         m2 += w[a] * d[a, 2]
-    mean = (m0, m1, m2)
+    off = (m0, m1, m2)
     cov = np.empty((3, 3))
     for r in range(3):
         for c in range(3):
@@ -212,9 +220,13 @@ def _moment_match(
                 acc += w[a] * P[grp[a], r, c]
             spread = 0.0
             for a in range(n):
-                spread += w[a] * (d[a, r] - mean[r]) * (d[a, c] - mean[c])
+                spread += w[a] * (d[a, r] - off[r]) * (d[a, c] - off[c])
             cov[r, c] = acc + spread
-    return m0, m1, m2, cov
+    x, y, heading = mu[i, 0], mu[i, 1], mu[i, 2]
+    mean[0] = x + m0
+    mean[1] = y + m1
+    mean[2] = wrap_float(heading + m2)
+    return cov
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -226,11 +238,8 @@ def place_kernel(
     n = near.shape[0]
     ww = w.copy()
     d = np.empty((n, 3))
-    m0, m1, m2, cov = _moment_match(near, n, ww, mu, P, i, d)
     out = np.empty(3)
-    out[0] = mu[i, 0] + m0
-    out[1] = mu[i, 1] + m1
-    out[2] = wrap_float(mu[i, 2] + m2)
+    cov = _moment_match(near, n, ww, mu, P, i, d, out)
     return out, cov
 
 
@@ -288,11 +297,7 @@ def merge_kernel(
                 for a in range(n):
                     s += w[a]
                 total[i] = s
-                m0, m1, m2, cov = _moment_match(grp, n, w, mu, P, i, d)
-                P[i] = cov
-                mu[i, 0] = mu[i, 0] + m0
-                mu[i, 1] = mu[i, 1] + m1
-                mu[i, 2] = wrap_float(mu[i, 2] + m2)
+                P[i] = _moment_match(grp, n, w, mu, P, i, d, mu[i])
                 fm = 0.0
                 fn = 0.0
                 for a in range(n):
