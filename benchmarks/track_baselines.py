@@ -93,6 +93,7 @@ from omniloc.evaluate.tracking import (  # noqa: E402
     Stream,
     TrackingResult,
     kidnap_streams,
+    mrclam_bound,
     mrclam_streams,
 )
 from omniloc.maps import LandmarkMap  # noqa: E402
@@ -313,7 +314,10 @@ def run_tracker(streams: list[Stream], log: Callable[[str], None]) -> dict[str, 
         return {"skipped": why}
     t0 = time.time()
     res = evaluate_streams(
-        streams, lambda s, st: make_tracker(s.landmarks, None), name="omniloc Tracker"
+        streams,
+        lambda s, st: make_tracker(s.landmarks, None),
+        name="omniloc Tracker",
+        bound=mrclam_bound(BOUND_P),
     )
     d = res.as_dict()
     d["wall_s"] = round(time.time() - t0, 1)
@@ -324,6 +328,11 @@ def run_tracker(streams: list[Stream], log: Callable[[str], None]) -> dict[str, 
 # --------------------------------------------------------------------------------------------
 # Tables
 # --------------------------------------------------------------------------------------------
+
+#: What the data allow: a localizer told the correspondences, as sure as the tracker's
+#: ``localized_probability`` (omniloc.evaluate.bounds).
+BOUND_P = 0.99
+BOUND_LABEL = f"told the correspondences, sure at {BOUND_P} (what the data allow)"
 
 LABELS = {
     "ekf_known": "EKF, known correspondences, truth start (upper bound)",
@@ -386,9 +395,28 @@ def _retotal(result: dict[str, Any]) -> dict[str, Any]:
     return {**result, **{k: fresh[k] for k in keys}}
 
 
+def _bound_runs(results: dict[str, dict[str, Any]]) -> list[dict[str, Any]]:
+    """The runs that carry what the data allow (the tracker's, since 2026-12-04 21:30),
+    their "never" restored: JSON keeps inf as null, and a bound's time is never undefined
+    (a recovery is, on a stream without a jump)."""
+    runs = results.get("tracker", {}).get("runs", [])
+    if not runs or not all("bound_time_to_localize_s" in r for r in runs):
+        return []
+    out = []
+    for r in runs:
+        r = dict(r)
+        if r["bound_time_to_localize_s"] is None:
+            r["bound_time_to_localize_s"] = math.inf
+        if r["bound_recovery_s"] is None and r["jump_t"] is not None:
+            r["bound_recovery_s"] = math.inf
+        out.append(r)
+    return out
+
+
 def tables(results: dict[str, dict[str, Any]]) -> str:
     lines: list[str] = []
     keys = [k for k, v in results.items() if "runs" in v]
+    bound_runs = _bound_runs(results)
 
     # Per robot (whole runs).
     lines += [
@@ -412,6 +440,13 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
                 f"{_pct(r['n_confidently_wrong'] / sc)} | {_f(r['pos_rmse_m'], '{:.3f}')} | "
                 f"{_f(r['heading_rmse_deg'], '{:.2f}')} | "
                 f"{_f(r['cpu_s'] / r['duration_s'], '{:.4f}')} |"
+            )
+    for r in bound_runs:
+        if r["name"].startswith("robot"):
+            lines.append(
+                f"| {BOUND_LABEL} | {r['name']} | "
+                f"{_f(r['bound_time_to_localize_s'], '{:.1f}')} | "
+                f"{_pct(r['bound_correct_after_rate'])} | - | - | - | - | - |"
             )
     lines.append("")
 
@@ -455,6 +490,31 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
                 f"{_pct(t['false_alarm_run_rate']) if set_name == 'plain' else '-'} | "
                 f"{_cov(t)} | {_f(_cpu_per_s(rs), '{:.4f}')} |"
             )
+    for set_name, prefix in (("whole runs", "robot"), ("kidnapped", "kidnap"), ("plain", "plain")):
+        rs = [r for r in bound_runs if r["name"].startswith(prefix)]
+        if not rs:
+            continue
+        t = _totals(rs)
+        kid = set_name == "kidnapped"
+        lines.append(
+            f"| {BOUND_LABEL} | {set_name} | {len(rs)} | "
+            f"{_f(t['bound_time_to_localize_median_s'], '{:.1f}')} / "
+            f"{_f(t['bound_time_to_localize_max_s'], '{:.0f}')} | "
+            f"{sum(r.bound_time_to_localize_s == math.inf for r in _run_scores(rs))} | "
+            f"{_pct(t['bound_correct_after_rate'])} | - | - | - | - | - | - | "
+            f"{_f(t['bound_recovery_median_s'], '{:.1f}') if kid else '-'} | - | - | - | - |"
+        )
+    if bound_runs:
+        lines += [
+            "",
+            f"*{BOUND_LABEL}*: `omniloc.evaluate.bounds.stream_bound` on each stream -- the "
+            "Cramer-Rao recursion of the bearings (told which tube each is; the measured "
+            "errors, 57 % at 0.33 deg and 43 % at 1.03 deg) and the odometry "
+            "(`MotionModel.mrclam()`) along the true path from no information, afresh at a "
+            f"kidnapping; a frame counts once the pose is within tolerance with probability "
+            f"{BOUND_P}. Optimistic (the correspondences known, the errors independent from "
+            "frame to frame), so its times are the least any honest localizer needs.",
+        ]
     skipped = [f"{_label(k)}: {v['skipped']}" for k, v in results.items() if "skipped" in v]
     if skipped:
         lines += ["", *(f"*Skipped*: {s}" for s in skipped)]

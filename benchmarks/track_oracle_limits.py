@@ -10,36 +10,18 @@ given short of the answer itself: it is TOLD which landmark each bearing comes f
 frames' landmark ids; the other robots' bearings are dropped), its odometry is linearised
 at the true path, and it starts from no information at all about the pose.
 
-From a start time ``t0`` it runs the information filter of the bearings and the odometry
-along the TRUE trajectory: the recursion of the posterior Cramer-Rao bound (Tichavsky,
-Muravchik and Nehorai, IEEE T-SP 1998) evaluated on the recorded path, the covariance that
-no estimator beats under the model linearised there:
-
-* between frames, the odometry's noise (``MotionModel.mrclam()``, the tracker's preset,
-  integrated over the recorded velocities between the frames, its latency applied) moves
-  the information as a Kalman prediction does, in information form
-  ``Y' = (I + Y~ N)^-1 Y~`` with ``Y~ = F^-T Y F^-1``, which holds for a singular ``Y``;
-* at each frame, every landmark bearing adds ``H^T H / sigma^2`` (``H`` its gradient at
-  the true pose); a bearing's information is that of the error model named (one Gaussian
-  of 1 deg, the preset's sigma; or the mixture measured on the recordings, 57 % at 0.33 deg
-  and 43 % at 1.03 deg, whose Fisher information is that of a Gaussian of 0.52 deg).
-
-The first frame from which the pose at that frame is within 0.3 m and 5 deg of its estimate
-with probability >= ``p`` (0.99, the tracker's ``localized_probability``; also 0.9) is the
-earliest time an honest localizer could say ``localized`` and be right by design. The
-probability lies above the Gaussian correlation inequality's lower bound (a circle of the
-widest position variance times the heading's share: the tracker's own
-``within_tolerance``) and below the smaller of the heading's and the widest position
-axis's shares; where these do not settle it, a Monte Carlo of 50,000 fixed draws does (a
-standard error of 0.0005 at 0.99).
-
-What the bound leaves out makes it optimistic, so the times are lower bounds: correspondences
-are known (the interpretation is the hard part: a wrong place that fits is what the tracker
-must rule out); the bearing errors are taken as independent from frame to frame (on MRCLAM a
-tube's errors are correlated, 0.66 at 0.3 s: benchmarks/bearing_correlation.py); the
-odometry's errors are those of the fitted model, without its biases. Negative information
-(tubes in view that were not reported) is not counted; with 35 % of the tubes in view
-reported per frame it is weak.
+The method is :mod:`omniloc.evaluate.bounds` (its documentation says what the bound assumes
+and leaves out): the recursion of the posterior Cramer-Rao bound along the true path, from
+no information, with the odometry's noise of ``MotionModel.mrclam()``; a frame could be
+localized when the pose there is within 0.3 m and 5 deg with probability >= ``p`` (0.99,
+the tracker's ``localized_probability``; also 0.9). Two bearing error models: one Gaussian
+of 1 deg (the preset's sigma), and the mixture measured on the recordings (57 % at 0.33
+deg, 43 % at 1.03 deg, worth a Gaussian of 0.52 deg). Everything the bound leaves out makes
+it optimistic -- the correspondences known, the bearing errors independent from frame to
+frame (a tube's are correlated, 0.66 at 0.3 s: benchmarks/bearing_correlation.py), the
+odometry without biases -- so its times are lower bounds and its shares upper bounds.
+``omniloc evaluate --dataset mrclam-track`` reports the same bound (the measured mixture,
+the tracker's ``localized_probability``) beside the tracker on every stream.
 
 Three figures per setting:
 
@@ -62,22 +44,24 @@ import argparse
 import math
 import sys
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import erf
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from _results import run_meta, write_results  # noqa: E402
-from omniloc.evaluate.tracking import Stream, mrclam_streams  # noqa: E402
-from omniloc.pose import bearing_jacobian  # noqa: E402
+from omniloc.evaluate.bounds import (  # noqa: E402
+    MRCLAM_BEARING_ERRORS,
+    bearing_information,
+    bound_steps,
+    confident_frames,
+    times_to_localize,
+)
+from omniloc.evaluate.tracking import mrclam_streams  # noqa: E402
 from omniloc.track import MotionModel  # noqa: E402
-from omniloc.track.motion import between, compose_jacobians, integrate  # noqa: E402
-from omniloc.track.tracker import within_tolerance  # noqa: E402
 
 FloatArray = NDArray[np.float64]
 
@@ -88,185 +72,9 @@ TOL_HEADING = math.radians(5.0)
 #: The error models compared: name -> (shares, sds in radians).
 ERROR_MODELS: dict[str, tuple[tuple[float, ...], tuple[float, ...]]] = {
     "gaussian 1 deg (the preset's sigma)": ((1.0,), (math.radians(1.0),)),
-    "measured mixture (57 % at 0.33 deg, 43 % at 1.03 deg)": (
-        (0.57, 0.43),
-        (math.radians(0.33), math.radians(1.03)),
-    ),
+    "measured mixture (57 % at 0.33 deg, 43 % at 1.03 deg)": MRCLAM_BEARING_ERRORS,
 }
 PROBABILITIES = (0.99, 0.9)
-MC_DRAWS = 50_000
-
-
-def bearing_information(shares: tuple[float, ...], sds: tuple[float, ...]) -> float:
-    """Fisher information (1/rad^2) of one bearing whose error is a zero-mean Gaussian
-    mixture: ``int p'(e)^2 / p(e) de``, on a grid of 20,001 points over +-30 of the widest sd.
-
-    Examples
-    --------
-    >>> round(bearing_information((1.0,), (0.5,)), 6)  # a Gaussian: 1 / sd^2
-    4.0
-    """
-    w = np.asarray(shares, dtype=np.float64)
-    s = np.asarray(sds, dtype=np.float64)
-    if w.shape != s.shape or w.size == 0 or (s <= 0).any() or (w < 0).any():
-        raise ValueError(f"shares and sds must pair up, sds > 0: {shares!r}, {sds!r}")
-    w = w / w.sum()
-    e = np.linspace(-30 * s.max(), 30 * s.max(), 20_001)
-    g = w * np.exp(-0.5 * (e[:, None] / s) ** 2) / (s * math.sqrt(2 * math.pi))
-    p = g.sum(axis=1)
-    dp = (-g * e[:, None] / s**2).sum(axis=1)
-    ok = p > 0
-    return float(np.trapezoid(dp[ok] ** 2 / p[ok], e[ok]))
-
-
-@dataclass(frozen=True)
-class Steps:
-    """A stream's frames as the information filter sees them.
-
-    Attributes
-    ----------
-    t : ndarray, shape (k,)
-        Frame times.
-    F, N : ndarray, shape (k, 3, 3)
-        The prediction from frame ``i - 1`` to frame ``i``: the Jacobian of the motion with
-        respect to the pose, and the odometry's noise in the world frame (both zero-filled
-        and the identity at ``i = 0``).
-    HtH : ndarray, shape (k, 3, 3)
-        Sum over frame ``i``'s landmark bearings of ``H^T H`` (per unit bearing variance).
-    bearings : ndarray of int, shape (k,)
-        The number of landmark bearings in each frame.
-    """
-
-    t: FloatArray
-    F: FloatArray
-    N: FloatArray
-    HtH: FloatArray
-    bearings: NDArray[np.int64]
-
-
-def stream_steps(stream: Stream, motion: MotionModel) -> Steps:
-    """The filter's steps along a stream's true trajectory (frames with ground truth only:
-    frames the Vicon track does not cover are left out, the odometry joins their
-    neighbours)."""
-    t_all = np.array([f.t for f in stream.frames])
-    truth, _ = stream.truth_at(t_all)
-    keep = np.isfinite(truth).all(axis=1)
-    frames = [f for f, k in zip(stream.frames, keep, strict=True) if k]
-    t = t_all[keep]
-    poses = truth[keep]
-    k = t.size
-    F = np.tile(np.eye(3), (k, 1, 1))
-    N = np.zeros((k, 3, 3))
-    HtH = np.zeros((k, 3, 3))
-    nb = np.zeros(k, dtype=np.int64)
-    xy = stream.landmarks.xy
-    for i, f in enumerate(frames):
-        if i > 0:
-            dt, v, w = stream.odometry.between(t[i - 1] - motion.delay_s, t[i] - motion.delay_s)
-            _, Q = integrate(dt, v, w, motion)
-            Jp, Jd = compose_jacobians(poses[i - 1], between(poses[i - 1], poses[i]))
-            F[i] = Jp
-            N[i] = Jd @ Q @ Jd.T
-        rows = [r for r in (f.truth or ()) if r is not None]
-        if rows:
-            _, G = bearing_jacobian(xy[rows], poses[i])
-            HtH[i] = G.T @ G
-            nb[i] = len(rows)
-    return Steps(t, F, N, HtH, nb)
-
-
-def _probability(cov: FloatArray, draws: FloatArray) -> float:
-    """P(|position| <= TOL_M and |heading| <= TOL_HEADING) for a zero-mean Gaussian error of
-    covariance ``cov``: the bounds where they settle it, else the Monte Carlo."""
-    lo = within_tolerance(cov, TOL_M, TOL_HEADING)
-    lam = float(np.linalg.eigvalsh(cov[:2, :2])[-1])
-    hi = min(
-        float(erf(TOL_HEADING / math.sqrt(2.0 * max(cov[2, 2], 1e-300)))),
-        float(erf(TOL_M / math.sqrt(2.0 * max(lam, 1e-300)))),
-    )
-    if hi - lo < 1e-4:
-        return lo
-    try:
-        L = np.linalg.cholesky(cov)
-    except np.linalg.LinAlgError:
-        return lo
-    x = draws @ L.T
-    ok = (np.hypot(x[:, 0], x[:, 1]) <= TOL_M) & (np.abs(x[:, 2]) <= TOL_HEADING)
-    return float(ok.mean())
-
-
-def predict_information(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArray:
-    """The Kalman prediction ``P' = F P F^T + N`` in information form, for information
-    matrices ``Y`` (..., 3, 3) that may be singular: ``Y' = (I + Y~ N)^-1 Y~`` with
-    ``Y~ = F^-T Y F^-1`` (``F`` invertible; ``N`` may be singular)."""
-    Finv = np.linalg.inv(F)
-    Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
-    Yn = np.linalg.solve(np.eye(3) + Yt @ N, Yt)
-    return 0.5 * (Yn + np.swapaxes(Yn, -1, -2))
-
-
-def _confident(y: FloatArray, draws: FloatArray, p_min: float) -> bool:
-    """Whether the information ``y`` puts the pose within tolerance with probability
-    ``p_min`` (False while it is singular: some direction not yet observed)."""
-    ev = np.linalg.eigvalsh(y)
-    if ev[0] <= 1e-12 * max(ev[-1], 1e-300):
-        return False
-    cov = np.linalg.inv(y)
-    hi = min(
-        float(erf(TOL_HEADING / math.sqrt(2.0 * cov[2, 2]))),
-        float(erf(TOL_M / math.sqrt(2.0 * np.linalg.eigvalsh(cov[:2, :2])[-1]))),
-    )
-    if hi < p_min:
-        return False
-    return within_tolerance(cov, TOL_M, TOL_HEADING) >= p_min or _probability(cov, draws) >= p_min
-
-
-def confident_frames(steps: Steps, info: float, p_min: float) -> NDArray[np.bool_]:
-    """For each frame, whether the filter started at the stream's first frame (with no
-    information, and told the correspondences all along) puts the pose within tolerance
-    with probability ``p_min`` there: the frames an honest localizer could call
-    ``localized``, at best."""
-    draws = np.random.default_rng(0).standard_normal((MC_DRAWS, 3))
-    out = np.zeros(steps.t.size, dtype=bool)
-    Y = np.zeros((3, 3))
-    for i in range(steps.t.size):
-        if i > 0:
-            Y = predict_information(Y, steps.F[i], steps.N[i])
-        Y = Y + info * steps.HtH[i]
-        out[i] = _confident(Y, draws, p_min)
-    return out
-
-
-def times_to_localize(
-    steps: Steps, starts: NDArray[np.int64], info: float, p_min: float
-) -> FloatArray:
-    """For each start frame index, the time from it to the first frame (it included) at
-    which the filter started there with no information could call the pose localized with
-    probability ``p_min``; inf when no frame of the stream does.
-
-    All starts run at once: each step predicts and updates the information of every start
-    already begun.
-    """
-    draws = np.random.default_rng(0).standard_normal((MC_DRAWS, 3))
-    k = steps.t.size
-    out = np.full(starts.size, np.inf)
-    Y = np.zeros((starts.size, 3, 3))
-    active = np.zeros(starts.size, dtype=bool)
-    for i in range(k):
-        if i > 0 and active.any():
-            Y[active] = predict_information(Y[active], steps.F[i], steps.N[i])
-        active |= starts == i
-        Y[active] += info * steps.HtH[i]
-        todo = np.flatnonzero(active & ~np.isfinite(out))
-        if todo.size == 0:
-            if (starts > i).any():
-                continue
-            break
-        for j in todo:
-            if _confident(Y[j], draws, p_min):
-                out[j] = steps.t[i] - steps.t[starts[j]]
-        active[np.isfinite(out)] = False
-    return out
 
 
 def _summary(times: FloatArray) -> dict[str, float | int]:
@@ -315,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
     t_wall = time.perf_counter()
     motion = MotionModel.mrclam()
     streams = mrclam_streams(args.data, args.robots)
-    steps = {s.name: stream_steps(s, motion) for s in streams}
+    steps = {s.name: bound_steps(s, motion) for s in streams}
     results: dict[str, dict[str, object]] = {}
     for model, (shares, sds) in ERROR_MODELS.items():
         info = bearing_information(shares, sds)
@@ -331,10 +139,12 @@ def main(argv: list[str] | None = None) -> int:
                 grid = np.arange(st.t[0], st.t[-1] - args.horizon, args.every)
                 starts = np.unique(np.searchsorted(st.t, grid))
                 starts = starts[starts < st.t.size]
-                tt = times_to_localize(st, starts, info, p_min)
+                tt = times_to_localize(
+                    st, starts, info, p_min, tol_m=TOL_M, tol_heading=TOL_HEADING
+                )
                 runs[name] = float(tt[0])
                 pooled.append(tt)
-                ok = confident_frames(st, info, p_min)
+                ok = confident_frames(st, info, p_min, tol_m=TOL_M, tol_heading=TOL_HEADING)
                 after[name] = float(ok[np.argmax(ok) :].mean()) if ok.any() else math.nan
             first = np.array(list(runs.values()))
             results[key] = {

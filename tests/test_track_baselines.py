@@ -303,3 +303,43 @@ def test_tuned_options_take_the_nearest_count_tuned() -> None:
     cfg = tb.pf_config(50_000, MotionNoise(), pf[50_000])
     assert cfg.n_particles == 50_000 and cfg.alpha_slow == 0.01
     assert cfg.sigma == pytest.approx(math.radians(0.5))
+
+
+def _score(name: str, jump: float, bound_ttl: float, bound_rec: float) -> object:
+    from omniloc.evaluate.tracking import RunScore
+
+    nan = math.nan
+    return RunScore(
+        name, 100.0, 10, 10, 50.0, 0.5, 5, 0, 0.1, 1.0, jump, nan, nan, 0, 1.0,
+        bound_time_to_localize_s=bound_ttl, bound_correct_after_rate=0.8,
+        bound_recovery_s=bound_rec,
+    )  # fmt: skip
+
+
+def test_the_tables_show_what_the_data_allow_beside_the_tracker() -> None:
+    import track_baselines as tb
+    from omniloc.evaluate.tracking import TrackingResult
+
+    runs = [
+        _score("robot1", math.nan, 30.0, math.nan),
+        _score("robot2", math.nan, math.inf, math.nan),
+        _score("robot3", math.nan, 10.0, math.nan),
+        _score("kidnap0", 50.0, 5.0, 12.0),
+        _score("kidnap1", 50.0, 5.0, 14.0),
+        _score("kidnap2", 50.0, 5.0, math.inf),
+    ]
+    # Stored as JSON would be (inf and NaN both null), and read back.
+    results = {"tracker": TrackingResult("t", runs).as_dict()}
+    text = tb.tables(results)
+    rows = [ln for ln in text.splitlines() if ln.startswith(f"| {tb.BOUND_LABEL} |")]
+    assert f"| {tb.BOUND_LABEL} | robot1 | 30.0 | 80.0 % |" in text
+    assert f"| {tb.BOUND_LABEL} | robot2 | never |" in text
+    (whole,) = [r for r in rows if "| whole runs |" in r]
+    assert "| 3 | 30.0 / never | 1 | 80.0 % |" in whole
+    (kid,) = [r for r in rows if "| kidnapped |" in r]
+    assert kid.split(" | ")[-5] == "14.0"  # the recovery median counts the stream never back
+    # Results stored before the bound existed show no such rows.
+    for r in results["tracker"]["runs"]:
+        for k in ("bound_time_to_localize_s", "bound_correct_after_rate", "bound_recovery_s"):
+            del r[k]
+    assert tb.BOUND_LABEL not in tb.tables(results)

@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable, Sequence
 
+from omniloc.evaluate.bounds import StreamBound
 from omniloc.evaluate.tracking import (
     LocalizerOverTime,
     RunScore,
@@ -33,8 +34,10 @@ def evaluate_streams(
     name: str,
     oracle_start: bool = False,
     progress: bool = True,
+    bound: Callable[[Stream], StreamBound] | None = None,
 ) -> TrackingResult:
-    """Score ``make(stream, start)`` on every stream with ``evaluate_tracking``."""
+    """Score ``make(stream, start)`` on every stream with ``evaluate_tracking`` (and
+    ``bound``, what the data allow, beside it when given)."""
     runs: list[RunScore] = []
     for k, s in enumerate(streams):
 
@@ -42,7 +45,7 @@ def evaluate_streams(
             return make(s, start)
 
         res, _ = evaluate_tracking(
-            [s], factory, name=name, oracle_start=oracle_start, progress=False
+            [s], factory, name=name, oracle_start=oracle_start, progress=False, bound=bound
         )
         runs.extend(res.runs)
         if progress and sys.stderr.isatty():

@@ -41,9 +41,9 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields, replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,6 +56,7 @@ from ..pose import Pose
 from ..sensor import chi2_quantile
 from ..track.data import Frame, GroundTruth, Odometry
 from ..track.records import TrackEstimate, TrackState
+from .bounds import MRCLAM_BEARING_ERRORS, StreamBound, bearing_information, stream_bound
 from .common import (
     NAN,
     calibration_of_bins,
@@ -75,6 +76,7 @@ __all__ = [
     "errors_against",
     "evaluate_mrclam_tracking",
     "evaluate_tracking",
+    "mrclam_bound",
     "run_stream",
     "score_run",
     "seed_spread",
@@ -84,6 +86,11 @@ __all__ = [
     "tracking_summary",
     "weight_ece",
 ]
+
+if TYPE_CHECKING:
+    from ..sensor import SensorModel
+    from ..track.motion import MotionModel
+    from ..track.tracker import TrackerConfig
 
 FloatArray = NDArray[np.float64]
 RngLike = np.random.Generator | int | None
@@ -355,6 +362,12 @@ class RunScore:
     cov_frames: int = 0
     cov_inside_50: int = 0
     cov_inside_99: int = 0
+    #: What the data allow (:func:`omniloc.evaluate.bounds.stream_bound`: a localizer told
+    #: the correspondences, as sure as the localizer must be): its time to localize, its
+    #: correct-after share and its recovery. NaN where not computed; inf: never.
+    bound_time_to_localize_s: float = NAN
+    bound_correct_after_rate: float = NAN
+    bound_recovery_s: float = NAN
 
     @property
     def realtime_factor(self) -> float:
@@ -518,6 +531,23 @@ def weight_ece(bins: Sequence[Sequence[float]]) -> float:
     return calibration_of_bins(n, total, ok).ece
 
 
+def _bound_totals(rs: Sequence[RunScore], jumps: Sequence[RunScore]) -> dict[str, float]:
+    """The bound's totals (:attr:`RunScore.bound_time_to_localize_s` and the rest): NaN
+    unless every run has its bound; inf ("never") as in :func:`censored_median`."""
+    have = bool(rs) and all(not math.isnan(r.bound_time_to_localize_s) for r in rs)
+    ttl = [r.bound_time_to_localize_s for r in rs]
+    after = [r.bound_correct_after_rate for r in rs if math.isfinite(r.bound_correct_after_rate)]
+    rec = [r.bound_recovery_s for r in jumps]
+    return {
+        "bound_time_to_localize_median_s": censored_median(ttl) if have else NAN,
+        "bound_time_to_localize_max_s": max(ttl) if have else NAN,
+        "bound_correct_after_rate": float(np.mean(after)) if have and after else NAN,
+        "bound_recovery_median_s": (
+            censored_median(rec) if have and rec and not any(map(math.isnan, rec)) else NAN
+        ),
+    }
+
+
 def _nanmedian(x: Sequence[float]) -> float:
     """The median of the finite values (NaN when there is none)."""
     a = np.asarray(x, dtype=np.float64)
@@ -639,6 +669,7 @@ class TrackingResult:
             "cov_frames": float(cov),
             "cov_inside_50_rate": sum(r.cov_inside_50 for r in rs) / cov if cov else NAN,
             "cov_inside_99_rate": sum(r.cov_inside_99 for r in rs) / cov if cov else NAN,
+            **_bound_totals(rs, jumps),
         }
 
     def to_csv(self, path: str | Path) -> None:
@@ -667,12 +698,16 @@ def evaluate_tracking(
     progress: bool = True,
     pos_tol_m: float = 0.3,
     heading_tol_deg: float = 5.0,
+    bound: Callable[[Stream], StreamBound] | None = None,
 ) -> tuple[TrackingResult, list[list[TrackEstimate]]]:
     """Run a localizer over time on every stream and score it.
 
     ``make_localizer(landmarks, start)`` builds a fresh localizer per stream; ``start`` is
     the true pose at the stream's start only when ``oracle_start`` is True (for a baseline
-    started at the truth), else None. Returns the scores and every estimate.
+    started at the truth), else None. ``bound(stream)``, when given, says what the data
+    allow on each stream (:func:`mrclam_bound`), scored beside the localizer
+    (:attr:`RunScore.bound_time_to_localize_s` and the rest). Returns the scores and every
+    estimate.
     """
     runs: list[RunScore] = []
     all_est: list[list[TrackEstimate]] = []
@@ -684,9 +719,18 @@ def evaluate_tracking(
                 p, _ = s.truth_at(s.start)
                 start = Pose.from_array(p[0])
             est, cpu = run_stream(make_localizer(s.landmarks, start), s)
-            runs.append(
-                score_run(s, est, cpu_s=cpu, pos_tol_m=pos_tol_m, heading_tol_deg=heading_tol_deg)
+            score = score_run(
+                s, est, cpu_s=cpu, pos_tol_m=pos_tol_m, heading_tol_deg=heading_tol_deg
             )
+            if bound is not None:
+                b = bound(s)
+                score = replace(
+                    score,
+                    bound_time_to_localize_s=b.time_to_localize_s,
+                    bound_correct_after_rate=b.correct_after_rate,
+                    bound_recovery_s=b.recovery_s,
+                )
+            runs.append(score)
             all_est.append(est)
             bar.update(1)
     finally:
@@ -750,17 +794,50 @@ def tracker_factory(
     :class:`~omniloc.track.Tracker` with a named preset's parameters, changed by
     ``settings`` (:func:`~omniloc.track.with_settings`; the start pose, even when given, is
     not used: the tracker localizes globally)."""
-    from ..track.presets import preset, with_settings
     from ..track.tracker import Tracker
 
-    sensor, motion, config = preset(preset_name)
-    if settings:
-        sensor, motion, config = with_settings(sensor, motion, config, settings)
+    sensor, motion, config = _preset_models(preset_name, settings)
 
     def make(landmarks: LandmarkMap, start: Pose | None) -> LocalizerOverTime:
         return Tracker(landmarks, sensor, motion, config)
 
     return make
+
+
+def _preset_models(
+    preset_name: str, settings: Mapping[str, Any] | None
+) -> tuple[SensorModel, MotionModel, TrackerConfig]:
+    """A named preset's sensor, motion and tracker configuration, changed by ``settings``."""
+    from ..track.presets import preset, with_settings
+
+    sensor, motion, config = preset(preset_name)
+    if settings:
+        sensor, motion, config = with_settings(sensor, motion, config, settings)
+    return sensor, motion, config
+
+
+def mrclam_bound(
+    p_min: float = 0.99,
+    *,
+    pos_tol_m: float = 0.3,
+    heading_tol_deg: float = 5.0,
+) -> Callable[[Stream], StreamBound]:
+    """``bound`` for :func:`evaluate_tracking` on MRCLAM streams: what a localizer told the
+    correspondences could do (:func:`omniloc.evaluate.bounds.stream_bound`), with the
+    recordings' odometry noise (:meth:`~omniloc.track.MotionModel.mrclam`), their measured
+    bearing errors (:data:`~omniloc.evaluate.bounds.MRCLAM_BEARING_ERRORS`) and a
+    localizer that says ``localized`` when it is within tolerance with probability
+    ``p_min``."""
+    from ..track.motion import MotionModel
+
+    motion = MotionModel.mrclam()
+    info = bearing_information(*MRCLAM_BEARING_ERRORS)
+    tol_h = math.radians(heading_tol_deg)
+
+    def bound(stream: Stream) -> StreamBound:
+        return stream_bound(stream, motion, info, p_min, tol_m=pos_tol_m, tol_heading=tol_h)
+
+    return bound
 
 
 @dataclass(frozen=True)
@@ -802,13 +879,20 @@ def evaluate_mrclam_tracking(
     if isinstance(kidnapped, bool) or not isinstance(kidnapped, (int, np.integer)) or kidnapped < 0:
         raise InputError(f"kidnapped must be an integer >= 0, got {kidnapped!r}")
     make = tracker_factory(preset_name, settings)  # bad settings: refused before the data
+    bound = mrclam_bound(
+        float(_preset_models(preset_name, settings)[2].localized_probability),
+        pos_tol_m=0.3,
+        heading_tol_deg=5.0,
+    )
     runs = mrclam_streams(path, robots)
-    whole, est = evaluate_tracking(runs, make, name="tracker: whole runs", progress=progress)
+    whole, est = evaluate_tracking(
+        runs, make, name="tracker: whole runs", progress=progress, bound=bound
+    )
     kid = None
     if kidnapped:
         jumps, plain = kidnap_streams(runs, int(kidnapped), rng=rng)
         kid, est_k = evaluate_tracking(
-            jumps + plain, make, name="tracker: kidnap streams", progress=progress
+            jumps + plain, make, name="tracker: kidnap streams", progress=progress, bound=bound
         )
         est = est + est_k
     return TrackingReport(whole, kid), est
@@ -871,6 +955,14 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
         f"{_fmt(tot['pos_rmse_m'], '.3f')} m, heading RMSE {_fmt(tot['heading_rmse_deg'])} deg; "
         f"{_fmt(tot['realtime_factor'], '.0f')}x real time"
     )
+    if not math.isnan(tot["bound_time_to_localize_max_s"]):
+        lines.append(
+            "what the data allow (a localizer told the correspondences, as sure as localized "
+            f"asks): first possible after a median of "
+            f"{_seconds(tot['bound_time_to_localize_median_s'])} (max "
+            f"{_seconds(tot['bound_time_to_localize_max_s'])}), then in "
+            f"{_fmt(100 * tot['bound_correct_after_rate'], '.1f')} % of the frames"
+        )
     lines.append(
         f"strongest hypothesis's weight against the truth ({int(tot['best_weight_frames'])} "
         f"frames with hypotheses): expected calibration error {_fmt(tot['best_weight_ece'], '.3f')}"
@@ -902,6 +994,12 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
                 tj["recovery_median_recovered_s"],
             )
             + f"); confidently wrong {_fmt(100 * tj['confidently_wrong_rate'], '.2f')} %"
+            + (
+                f"; told the correspondences, right again after a median of "
+                f"{_seconds(tj['bound_recovery_median_s'])} at best"
+                if not math.isnan(tj["bound_recovery_median_s"])
+                else ""
+            )
         )
         lines.append(
             f"same segments without a jump ({int(tp['runs'])}): false alarm on "

@@ -1,0 +1,468 @@
+"""What the data allow: how soon ANY localizer could honestly say ``localized`` on a stream.
+
+A localizer over time is judged by when it is first right, how often it is right after, and
+how soon it is right again after a kidnapping. Those figures mean little without what the
+recording itself allows. This module bounds them with everything a localizer could be given
+short of the answer: it is TOLD which landmark each bearing comes from (the frames' truth,
+:attr:`omniloc.track.Frame.truth`; clutter is dropped), its odometry is linearised at the
+true path, and it starts from no information about the pose.
+
+Along the stream's true trajectory it runs the information filter of the bearings and the
+odometry -- the recursion of the posterior Cramer-Rao bound (Tichavsky, Muravchik and
+Nehorai, IEEE T-SP 1998) evaluated on the recorded path: the covariance no estimator beats
+under the model linearised there.
+
+* Between frames, the odometry's noise (a :class:`~omniloc.track.MotionModel`, integrated over
+  the recorded velocities between the frames, its latency applied) moves the information as a
+  Kalman prediction does, in information form (:func:`predict_information`), which holds
+  while the information is still singular.
+* At each frame every landmark bearing adds ``info * H^T H``, ``H`` its gradient at the true
+  pose and ``info`` one bearing's Fisher information (:func:`bearing_information`: ``1 /
+  sigma^2`` for a Gaussian, more for a sharp core with a heavier tail).
+
+A frame *could be localized* when the pose there is within the tolerance (0.3 m, 5 deg) of
+its estimate with probability ``p_min`` under that covariance (:func:`tolerance_probability`):
+the earliest an honest localizer -- one that says ``localized`` only when it is that sure --
+could say it and be right by design.
+
+What the bound leaves out makes it optimistic, so its times are lower bounds and its shares
+upper bounds: the correspondences are known (ruling out the wrong places that fit is a real
+localizer's hard part), the bearing errors are taken as independent from frame to frame, the
+odometry's errors as the model's, without biases. Only negative information (landmarks in
+view that were not reported) is left out.
+
+* :func:`stream_bound` -- a stream's bound in the terms of
+  :func:`~omniloc.evaluate.tracking.score_run`: the time from its start to the first frame
+  that could be localized, the share of the frames from there on that could be, and the time
+  from a kidnapping to the first frame after it that could be (the filter started afresh at
+  the jump);
+* :func:`times_to_localize` -- from each of many start frames, the time to the first frame
+  that could be localized (a robot set down there knowing nothing);
+* :func:`confident_frames` -- which frames could be localized, by a filter started at the
+  first frame (and afresh at given frames).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.special import erf
+
+from ..errors import InputError
+from ..pose import bearing_jacobian
+from ..track.motion import MotionModel, between, compose_jacobians, integrate
+from ..track.tracker import within_tolerance
+
+if TYPE_CHECKING:
+    from .tracking import Stream
+
+__all__ = [
+    "MRCLAM_BEARING_ERRORS",
+    "BoundSteps",
+    "StreamBound",
+    "bearing_information",
+    "bound_steps",
+    "confident_frames",
+    "predict_information",
+    "stream_bound",
+    "times_to_localize",
+    "tolerance_probability",
+]
+
+FloatArray = NDArray[np.float64]
+
+#: MRCLAM set 6's bearing errors at the true poses (docs/tracking.md, measured against the
+#: Vicon track): a mixture of zero-mean Gaussians, 57 % with an sd of 0.33 deg and 43 % with
+#: 1.03 deg, as (shares, sds in radians). One such bearing is worth a Gaussian of 0.52 deg.
+MRCLAM_BEARING_ERRORS: tuple[tuple[float, ...], tuple[float, ...]] = (
+    (0.57, 0.43),
+    (math.radians(0.33), math.radians(1.03)),
+)
+
+#: Draws of the Monte Carlo that settles a tolerance probability the bounds do not (a
+#: standard error of 0.0005 at 0.99).
+MC_DRAWS = 50_000
+
+
+def bearing_information(shares: ArrayLike, sds: ArrayLike) -> float:
+    """Fisher information (1/rad^2) of one bearing whose error is a zero-mean Gaussian
+    mixture: ``int p'(e)^2 / p(e) de``, on a grid of 20,001 points over +-30 of the widest sd.
+
+    Parameters
+    ----------
+    shares : array_like, shape (k,)
+        The components' shares (>= 0, not all 0; normalised here).
+    sds : array_like, shape (k,)
+        Their standard deviations, radians (> 0).
+
+    Raises
+    ------
+    InputError
+        Shares and sds that do not pair up, a share below 0 or all 0, an sd not above 0.
+
+    Examples
+    --------
+    >>> round(bearing_information([1.0], [0.5]), 6)  # a Gaussian: 1 / sd^2
+    4.0
+    """
+    try:
+        w = np.asarray(shares, dtype=np.float64).reshape(-1)
+        s = np.asarray(sds, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"shares and sds must be numbers, got {shares!r} and {sds!r}") from exc
+    if (
+        w.shape != s.shape
+        or w.size == 0
+        or not (np.isfinite(w).all() and np.isfinite(s).all())
+        or (s <= 0).any()
+        or (w < 0).any()
+        or not w.sum() > 0
+    ):
+        raise InputError(
+            "shares and sds must pair up, shares >= 0 and not all 0, sds finite and > 0: "
+            f"got {shares!r} and {sds!r}"
+        )
+    w = w / w.sum()
+    e = np.linspace(-30 * s.max(), 30 * s.max(), 20_001)
+    g = w * np.exp(-0.5 * (e[:, None] / s) ** 2) / (s * math.sqrt(2 * math.pi))
+    p = g.sum(axis=1)
+    dp = (-g * e[:, None] / s**2).sum(axis=1)
+    ok = p > 0
+    return float(np.trapezoid(dp[ok] ** 2 / p[ok], e[ok]))
+
+
+def predict_information(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArray:
+    """The Kalman prediction ``P' = F P F^T + N`` in information form.
+
+    ``Y' = (I + Y~ N)^-1 Y~`` with ``Y~ = F^-T Y F^-1``: it holds for information matrices
+    that are singular (a direction not observed yet) and for a singular ``N``.
+
+    Parameters
+    ----------
+    Y : ndarray, shape (..., 3, 3)
+        Information matrices (symmetric, positive semi-definite).
+    F : ndarray, shape (3, 3)
+        The motion's Jacobian with respect to the pose (invertible).
+    N : ndarray, shape (3, 3)
+        The motion noise's covariance in the world frame.
+    """
+    Y, F, N = (np.asarray(a, dtype=np.float64) for a in (Y, F, N))
+    if Y.shape[-2:] != (3, 3) or F.shape != (3, 3) or N.shape != (3, 3):
+        raise InputError(
+            f"predict_information needs Y (..., 3, 3), F and N (3, 3), got {Y.shape}, "
+            f"{F.shape}, {N.shape}"
+        )
+    if not (np.isfinite(Y).all() and np.isfinite(F).all() and np.isfinite(N).all()):
+        raise InputError("predict_information needs finite Y, F and N")
+    try:
+        Finv = np.linalg.inv(F)
+    except np.linalg.LinAlgError as exc:
+        raise InputError("predict_information needs an invertible F") from exc
+    Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
+    Yn = np.linalg.solve(np.eye(3) + Yt @ N, Yt)
+    return np.asarray(0.5 * (Yn + np.swapaxes(Yn, -1, -2)), dtype=np.float64)
+
+
+def _draws() -> FloatArray:
+    return np.random.default_rng(0).standard_normal((MC_DRAWS, 3))
+
+
+def _bounds(cov: FloatArray, tol_m: float, tol_heading: float) -> tuple[float, float]:
+    """Lower and upper bounds of the tolerance probability of a zero-mean Gaussian error.
+
+    Lower: the position's circle under its widest variance (Anderson's theorem) times the
+    heading's share (the Gaussian correlation inequality). Upper: the smaller of the
+    heading's share and the share of the strip along the widest position axis."""
+    lam = max(float(np.linalg.eigvalsh(cov[:2, :2])[-1]), 1e-300)
+    sd_h = math.sqrt(max(float(cov[2, 2]), 1e-300))
+    hi = min(
+        float(erf(tol_heading / (math.sqrt(2.0) * sd_h))),
+        float(erf(tol_m / math.sqrt(2.0 * lam))),
+    )
+    return within_tolerance(cov, tol_m, tol_heading), hi
+
+
+def tolerance_probability(
+    cov: ArrayLike,
+    tol_m: float = 0.3,
+    tol_heading: float = math.radians(5.0),
+    draws: FloatArray | None = None,
+) -> float:
+    """P(|position error| <= ``tol_m`` and |heading error| <= ``tol_heading``) for a
+    zero-mean Gaussian pose error of covariance ``cov`` (3 x 3): the bounds of the module's
+    documentation where they agree within 1e-4, else a Monte Carlo of ``draws`` (standard
+    normal rows; 50,000 fixed ones by default).
+
+    Examples
+    --------
+    >>> round(tolerance_probability(np.diag([1e-4, 1e-4, 1e-6])), 4)
+    1.0
+    """
+    _positive("tol_m", tol_m)
+    _positive("tol_heading", tol_heading)
+    c = np.asarray(cov, dtype=np.float64)
+    if c.shape != (3, 3) or not np.isfinite(c).all():
+        raise InputError(f"cov must be a finite 3 x 3 covariance, got shape {c.shape}")
+    lo, hi = _bounds(c, tol_m, tol_heading)
+    if hi - lo < 1e-4:
+        return lo
+    try:
+        L = np.linalg.cholesky(0.5 * (c + c.T))
+    except np.linalg.LinAlgError:
+        return lo
+    x = (_draws() if draws is None else draws) @ L.T
+    ok = (np.hypot(x[:, 0], x[:, 1]) <= tol_m) & (np.abs(x[:, 2]) <= tol_heading)
+    return float(ok.mean())
+
+
+def _could_localize(
+    Y: FloatArray, p_min: float, tol_m: float, tol_heading: float, draws: FloatArray
+) -> bool:
+    """Whether the information ``Y`` puts the pose within tolerance with probability
+    ``p_min`` (False while it is singular: some direction not observed yet)."""
+    ev = np.linalg.eigvalsh(Y)
+    if not ev[0] > 1e-12 * max(ev[-1], 1e-300):
+        return False
+    cov = np.asarray(np.linalg.inv(Y), dtype=np.float64)
+    lo, hi = _bounds(cov, tol_m, tol_heading)
+    if hi < p_min:
+        return False
+    if lo >= p_min:
+        return True
+    return tolerance_probability(cov, tol_m, tol_heading, draws) >= p_min
+
+
+@dataclass(frozen=True)
+class BoundSteps:
+    """A stream's frames as the information filter sees them (frames with ground truth).
+
+    Attributes
+    ----------
+    t : ndarray, shape (k,)
+        Frame times (stream time).
+    F, N : ndarray, shape (k, 3, 3)
+        The prediction from frame ``i - 1`` to frame ``i``: the motion's Jacobian with
+        respect to the pose, and the odometry's noise in the world frame (the identity and
+        zero at ``i = 0``).
+    HtH : ndarray, shape (k, 3, 3)
+        Sum over frame ``i``'s landmark bearings of ``H^T H``.
+    bearings : ndarray of int, shape (k,)
+        The landmark bearings of each frame.
+    """
+
+    t: FloatArray
+    F: FloatArray
+    N: FloatArray
+    HtH: FloatArray
+    bearings: NDArray[np.int64]
+
+
+def bound_steps(stream: Stream, motion: MotionModel) -> BoundSteps:
+    """The information filter's steps along a stream's true trajectory.
+
+    Frames outside the ground truth are left out (the odometry joins their neighbours);
+    bearings without a true landmark (clutter) are dropped.
+
+    Raises
+    ------
+    InputError
+        A stream whose frames carry no truth (:attr:`Frame.truth`): the bound needs the
+        correspondences.
+    """
+    if stream.frames and all(f.truth is None for f in stream.frames):
+        raise InputError(
+            f"{stream.name}: the frames carry no landmark truth (Frame.truth); the bound "
+            "needs the correspondences"
+        )
+    t_all = np.array([f.t for f in stream.frames], dtype=np.float64)
+    truth, _ = stream.truth_at(t_all) if t_all.size else (np.zeros((0, 3)), None)
+    keep = np.asarray(np.isfinite(truth).all(axis=1), dtype=bool)
+    frames = [f for f, k in zip(stream.frames, keep.tolist(), strict=True) if k]
+    t = t_all[keep]
+    poses = truth[keep]
+    k = t.size
+    F = np.tile(np.eye(3), (k, 1, 1))
+    N = np.zeros((k, 3, 3))
+    HtH = np.zeros((k, 3, 3))
+    nb = np.zeros(k, dtype=np.int64)
+    xy = stream.landmarks.xy
+    for i, f in enumerate(frames):
+        if i > 0:
+            dt, v, w = stream.odometry.between(t[i - 1] - motion.delay_s, t[i] - motion.delay_s)
+            _, Q = integrate(dt, v, w, motion)
+            Jp, Jd = compose_jacobians(poses[i - 1], between(poses[i - 1], poses[i]))
+            F[i] = Jp
+            N[i] = Jd @ Q @ Jd.T
+        rows = [r for r in (f.truth or ()) if r is not None]
+        if rows:
+            _, G = bearing_jacobian(xy[rows], poses[i])
+            HtH[i] = G.T @ G
+            nb[i] = len(rows)
+    return BoundSteps(t, F, N, HtH, nb)
+
+
+def _positive(name: str, v: object) -> None:
+    ok = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+    if not (ok and math.isfinite(float(v)) and float(v) > 0):  # type: ignore[arg-type]
+        raise InputError(f"{name} must be finite and > 0, got {v!r}")
+
+
+def _check(info: float, p_min: float, tol_m: float, tol_heading: float) -> None:
+    for name, v in (("info", info), ("tol_m", tol_m), ("tol_heading", tol_heading)):
+        _positive(name, v)
+    if not (isinstance(p_min, (int, float, np.integer, np.floating)) and 0.0 < p_min < 1.0):
+        raise InputError(f"p_min must lie in (0, 1), got {p_min!r}")
+
+
+def confident_frames(
+    steps: BoundSteps,
+    info: float,
+    p_min: float,
+    *,
+    restarts: Sequence[int] = (),
+    tol_m: float = 0.3,
+    tol_heading: float = math.radians(5.0),
+) -> NDArray[np.bool_]:
+    """For each frame, whether the filter started at the first frame with no information
+    (and again at each frame index of ``restarts``: a kidnapping) could call the pose
+    localized there with probability ``p_min``.
+
+    Examples
+    --------
+    Standing still, one bearing a frame at three landmarks in turn: from the third frame on.
+
+    >>> import math
+    >>> L = np.array([[3.0, 0.5], [2.5, -1.5], [4.0, 2.0]])
+    >>> from omniloc.pose import bearing_jacobian
+    >>> HtH = np.stack([bearing_jacobian(L[[i % 3]], np.zeros(3))[1] for i in range(5)])
+    >>> HtH = np.einsum("kij,kil->kjl", HtH, HtH)
+    >>> st = BoundSteps(np.arange(5.0), np.tile(np.eye(3), (5, 1, 1)),
+    ...                 np.zeros((5, 3, 3)), HtH, np.ones(5, dtype=np.int64))
+    >>> confident_frames(st, 1 / math.radians(0.3) ** 2, 0.99).tolist()
+    [False, False, True, True, True]
+    """
+    _check(info, p_min, tol_m, tol_heading)
+    try:
+        again = {int(i) for i in restarts}
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"restarts must be frame indices, got {restarts!r}") from exc
+    draws = _draws()
+    out = np.zeros(steps.t.size, dtype=bool)
+    Y = np.zeros((3, 3))
+    for i in range(steps.t.size):
+        if i in again:
+            Y = np.zeros((3, 3))
+        elif i > 0:
+            Y = predict_information(Y, steps.F[i], steps.N[i])
+        Y = Y + info * steps.HtH[i]
+        out[i] = _could_localize(Y, p_min, tol_m, tol_heading, draws)
+    return out
+
+
+def times_to_localize(
+    steps: BoundSteps,
+    starts: ArrayLike,
+    info: float,
+    p_min: float,
+    *,
+    tol_m: float = 0.3,
+    tol_heading: float = math.radians(5.0),
+) -> FloatArray:
+    """For each start frame index, the time from it to the first frame (itself included) at
+    which a filter started there with no information could call the pose localized with
+    probability ``p_min``; inf when no frame of the stream does.
+
+    All starts run at once: each frame predicts and updates the information of every start
+    begun and not yet localized.
+    """
+    _check(info, p_min, tol_m, tol_heading)
+    try:
+        s = np.asarray(starts, dtype=np.int64).reshape(-1)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"starts must be frame indices, got {starts!r}") from exc
+    if s.size and (s.min() < 0 or s.max() >= steps.t.size):
+        raise InputError(f"starts must be frame indices in [0, {steps.t.size}), got {starts!r}")
+    draws = _draws()
+    out = np.full(s.size, np.inf)
+    Y = np.zeros((s.size, 3, 3))
+    active = np.zeros(s.size, dtype=bool)
+    last = int(s.max()) if s.size else -1
+    for i in range(steps.t.size):
+        if i > 0 and active.any():
+            Y[active] = predict_information(Y[active], steps.F[i], steps.N[i])
+        active |= s == i
+        Y[active] += info * steps.HtH[i]
+        for j in np.flatnonzero(active):
+            if _could_localize(Y[j], p_min, tol_m, tol_heading, draws):
+                out[j] = steps.t[i] - steps.t[s[j]]
+                active[j] = False
+        if i >= last and not active.any():
+            break
+    return out
+
+
+@dataclass(frozen=True)
+class StreamBound:
+    """What a localizer told the correspondences could do on one stream (see
+    :func:`stream_bound`; inf: never within the stream, NaN: not defined)."""
+
+    #: From the stream's start to the first frame (before any jump) that could be localized.
+    time_to_localize_s: float
+    #: The share of the frames from that one on that could be localized.
+    correct_after_rate: float
+    #: From the jump to the first frame after it that could be localized (NaN: no jump).
+    recovery_s: float
+
+
+def stream_bound(
+    stream: Stream,
+    motion: MotionModel,
+    info: float,
+    p_min: float,
+    *,
+    tol_m: float = 0.3,
+    tol_heading: float = math.radians(5.0),
+) -> StreamBound:
+    """The bound on one stream, in the terms :func:`~omniloc.evaluate.tracking.score_run`
+    scores a localizer by (its time to localize, correct-after share and recovery).
+
+    The filter starts at the stream's first frame and afresh at its kidnapping, if any.
+
+    Parameters
+    ----------
+    stream : Stream
+        With the frames' landmark truth (:func:`~omniloc.evaluate.tracking.mrclam_streams`).
+    motion : MotionModel
+        The odometry's noise.
+    info : float
+        One bearing's Fisher information (:func:`bearing_information`).
+    p_min : float
+        How sure a localizer must be to say ``localized`` (a tracker's
+        ``localized_probability``).
+    """
+    _check(info, p_min, tol_m, tol_heading)
+    steps = bound_steps(stream, motion)
+    jump = stream.jump_t
+    j = int(np.searchsorted(steps.t, jump, side="left")) if math.isfinite(jump) else steps.t.size
+    ok = confident_frames(
+        steps,
+        info,
+        p_min,
+        restarts=[j] if j < steps.t.size else [],
+        tol_m=tol_m,
+        tol_heading=tol_heading,
+    )
+    pre = np.flatnonzero(ok[:j])
+    ttl = float(steps.t[pre[0]] - stream.start) if pre.size else math.inf
+    first = np.flatnonzero(ok)
+    rate = float(ok[first[0] :].mean()) if first.size else math.nan
+    recovery = math.nan
+    if math.isfinite(jump):
+        post = np.flatnonzero(ok[j:])
+        recovery = float(steps.t[j + post[0]] - jump) if post.size else math.inf
+    return StreamBound(ttl, rate, recovery)
