@@ -1936,6 +1936,118 @@ def _scenario_targets() -> list[Target]:
     ]
 
 
+ARRAYS_OF_NUMBERS: Pool = (
+    ("nan", [0.1, float("nan")]),
+    ("strings", ["a", "b"]),
+    ("2-D", [[0.1, 0.2]]),
+    ("None", None),
+    ("empty", []),
+    ("complex", [1j, 2j]),
+    ("1e300", [1e300, 1e300]),
+    ("negative", [-1.0, 1.0]),
+    ("400-digit", [10**400, 1]),
+    ("three", [0.1, 0.2, 0.3]),
+    ("halves", [0.5, 1.5]),
+)
+
+MATRICES: Pool = (
+    ("nan", np.full((3, 3), np.nan)),
+    ("inf", np.diag([np.inf, 1.0, 1.0])),
+    ("1e300", np.eye(3) * 1e300),
+    ("zeros", np.zeros((3, 3))),
+    ("2 x 2", np.eye(2)),
+    ("flat", [1.0] * 9),
+    ("strings", [["a"] * 3] * 3),
+    ("None", None),
+    ("indefinite", np.diag([1.0, -1.0, 1.0])),
+    ("asymmetric", np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])),
+    ("denormal", np.eye(3) * 5e-324),
+    ("complex", np.eye(3) + 1j),
+    ("stack of two", np.stack([np.eye(3)] * 2)),
+)
+
+
+def _bound_steps() -> Any:
+    """A robot standing still seeing three landmarks, one a frame, for nine frames."""
+    from omniloc.evaluate.bounds import BoundSteps
+
+    L = np.array([[3.0, 0.5], [2.5, -1.5], [4.0, 2.0]])
+    G = np.stack([omniloc.bearing_jacobian(L[[k % 3]], np.zeros(3))[1] for k in range(9)])
+    N = np.zeros((9, 3, 3))
+    N[1:] = np.diag([1e-6, 1e-6, 1e-5])
+    return BoundSteps(
+        np.arange(9) * 0.25,
+        np.tile(np.eye(3), (9, 1, 1)),
+        N,
+        np.einsum("kij,kil->kjl", G, G),
+        np.ones(9, dtype=np.int64),
+    )
+
+
+def _bounds_targets() -> list[Target]:
+    from omniloc.evaluate import bounds as B
+
+    def prob_check(kw: dict[str, Any], v: Any) -> None:
+        if not 0.0 <= v <= 1.0:
+            raise Insane(f"probability {v}")
+
+    filt = {
+        "info": Arg(("info",), NUMBERS),
+        "p_min": Arg(("p_min",), PROBABILITIES),
+        "tol_m": Arg(("tol_m",), NUMBERS),
+        "tol_heading": Arg(("tol_heading",), ANGLES),
+    }
+    base = lambda: {  # noqa: E731
+        "steps": Lazy(_bound_steps),
+        "info": 1 / math.radians(0.3) ** 2,
+        "p_min": 0.99,
+        "tol_m": 0.3,
+        "tol_heading": math.radians(5.0),
+    }
+    return [
+        Target(
+            "bearing_information",
+            lambda kw: B.bearing_information(**kw),
+            lambda: {"shares": [0.57, 0.43], "sds": [0.006, 0.018]},
+            {
+                "shares": Arg(("shares",), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+                "sds": Arg(("sds",), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+            },
+        ),
+        Target(
+            "tolerance_probability",
+            lambda kw: B.tolerance_probability(**kw),
+            lambda: {"cov": np.diag([0.01, 0.01, 0.001]), "tol_m": 0.3, "tol_heading": 0.09},
+            {
+                "cov": Arg(("cov",), MATRICES),
+                "tol_m": Arg(("tol_m",), NUMBERS),
+                "tol_heading": Arg(("tol_heading",), ANGLES),
+            },
+            check=prob_check,
+        ),
+        Target(
+            "predict_information",
+            lambda kw: B.predict_information(**kw),
+            lambda: {"Y": np.eye(3), "F": np.eye(3), "N": np.eye(3) * 1e-3},
+            {k: Arg(("predict_information", k), MATRICES) for k in ("Y", "F", "N")},
+        ),
+        Target(
+            "confident_frames",
+            lambda kw: B.confident_frames(**kw),
+            lambda: {**base(), "restarts": ()},
+            {**filt, "restarts": Arg(("restarts",), merged(ARRAYS_OF_NUMBERS, NUMBERS))},
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "times_to_localize",
+            lambda kw: B.times_to_localize(**kw),
+            lambda: {**base(), "starts": [0, 3]},
+            {**filt, "starts": Arg(("starts",), merged(ARRAYS_OF_NUMBERS, COUNTS))},
+            check=lambda kw, v: None,  # inf: never
+        ),
+    ]
+
+
 def all_targets() -> dict[str, Target]:
     """Every target by name (the census walks them all)."""
     out: dict[str, Target] = {}
@@ -1951,6 +2063,7 @@ def all_targets() -> dict[str, Target]:
         + _settings_targets()
         + _plot_targets()
         + _scenario_targets()
+        + _bounds_targets()
     ):
         out[t.name] = t
     return out

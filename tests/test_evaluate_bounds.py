@@ -67,11 +67,25 @@ def test_a_gaussian_bearing_is_worth_its_inverse_variance_and_a_mixture_more() -
         ([0.0], [0.1]),
         ([1.0], [math.nan]),
         (["a"], [0.1]),
+        ([1.0], [1e-10]),
+        ([1.0], [7.0]),
     ],
 )
 def test_a_bearing_error_model_that_is_not_one_is_refused(shares: list, sds: list) -> None:
     with pytest.raises(InputError, match="shares and sds"):
         bearing_information(shares, sds)
+
+
+def test_a_mixture_of_very_different_widths_is_integrated_as_well_as_one() -> None:
+    # A component 1e6 times narrower holding a share of 1e-3: its information dominates.
+    w, s = [1.0 - 1e-3, 1e-3], [1e-2, 1e-8]
+    got = bearing_information(w, s)
+    assert got == pytest.approx(1e-3 / 1e-16, rel=0.02)
+    assert bearing_information([1.0], [2 * math.pi]) == pytest.approx(1 / (4 * math.pi**2))
+    # Shares are relative, however large.
+    assert bearing_information([1e300, 1e300], [0.1, 0.2]) == pytest.approx(
+        bearing_information([1.0, 1.0], [0.1, 0.2])
+    )
 
 
 # --- the prediction in information form -------------------------------------------------------
@@ -125,9 +139,19 @@ def test_the_probability_is_the_share_of_errors_within_tolerance() -> None:
     assert tolerance_probability(np.diag([1e-4, 1e-4, 1e-6])) == pytest.approx(1.0, abs=1e-6)
 
 
-@pytest.mark.parametrize("cov", [np.eye(2), np.full((3, 3), np.nan)])
+@pytest.mark.parametrize(
+    "cov",
+    [
+        np.eye(2),
+        np.full((3, 3), np.nan),
+        np.eye(3) * 1e300,
+        np.diag([1.0, -1.0, 1.0]),
+        np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+        [["a"] * 3] * 3,
+    ],
+)
 def test_a_covariance_that_is_not_one_is_refused(cov: np.ndarray) -> None:
-    with pytest.raises(InputError, match="3 x 3"):
+    with pytest.raises(InputError, match="cov"):
         tolerance_probability(cov)
 
 

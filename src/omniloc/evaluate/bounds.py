@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import erf
 
 from ..errors import InputError
+from ..io import shorten
 from ..pose import bearing_jacobian
 from ..track.motion import MotionModel, between, compose_jacobians, integrate
 from ..track.tracker import within_tolerance
@@ -84,6 +85,14 @@ MRCLAM_BEARING_ERRORS: tuple[tuple[float, ...], tuple[float, ...]] = (
     (math.radians(0.33), math.radians(1.03)),
 )
 
+#: The narrowest bearing error sd :func:`bearing_information` takes (radians).
+MIN_SD = 1e-9
+#: The largest one bearing's information (1/rad^2: an sd of 3e-8 rad), tolerance in
+#: position (m) and entry of a covariance or information matrix the bound takes.
+MAX_INFO = 1e15
+MAX_TOL_M = 1e6
+MAX_ENTRY = 1e100
+
 #: Draws of the Monte Carlo that settles a tolerance probability the bounds do not (a
 #: standard error of 0.0005 at 0.99).
 MC_DRAWS = 50_000
@@ -91,49 +100,51 @@ MC_DRAWS = 50_000
 
 def bearing_information(shares: ArrayLike, sds: ArrayLike) -> float:
     """Fisher information (1/rad^2) of one bearing whose error is a zero-mean Gaussian
-    mixture: ``int p'(e)^2 / p(e) de``, on a grid of 20,001 points over +-30 of the widest sd.
+    mixture: ``int p'(e)^2 / p(e) de``.
 
     Parameters
     ----------
     shares : array_like, shape (k,)
         The components' shares (>= 0, not all 0; normalised here).
     sds : array_like, shape (k,)
-        Their standard deviations, radians (> 0).
+        Their standard deviations, radians (from 1e-9 to 2 pi).
 
     Raises
     ------
     InputError
-        Shares and sds that do not pair up, a share below 0 or all 0, an sd not above 0.
+        Shares and sds that do not pair up, a share below 0 or all 0, an sd outside
+        [1e-9, 2 pi].
 
     Examples
     --------
     >>> round(bearing_information([1.0], [0.5]), 6)  # a Gaussian: 1 / sd^2
     4.0
     """
-    try:
-        w = np.asarray(shares, dtype=np.float64).reshape(-1)
-        s = np.asarray(sds, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"shares and sds must be numbers, got {shares!r} and {sds!r}") from exc
+    w = _real("shares and sds: shares", shares).reshape(-1)
+    s = _real("shares and sds: sds", sds).reshape(-1)
     if (
         w.shape != s.shape
         or w.size == 0
         or not (np.isfinite(w).all() and np.isfinite(s).all())
-        or (s <= 0).any()
+        or (s < MIN_SD).any()
+        or (s > 2 * math.pi).any()
         or (w < 0).any()
-        or not w.sum() > 0
+        or not w.max() > 0
     ):
         raise InputError(
-            "shares and sds must pair up, shares >= 0 and not all 0, sds finite and > 0: "
-            f"got {shares!r} and {sds!r}"
+            "shares and sds must pair up, the shares >= 0 and not all 0, the sds in "
+            f"[{MIN_SD:g}, 2 pi] radians: got {_describe(shares)} and {_describe(sds)}"
         )
+    w = w / w.max()
     w = w / w.sum()
-    e = np.linspace(-30 * s.max(), 30 * s.max(), 20_001)
+    # The integrand is even: twice the integral over e >= 0, on a grid that is geometric from
+    # far inside the sharpest component to far beyond the widest (exact to ~1e-7).
+    e = np.concatenate([[0.0], np.geomspace(1e-4 * s.min(), 40.0 * s.max(), 20_000)])
     g = w * np.exp(-0.5 * (e[:, None] / s) ** 2) / (s * math.sqrt(2 * math.pi))
     p = g.sum(axis=1)
     dp = (-g * e[:, None] / s**2).sum(axis=1)
     ok = p > 0
-    return float(np.trapezoid(dp[ok] ** 2 / p[ok], e[ok]))
+    return float(2.0 * np.trapezoid(dp[ok] ** 2 / p[ok], e[ok]))
 
 
 def predict_information(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArray:
@@ -151,21 +162,54 @@ def predict_information(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArr
     N : ndarray, shape (3, 3)
         The motion noise's covariance in the world frame.
     """
-    Y, F, N = (np.asarray(a, dtype=np.float64) for a in (Y, F, N))
-    if Y.shape[-2:] != (3, 3) or F.shape != (3, 3) or N.shape != (3, 3):
-        raise InputError(
-            f"predict_information needs Y (..., 3, 3), F and N (3, 3), got {Y.shape}, "
-            f"{F.shape}, {N.shape}"
-        )
-    if not (np.isfinite(Y).all() and np.isfinite(F).all() and np.isfinite(N).all()):
-        raise InputError("predict_information needs finite Y, F and N")
+    Y = _matrices("predict_information's Y", Y, (..., 3, 3))
+    F = _matrices("predict_information's F", F, (3, 3))
+    N = _matrices("predict_information's N", N, (3, 3))
     try:
         Finv = np.linalg.inv(F)
+        Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
+        Yn = np.linalg.solve(np.eye(3) + Yt @ N, Yt)
     except np.linalg.LinAlgError as exc:
-        raise InputError("predict_information needs an invertible F") from exc
-    Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
-    Yn = np.linalg.solve(np.eye(3) + Yt @ N, Yt)
+        raise InputError(f"predict_information: F or I + Y~ N is singular ({exc})") from exc
+    if not np.isfinite(Yn).all():
+        raise InputError("predict_information: the prediction overflows (Y, F or N too large)")
     return np.asarray(0.5 * (Yn + np.swapaxes(Yn, -1, -2)), dtype=np.float64)
+
+
+def _describe(a: object) -> str:
+    """A value as one short line (an array by its type and shape: numpy prints on many)."""
+    if isinstance(a, np.ndarray):
+        return f"an array of {a.dtype} of shape {a.shape}"
+    return " ".join(shorten(a).split())
+
+
+def _real(name: str, a: object) -> FloatArray:
+    """``a`` as a float64 array of real numbers (bools and integers too), or an
+    :class:`InputError` naming it."""
+    try:
+        m = np.asarray(a)
+        if m.dtype.kind not in "biuf":
+            raise TypeError(m.dtype)
+        return np.asarray(m, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"{name} must be real numbers, got {_describe(a)}") from exc
+
+
+def _matrices(name: str, a: object, shape: tuple[object, ...]) -> FloatArray:
+    """``a`` as finite float64 of ``shape`` (``...``: any leading axes), entries at most
+    MAX_ENTRY in magnitude, or an :class:`InputError` naming it."""
+    m = _real(name, a)
+    fixed = shape[1:] if shape[0] is ... else shape
+    if (
+        m.ndim < len(fixed)
+        or m.shape[m.ndim - len(fixed) :] != fixed
+        or (shape[0] is not ... and m.ndim != len(fixed))
+    ):
+        want = "(..., 3, 3)" if shape[0] is ... else str(shape)
+        raise InputError(f"{name} must have shape {want}, got {m.shape}")
+    if not np.isfinite(m).all() or (m.size and np.abs(m).max() > MAX_ENTRY):
+        raise InputError(f"{name} must be finite, at most {MAX_ENTRY:g} in magnitude")
+    return m
 
 
 def _draws() -> FloatArray:
@@ -194,20 +238,32 @@ def tolerance_probability(
     draws: FloatArray | None = None,
 ) -> float:
     """P(|position error| <= ``tol_m`` and |heading error| <= ``tol_heading``) for a
-    zero-mean Gaussian pose error of covariance ``cov`` (3 x 3): the bounds of the module's
-    documentation where they agree within 1e-4, else a Monte Carlo of ``draws`` (standard
-    normal rows; 50,000 fixed ones by default).
+    zero-mean Gaussian pose error of covariance ``cov`` (3 x 3).
+
+    Bounded below by the position's circle under its widest variance times the heading's
+    share (the tracker's ``within_tolerance``), above by the smaller of the heading's share
+    and that of the strip along the widest position axis; where the two agree within 1e-4
+    the lower is returned, else a Monte Carlo of ``draws`` (standard normal rows, 50,000
+    fixed ones by default: a standard error of 0.0005 at 0.99).
+
+    Raises
+    ------
+    InputError
+        A ``cov`` that is not a finite, symmetric, positive semi-definite 3 x 3 matrix;
+        tolerances that are not numbers in (0, 1e6] m and (0, pi] rad.
 
     Examples
     --------
     >>> round(tolerance_probability(np.diag([1e-4, 1e-4, 1e-6])), 4)
     1.0
     """
-    _positive("tol_m", tol_m)
-    _positive("tol_heading", tol_heading)
-    c = np.asarray(cov, dtype=np.float64)
-    if c.shape != (3, 3) or not np.isfinite(c).all():
-        raise InputError(f"cov must be a finite 3 x 3 covariance, got shape {c.shape}")
+    _positive("tol_m", tol_m, MAX_TOL_M)
+    _positive("tol_heading", tol_heading, math.pi)
+    c = _matrices("cov", cov, (3, 3))
+    ev = np.linalg.eigvalsh(0.5 * (c + c.T))
+    scale = max(float(np.abs(c).max()), 1e-300)
+    if not (np.abs(c - c.T).max() <= 1e-9 * scale and ev[0] >= -1e-12 * scale):
+        raise InputError("cov must be a 3 x 3 covariance: symmetric, positive semi-definite")
     lo, hi = _bounds(c, tol_m, tol_heading)
     if hi - lo < 1e-4:
         return lo
@@ -306,17 +362,37 @@ def bound_steps(stream: Stream, motion: MotionModel) -> BoundSteps:
     return BoundSteps(t, F, N, HtH, nb)
 
 
-def _positive(name: str, v: object) -> None:
+def _indices(name: str, a: object, n: int) -> NDArray[np.int64]:
+    """``a`` as a flat array of frame indices in [0, n), or an :class:`InputError`."""
+    try:
+        arr = np.asarray(a)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(f"{name} must be frame indices, got {_describe(a)}") from exc
+    if arr.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if arr.ndim > 1 or arr.dtype.kind not in "iu" or arr.min() < 0 or arr.max() >= n:
+        raise InputError(f"{name} must be frame indices in [0, {n}), got {_describe(a)}")
+    return arr.reshape(-1).astype(np.int64)
+
+
+def _positive(name: str, v: object, hi: float) -> None:
+    """A real number in (0, hi], or an :class:`InputError` naming it."""
     ok = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-    if not (ok and math.isfinite(float(v)) and float(v) > 0):  # type: ignore[arg-type]
-        raise InputError(f"{name} must be finite and > 0, got {v!r}")
+    try:
+        x = float(v) if ok else math.nan  # type: ignore[arg-type]
+    except OverflowError:
+        x = math.inf
+    if not (math.isfinite(x) and 0.0 < x <= hi):
+        raise InputError(f"{name} must be a number in (0, {hi:g}], got {_describe(v)}")
 
 
 def _check(info: float, p_min: float, tol_m: float, tol_heading: float) -> None:
-    for name, v in (("info", info), ("tol_m", tol_m), ("tol_heading", tol_heading)):
-        _positive(name, v)
-    if not (isinstance(p_min, (int, float, np.integer, np.floating)) and 0.0 < p_min < 1.0):
-        raise InputError(f"p_min must lie in (0, 1), got {p_min!r}")
+    _positive("info", info, MAX_INFO)
+    _positive("tol_m", tol_m, MAX_TOL_M)
+    _positive("tol_heading", tol_heading, math.pi)
+    ok = isinstance(p_min, (int, float, np.integer, np.floating)) and not isinstance(p_min, bool)
+    if not (ok and 0.0 < p_min < 1.0):
+        raise InputError(f"p_min must lie in (0, 1), got {_describe(p_min)}")
 
 
 def confident_frames(
@@ -347,10 +423,7 @@ def confident_frames(
     [False, False, True, True, True]
     """
     _check(info, p_min, tol_m, tol_heading)
-    try:
-        again = {int(i) for i in restarts}
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"restarts must be frame indices, got {restarts!r}") from exc
+    again = set(_indices("restarts", restarts, steps.t.size).tolist())
     draws = _draws()
     out = np.zeros(steps.t.size, dtype=bool)
     Y = np.zeros((3, 3))
@@ -381,12 +454,7 @@ def times_to_localize(
     begun and not yet localized.
     """
     _check(info, p_min, tol_m, tol_heading)
-    try:
-        s = np.asarray(starts, dtype=np.int64).reshape(-1)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise InputError(f"starts must be frame indices, got {starts!r}") from exc
-    if s.size and (s.min() < 0 or s.max() >= steps.t.size):
-        raise InputError(f"starts must be frame indices in [0, {steps.t.size}), got {starts!r}")
+    s = _indices("starts", starts, steps.t.size)
     draws = _draws()
     out = np.full(s.size, np.inf)
     Y = np.zeros((s.size, 3, 3))
