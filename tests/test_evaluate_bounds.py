@@ -4,6 +4,7 @@ the correspondences, along the true path, and its place in the tracking evaluati
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -351,3 +352,21 @@ def test_restarts_and_starts_that_are_no_indices_are_refused() -> None:
         confident_frames(_steps([[0]]), 100.0, 0.9, restarts=["x"])
     with pytest.raises(InputError, match="starts"):
         times_to_localize(_steps([[0]]), ["x"], 100.0, 0.9)
+
+
+MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "tracking.md"
+
+
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_the_guides_example_prints_what_it_says(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = DOCS.read_text()
+    start = text.index("How soon could any localizer know where the robot is")
+    block = text[text.index("```python\n", start) + 10 : text.index("```\n", start + 10)]
+    said = [ln[2:] for ln in block.splitlines() if ln.startswith("# first possible after")]
+    assert len(said) == 1
+    monkeypatch.chdir(MRCLAM)
+    exec(compile(block, str(DOCS), "exec"), {})
+    assert capsys.readouterr().out.strip() == said[0]
