@@ -350,3 +350,48 @@ def test_seed_spread_reads_the_streams_figures(tmp_path: Path) -> None:
     lines = seed_spread_table(spread).splitlines()
     assert lines[0] == "| figure | seed 5 | seed 1 | range |"
     assert any(line.startswith("| plain: false alarms (%) |") for line in lines)
+
+
+def test_generic_frames_with_a_ground_truth_say_nothing_of_the_bound(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omniloc.track import write_groundtruth
+
+    lm, odo, fr = _write_inputs(tmp_path)
+    gt = tmp_path / "gt.csv"
+    write_groundtruth(gt, _run().truth)
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
+    assert main([*argv, "--groundtruth", str(gt)]) == 0
+    out = capsys.readouterr().out
+    assert "against the ground truth" in out
+    assert "what the data allow" not in out  # the frames do not say which landmark is which
+
+
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_track_on_mrclam_with_its_ground_truth_says_what_the_data_allow(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    data = _truncated_mrclam(tmp_path / "mrclam", 30.0)
+    argv = [
+        "-q", "track", "--map", str(data / "landmarks.csv"), "--preset", "mrclam",
+        "--odometry", str(data / "robot2_odometry.csv"),
+        "--frames", str(data / "robot2_frames.csv"),
+    ]  # fmt: skip
+    assert main(argv) == 0
+    assert "what the data allow" not in capsys.readouterr().out  # no ground truth
+    gt = ["--groundtruth", str(data / "robot2_groundtruth_10hz.csv")]
+    assert main([*argv, *gt]) == 0
+    line = next(s for s in capsys.readouterr().out.splitlines() if "what the data allow" in s)
+    # Robot 2 sees four tubes in its first seconds: a localizer told them is sure at once.
+    after = float(line.split("(")[2].split(" s after")[0])
+    assert 0.0 <= after < 10.0 and "% of the frames" in line
+    # A map that lacks a tube the frames name: the run goes on, without the bound.
+    lines = (data / "landmarks.csv").read_text().splitlines()
+    kept = [s for s in lines if not s.startswith("15,")]  # tube 15, in robot 2's first frame
+    assert len(kept) == len(lines) - 1
+    (tmp_path / "fewer.csv").write_text("\n".join(kept) + "\n")
+    fewer = [*argv[:3], str(tmp_path / "fewer.csv"), *argv[4:], *gt]
+    assert main(fewer) == 0
+    out = capsys.readouterr().out
+    assert "against the ground truth" in out or "frames over" in out
+    assert "what the data allow" not in out

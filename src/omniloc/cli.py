@@ -402,7 +402,10 @@ def _add_track_parser(sub: Any) -> None:
     t.add_argument("--fov", type=_fov_deg, help="full field of view, deg (overrides the preset)")
     t.add_argument("--max-range", type=_positive, help="sensor range, m (overrides the preset)")
     t.add_argument(
-        "--groundtruth", type=Path, help="true track t,x,y,theta: errors in the summary and figure"
+        "--groundtruth",
+        type=Path,
+        help="true track t,x,y,theta: errors in the summary and figure; with frames that name "
+        "their landmarks (MRCLAM's), also what the data allow a localizer told them",
     )
     t.add_argument("--out", type=_out_path, metavar="TRAJ.tum", help="localized poses, TUM format")
     t.add_argument(
@@ -901,7 +904,6 @@ def _cmd_track(args: argparse.Namespace) -> int:
     from .evaluate.common import progress_bar
     from .maps import LandmarkMap
     from .track import (
-        load_frames,
         load_groundtruth,
         load_odometry,
         preset,
@@ -916,12 +918,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
         sensor, motion, config = with_settings(sensor, motion, config, settings)
     lm = LandmarkMap.load(args.map)
     odo = load_odometry(args.odometry)
-    frames = load_frames(args.frames, degrees=args.degrees)
-    if not frames:
-        raise InputError(f"{args.frames}: no frames")
     if args.truth_out is not None and args.groundtruth is None:
         raise InputError("--truth-out writes the ground truth: give it with --groundtruth")
     truth = load_groundtruth(args.groundtruth) if args.groundtruth is not None else None
+    frames = _frames_for_track(args, lm, truth is not None)
+    if not frames:
+        raise InputError(f"{args.frames}: no frames")
     changes: dict[str, Any] = {}
     if args.sigma is not None:
         changes["sigma"] = float(np.deg2rad(args.sigma))
@@ -985,6 +987,9 @@ def _cmd_track(args: argparse.Namespace) -> int:
                 f"{np.sqrt(np.nanmean(d_pos[loc] ** 2)):.3f} m, heading RMSE "
                 f"{np.sqrt(np.nanmean(d_hdg[loc] ** 2)):.2f} deg"
             )
+        said = _what_the_data_allow(lm, odo, frames, truth, sensor, motion, config, est[0].t)
+        if said:
+            print(said)
     last = est[-1]
     where = "no pose"
     if last.pose is not None:
@@ -992,6 +997,76 @@ def _cmd_track(args: argparse.Namespace) -> int:
         where = f"x = {p.x:.3f} m, y = {p.y:.3f} m, theta = {np.rad2deg(p.theta):.2f} deg"
     print(f"last frame: {last.state.value}: {where} ({last.reason})")
     return 0
+
+
+def _frames_for_track(args: argparse.Namespace, lm: Any, with_truth: bool) -> list[Any]:
+    """The frames of ``omniloc track``: with a ground truth, an MRCLAM frames file's landmark
+    ids are kept as each bearing's truth (for the bound; the tracker never reads them),
+    unless the map does not hold them all."""
+    from .track import load_frames
+
+    if with_truth:
+        ids = {str(i): k for k, i in enumerate(lm.ids)}
+        try:
+            return load_frames(args.frames, degrees=args.degrees, landmark_ids=ids)
+        except InputError:
+            pass  # an id the map lacks (or a bad file: read again below, and refused there)
+    return load_frames(args.frames, degrees=args.degrees)
+
+
+def _what_the_data_allow(
+    lm: Any,
+    odo: Any,
+    frames: list[Any],
+    truth: Any,
+    sensor: Any,
+    motion: Any,
+    config: Any,
+    t0: float,
+) -> str | None:
+    """The summary's line on what the recording allows a localizer told each bearing's
+    landmark, under the tracker's own models (:mod:`omniloc.evaluate.bounds`); None when
+    the frames carry no landmark truth, or the bound cannot be computed (said in the log)."""
+    from .errors import OmnilocError
+    from .evaluate.bounds import bearing_information, stream_bound
+    from .evaluate.tracking import whole_run
+
+    if not any(f.truth for f in frames):
+        return None
+    share = float(config.core_share)
+    shares, sds = (
+        ([share, 1.0 - share], [config.core_sigma, sensor.sigma])
+        if share > 0
+        else (
+            [1.0],
+            [sensor.sigma],
+        )
+    )
+    try:
+        info = bearing_information(shares, sds)
+        b = stream_bound(
+            whole_run("run", lm, odo, frames, truth),
+            motion,
+            info,
+            float(config.localized_probability),
+            tol_m=float(config.tolerance_m),
+            tol_heading=float(config.tolerance_heading),
+        )
+    except OmnilocError as exc:
+        log.warning("what the data allow: not computed (%s)", exc)
+        return None
+    start = min(float(odo.t[0]), frames[0].t)
+    if not np.isfinite(b.time_to_localize_s):
+        return (
+            "what the data allow (told each bearing's landmark, under the tracker's models): "
+            "never sure enough to be localized in this recording"
+        )
+    first = start + b.time_to_localize_s
+    return (
+        f"what the data allow (told each bearing's landmark, under the tracker's models): "
+        f"sure enough to be localized from t = {first:.3f} s ({first - t0:.1f} s after the "
+        f"first frame), then in {100 * b.correct_after_rate:.1f} % of the frames"
+    )
 
 
 def _cmd_fit_motion(args: argparse.Namespace) -> int:
