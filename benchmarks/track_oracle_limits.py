@@ -162,7 +162,7 @@ def main(argv: list[str] | None = None) -> int:
             sd = r["bearing_sd_equivalent_deg"]
             print(f"{key} (one bearing worth a Gaussian of {sd:.2f} deg)")
             print(
-                "  from each run's start: "
+                "  from each run's first frame: "
                 + ", ".join(f"{n} {_s(v)}" for n, v in runs.items())
                 + f"; median {_s(r['first_median_s'])}, max {_s(r['first_max_s'])}"
             )
