@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
             results[key] = {
                 "bearing_sd_equivalent_deg": math.degrees(1.0 / math.sqrt(info)),
                 "p_min": p_min,
-                "first_from_run_start_s": runs,
+                "first_from_first_frame_s": runs,
                 "first_median_s": float(np.median(first)),
                 "first_max_s": float(first.max()),
                 "from_any_start": _summary(np.concatenate(pooled)),

@@ -26,7 +26,7 @@ def test_the_script_bounds_the_recordings(tmp_path: Path) -> None:
     assert data["runs"]["robot4"]["frames"] > 1000
     assert len(data["bounds"]) == len(tol.ERROR_MODELS) * len(tol.PROBABILITIES)
     for b in data["bounds"].values():
-        first = b["first_from_run_start_s"]["robot4"]
+        first = b["first_from_first_frame_s"]["robot4"]
         assert first == b["first_median_s"] and (first is None or first >= 0)
         a = b["from_any_start"]
         assert a["starts"] >= 10 and 0 <= a["within_10_s"] <= a["within_15_s"] <= 1
