@@ -1033,15 +1033,11 @@ def _what_the_data_allow(
 
     if not any(f.truth for f in frames):
         return None
-    share = float(config.core_share)
-    shares, sds = (
-        ([share, 1.0 - share], [config.core_sigma, sensor.sigma])
-        if share > 0
-        else (
-            [1.0],
-            [sensor.sigma],
-        )
-    )
+    share = float(config.core_share)  # the bearing errors as the tracker weighs them
+    if share > 0:
+        shares, sds = [share, 1.0 - share], [config.core_sigma, sensor.sigma]
+    else:
+        shares, sds = [1.0], [sensor.sigma]
     try:
         info = bearing_information(shares, sds)
         b = stream_bound(
