@@ -370,3 +370,65 @@ def test_the_guides_example_prints_what_it_says(
     monkeypatch.chdir(MRCLAM)
     exec(compile(block, str(DOCS), "exec"), {})
     assert capsys.readouterr().out.strip() == said[0]
+
+
+def test_draws_of_another_shape_are_refused_and_given_ones_are_used() -> None:
+    cov = np.array([[0.02, 0.012, 0.0], [0.012, 0.015, 0.0], [0.0, 0.0, 0.002]])
+    for bad in (np.zeros((10, 2)), np.zeros((0, 3)), np.zeros((2, 5, 3)), [[np.nan] * 3]):
+        with pytest.raises(InputError, match="draws"):
+            tolerance_probability(cov, draws=bad)
+    # All draws at the origin: every error within tolerance.
+    assert tolerance_probability(cov, draws=np.zeros((7, 3))) == 1.0
+
+
+def test_a_covariance_without_a_cholesky_factor_gets_its_lower_bound() -> None:
+    # No heading error, a round position error: the lower bound is then the probability
+    # itself (the circle's), and it is what comes back without a factor to sample with.
+    cov = np.diag([0.05, 0.05, 0.0])
+    want = 1.0 - math.exp(-0.5 * 0.09 / 0.05)
+    assert tolerance_probability(cov) == pytest.approx(want, rel=1e-12)
+
+
+def _scored(name: str, jump: float, ttl: float, rate: float, recovery: float) -> object:
+    from omniloc.evaluate.tracking import RunScore
+
+    nan = math.nan
+    return RunScore(
+        name, 100.0, 10, 10, nan, nan, 0, 0, nan, nan, jump, nan, nan, 0, 1.0,
+        bound_time_to_localize_s=ttl, bound_correct_after_rate=rate, bound_recovery_s=recovery,
+    )  # fmt: skip
+
+
+def test_the_bounds_totals_are_the_runs_medians_and_mean() -> None:
+    runs = [
+        _scored("a", math.nan, 30.0, 0.2, math.nan),
+        _scored("b", 50.0, 10.0, 0.3, 12.0),
+        _scored("c", 50.0, 20.0, 1.0, math.inf),
+        _scored("d", 50.0, math.inf, math.nan, 14.0),
+    ]
+    tot = TrackingResult("x", runs).totals()
+    assert tot["bound_time_to_localize_median_s"] == 25.0
+    assert tot["bound_time_to_localize_max_s"] == math.inf
+    assert tot["bound_correct_after_rate"] == pytest.approx(0.5)  # the mean, as the tracker's
+    assert tot["bound_recovery_median_s"] == 14.0  # the stream never back counts as latest
+    # One run without its bound: no total claims one.
+    part = TrackingResult("x", [*runs, _scored("e", math.nan, math.nan, math.nan, math.nan)])
+    assert all(math.isnan(v) for k, v in part.totals().items() if k.startswith("bound_"))
+
+
+def test_the_mrclam_evaluation_bounds_the_kidnapped_streams_too(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import omniloc.evaluate.tracking as T
+
+    seen: list[object] = []
+
+    def spy(streams: object, make: object, **kw: object) -> tuple[TrackingResult, list]:
+        seen.append(kw.get("bound"))
+        return TrackingResult("x", []), []
+
+    monkeypatch.setattr(T, "mrclam_streams", lambda path, robots: ["run"])
+    monkeypatch.setattr(T, "kidnap_streams", lambda runs, n, rng: (["jump"], ["plain"]))
+    monkeypatch.setattr(T, "evaluate_tracking", spy)
+    T.evaluate_mrclam_tracking("folder", kidnapped=1, progress=False)
+    assert len(seen) == 2 and all(callable(b) for b in seen)

@@ -56,8 +56,8 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import erf
 
 from ..errors import InputError
-from ..io import shorten
-from ..pose import bearing_jacobian
+from ..io import finite_number, real_array, shorten
+from ..pose import fisher_information
 from ..track.motion import MotionModel, between, compose_jacobians, integrate
 from ..track.tracker import within_tolerance
 
@@ -122,8 +122,8 @@ def bearing_information(shares: ArrayLike, sds: ArrayLike) -> float:
     >>> round(bearing_information([1.0], [0.5]), 6)  # a Gaussian: 1 / sd^2
     4.0
     """
-    w = _real("shares and sds: shares", shares).reshape(-1)
-    s = _real("shares and sds: sds", sds).reshape(-1)
+    w = real_array(shares, "shares and sds: shares", InputError).reshape(-1)
+    s = real_array(sds, "shares and sds: sds", InputError).reshape(-1)
     if (
         w.shape != s.shape
         or w.size == 0
@@ -168,13 +168,19 @@ def predict_information(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArr
     F = _matrices("predict_information's F", F, (3, 3))
     N = _matrices("predict_information's N", N, (3, 3))
     try:
-        Finv = np.linalg.inv(F)
-        Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
-        Yn = np.linalg.solve(np.eye(3) + Yt @ N, Yt)
+        out = _predict(Y, F, N)
     except np.linalg.LinAlgError as exc:
         raise InputError(f"predict_information: F or I + Y~ N is singular ({exc})") from exc
-    if not np.isfinite(Yn).all():
+    if not np.isfinite(out).all():
         raise InputError("predict_information: the prediction overflows (Y, F or N too large)")
+    return out
+
+
+def _predict(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArray:
+    """:func:`predict_information` without its checks, for the filter's own steps."""
+    Finv = np.linalg.inv(F)
+    Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
+    Yn = np.linalg.solve(np.eye(3) + Yt @ N, Yt)
     return np.asarray(0.5 * (Yn + np.swapaxes(Yn, -1, -2)), dtype=np.float64)
 
 
@@ -185,29 +191,18 @@ def _describe(a: object) -> str:
     return " ".join(shorten(a).split())
 
 
-def _real(name: str, a: object) -> FloatArray:
-    """``a`` as a float64 array of real numbers (bools and integers too), or an
-    :class:`InputError` naming it."""
-    try:
-        m = np.asarray(a)
-        if m.dtype.kind not in "biuf":
-            raise TypeError(m.dtype)
-        return np.asarray(m, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError) as exc:
-        raise InputError(f"{name} must be real numbers, got {_describe(a)}") from exc
-
-
-def _matrices(name: str, a: object, shape: tuple[object, ...]) -> FloatArray:
+def _matrices(name: str, a: ArrayLike, shape: tuple[object, ...]) -> FloatArray:
     """``a`` as finite float64 of ``shape`` (``...``: any leading axes), entries at most
     MAX_ENTRY in magnitude, or an :class:`InputError` naming it."""
-    m = _real(name, a)
+    m = real_array(a, name, InputError)
     fixed = shape[1:] if shape[0] is ... else shape
     if (
         m.ndim < len(fixed)
         or m.shape[m.ndim - len(fixed) :] != fixed
         or (shape[0] is not ... and m.ndim != len(fixed))
     ):
-        want = "(..., 3, 3)" if shape[0] is ... else str(shape)
+        dims = ", ".join(str(d) for d in fixed)
+        want = f"(..., {dims})" if shape[0] is ... else f"({dims})"
         raise InputError(f"{name} must have shape {want}, got {m.shape}")
     if not np.isfinite(m).all() or (m.size and np.abs(m).max() > MAX_ENTRY):
         raise InputError(f"{name} must be finite, at most {MAX_ENTRY:g} in magnitude")
@@ -266,7 +261,19 @@ def tolerance_probability(
     scale = max(float(np.abs(c).max()), 1e-300)
     if not (np.abs(c - c.T).max() <= 1e-9 * scale and ev[0] >= -1e-12 * scale):
         raise InputError("cov must be a 3 x 3 covariance: symmetric, positive semi-definite")
-    lo, hi = _bounds(c, tol_m, tol_heading)
+    if draws is not None:
+        draws = _matrices("draws", draws, (..., 3))
+        if draws.ndim != 2 or draws.shape[0] == 0:
+            raise InputError(f"draws must have shape (n, 3) with n >= 1, got {draws.shape}")
+    return _settle(c, tol_m, tol_heading, *_bounds(c, tol_m, tol_heading), draws)
+
+
+def _settle(
+    c: FloatArray, tol_m: float, tol_heading: float, lo: float, hi: float, draws: FloatArray | None
+) -> float:
+    """The tolerance probability from its bounds ``lo`` and ``hi``: the lower where they
+    agree within 1e-4, else the share of the Monte Carlo ``draws`` within tolerance (the
+    lower, an under-statement, when ``c`` has no Cholesky factor: a direction of no error)."""
     if hi - lo < 1e-4:
         return lo
     try:
@@ -292,7 +299,7 @@ def _could_localize(
         return False
     if lo >= p_min:
         return True
-    return tolerance_probability(cov, tol_m, tol_heading, draws) >= p_min
+    return _settle(cov, tol_m, tol_heading, lo, hi, draws) >= p_min
 
 
 @dataclass(frozen=True)
@@ -358,8 +365,7 @@ def bound_steps(stream: Stream, motion: MotionModel) -> BoundSteps:
             N[i] = Jd @ Q @ Jd.T
         rows = [r for r in (f.truth or ()) if r is not None]
         if rows:
-            _, G = bearing_jacobian(xy[rows], poses[i])
-            HtH[i] = G.T @ G
+            HtH[i] = fisher_information(xy[rows], poses[i], 1.0)
             nb[i] = len(rows)
     return BoundSteps(t, F, N, HtH, nb)
 
@@ -377,15 +383,13 @@ def _indices(name: str, a: object, n: int) -> NDArray[np.int64]:
     return arr.reshape(-1).astype(np.int64)
 
 
-def _positive(name: str, v: object, hi: float) -> None:
-    """A real number in (0, hi], or an :class:`InputError` naming it."""
-    ok = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-    try:
-        x = float(v) if ok else math.nan  # type: ignore[arg-type]
-    except OverflowError:
-        x = math.inf
-    if not (math.isfinite(x) and 0.0 < x <= hi):
+def _positive(name: str, v: object, hi: float) -> float:
+    """A finite number in (0, hi] (:func:`omniloc.io.finite_number`), or an
+    :class:`InputError` naming it."""
+    x = finite_number(v, name)
+    if not 0.0 < x <= hi:
         raise InputError(f"{name} must be a number in (0, {hi:g}], got {_describe(v)}")
+    return x
 
 
 def _check(info: float, p_min: float, tol_m: float, tol_heading: float) -> None:
@@ -433,7 +437,7 @@ def confident_frames(
         if i in again:
             Y = np.zeros((3, 3))
         elif i > 0:
-            Y = predict_information(Y, steps.F[i], steps.N[i])
+            Y = _predict(Y, steps.F[i], steps.N[i])
         Y = Y + info * steps.HtH[i]
         out[i] = _could_localize(Y, p_min, tol_m, tol_heading, draws)
     return out
@@ -464,7 +468,7 @@ def times_to_localize(
     last = int(s.max()) if s.size else -1
     for i in range(steps.t.size):
         if i > 0 and active.any():
-            Y[active] = predict_information(Y[active], steps.F[i], steps.N[i])
+            Y[active] = _predict(Y[active], steps.F[i], steps.N[i])
         active |= s == i
         Y[active] += info * steps.HtH[i]
         for j in np.flatnonzero(active):
