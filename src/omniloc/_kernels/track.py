@@ -973,15 +973,32 @@ def near_pairs(
     n = 0
     for a in range(mu_a.shape[0]):
         for b in range(mu_b.shape[0]):
-            g0 = mu_a[a, 0] - mu_b[b, 0]
-            g1 = mu_a[a, 1] - mu_b[b, 1]
-            if not g0 * g0 + g1 * g1 <= max_d2:
-                continue
-            if _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_heading, max_form):
+            if _near_same(mu_a, Pa, a, mu_b, Pb, b, max_d2, max_heading, max_form):
                 ia[n] = a
                 ib[n] = b
                 n += 1
     return ia[:n].copy(), ib[:n].copy()
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _near_same(
+    mu_a: FloatArray,
+    Pa: FloatArray,
+    a: int,
+    mu_b: FloatArray,
+    Pb: FloatArray,
+    b: int,
+    max_d2: float,
+    max_heading: float,
+    max_form: float,
+) -> bool:
+    """Poses ``a`` and ``b`` within ``max_d2`` (squared distance) of each other and the same
+    pose (:func:`_same_pose`): the one test of :func:`near_pairs` and :func:`grid_pairs`."""
+    g0 = mu_a[a, 0] - mu_b[b, 0]
+    g1 = mu_a[a, 1] - mu_b[b, 1]
+    if not g0 * g0 + g1 * g1 <= max_d2:
+        return False
+    return _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_heading, max_form)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -1068,11 +1085,7 @@ def grid_pairs(
                 while j < n_in and keys[j] == key:
                     b = members[j]
                     j += 1
-                    g0 = x - mu_b[b, 0]
-                    g1 = y - mu_b[b, 1]
-                    if not g0 * g0 + g1 * g1 <= max_d2:
-                        continue
-                    if _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_heading, max_form):
+                    if _near_same(mu_a, Pa, a, mu_b, Pb, b, max_d2, max_heading, max_form):
                         found[m] = b
                         m += 1
         if m == 0:
