@@ -235,3 +235,57 @@ def test_the_censored_median_names_times_it_cannot_read(bad: object) -> None:
 
     with pytest.raises(InputError, match="censored_median: times must be"):
         censored_median(bad)  # type: ignore[arg-type]
+
+
+def _kidnapped_stream() -> Stream:
+    """Frames at t = 0..9; at t = 5 the stream jumps from TRUE to a pose 3 m away."""
+    from dataclasses import replace as _replace
+
+    from omniloc.evaluate.tracking import splice
+
+    a = _stream(5)
+    far = Pose(TRUE.x + 3.0, TRUE.y, TRUE.theta)
+    t = a.segments[0].truth.t
+    b_truth = GroundTruth(
+        t=t, x=np.full(t.size, far.x), y=np.full(t.size, far.y), theta=np.full(t.size, far.theta)
+    )
+    b = _replace(a, segments=(_replace(a.segments[0], truth=b_truth),))
+    return splice(a, 0.0, 5.0, b, 0.0, 5.0, "k")
+
+
+def _flagged_run(localized_before: bool, flag_at: float | None) -> list[TrackEstimate]:
+    out = []
+    for k in range(10):
+        t = float(k)
+        e = _localized(t, 0.0, 0.01) if k < 5 and localized_before else _ambiguous(t, TRUE, 0.5)
+        if flag_at is not None and t == flag_at:
+            e = TrackEstimate(t, TrackState.LOST, kidnapped=True)
+        out.append(e)
+    return out
+
+
+def test_the_flag_delay_is_read_where_there_was_a_place_to_leave() -> None:
+    from omniloc.evaluate.tracking import tracking_summary
+
+    stream = _kidnapped_stream()
+    assert stream.jump_t == 5.0
+    flagged = score_run(stream, _flagged_run(True, 7.0))
+    assert flagged.flag_delay_s == 2.0 and flagged.false_alarms == 0
+    never = score_run(stream, _flagged_run(True, None))
+    assert never.flag_delay_s == math.inf
+    # Not localized on the last frame before the jump: no place to leave, nothing to read.
+    assert math.isnan(score_run(stream, _flagged_run(False, 7.0)).flag_delay_s)
+    # A flag before the jump is a false alarm, not the kidnapping's flag.
+    early = score_run(stream, _flagged_run(True, 3.0))
+    assert early.false_alarms == 1 and early.flag_delay_s == math.inf
+    # A stream without a jump has no flag delay.
+    assert math.isnan(score_run(_stream(10), _flagged_run(True, 7.0)).flag_delay_s)
+    res = TrackingResult("t", [flagged, never, score_run(stream, _flagged_run(False, None))])
+    tot = res.totals(True)
+    assert tot["localized_at_jump"] == 2 and tot["kidnaps_flagged"] == 1
+    assert tot["flag_delay_median_s"] == math.inf  # half of them never flagged
+    assert tot["flag_delay_median_flagged_s"] == 2.0
+    from omniloc.evaluate.tracking import TrackingReport
+
+    text = tracking_summary(TrackingReport(TrackingResult("w", [flagged]), res))
+    assert "localized when carried off in 2: the kidnapping flagged in 1, a median of 2.0 s" in text

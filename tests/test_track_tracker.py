@@ -210,9 +210,11 @@ def _dip_run(
     dip: tuple[float, float],
     still_localized: bool = False,
     watch_s: float = CONFIG.kidnap_watch_s,
+    fit: float = 0.0,
 ) -> tuple[list[float], list[str]]:
-    """Times flagged kidnapped and every state, with ``kidnap_confirm_s``."""
-    config = replace(CONFIG, kidnap_confirm_s=confirm_s, kidnap_watch_s=watch_s)
+    """Times flagged kidnapped and every state, with ``kidnap_confirm_s`` (and
+    ``kidnap_fit``)."""
+    config = replace(CONFIG, kidnap_confirm_s=confirm_s, kidnap_watch_s=watch_s, kidnap_fit=fit)
     tr = _Dipping(GRID, SENSOR, MOTION, config)
     tr.dip, tr.still_localized = dip, still_localized
     return _feed(tr)
@@ -241,6 +243,47 @@ def test_a_loss_is_flagged_only_once_it_has_lasted_kidnap_confirm_s() -> None:
     # A loss that began within kidnap_watch_s is followed to its end, even when the watch
     # (here 1 s from the first frame not localized) ends before the wait does.
     assert _dip_run(2.0, (20.0, 23.0), watch_s=1.0)[0][0] == 22.125
+
+
+class _Reasons(_Dipping):
+    """:class:`_Dipping` that keeps every estimate's reason."""
+
+    def __init__(self, *args: object) -> None:
+        super().__init__(*args)  # type: ignore[arg-type]
+        self.reasons: list[str] = []
+
+    def frame(self, t: float, bearings: object) -> object:  # type: ignore[override]
+        e = super().frame(t, bearings)  # type: ignore[arg-type]
+        self.reasons.append(e.reason)
+        return e
+
+
+def test_a_place_that_still_explains_the_bearings_is_not_flagged() -> None:
+    jump = KIDNAP[0]
+    never = (float("inf"), float("inf"))
+    late, states = _dip_run(1.0, never)
+    assert len(late) == 1 and jump + 1.0 <= late[0] < jump + 2.0
+    # The kidnapping: the place, moved by the odometry alone, explains none of the bearings
+    # after the jump -- flagged at the same frame as without the test.
+    assert _dip_run(1.0, never, fit=0.5) == (late, states)
+    # A loss that lasts (the place seems to hold 10 % from 20 to 21.5 s) while every bearing
+    # still fits the place: flagged without the test, not with it; the states are the same.
+    dip = (20.0, 21.5)
+    lasting, dip_states = _dip_run(1.0, dip)
+    assert lasting[0] == 21.125
+    assert _dip_run(1.0, dip, fit=0.5) == (late, dip_states)
+    # The reason says why, and a loss the place survives by explaining the bearings for
+    # kidnap_watch_s is no longer watched.
+    config = replace(CONFIG, kidnap_confirm_s=1.0, kidnap_watch_s=1.5, kidnap_fit=0.5)
+    tr = _Reasons(GRID, SENSOR, MOTION, config)
+    tr.dip = (20.0, 23.0)
+    flagged, _ = _feed(tr)
+    assert flagged == late
+    said = [r for r in tr.reasons if "not taken for a kidnapping" in r]
+    assert said and "explains" in said[0]
+    assert "no longer watched" in said[-1] and all("no longer" not in r for r in said[:-1])
+    # A test that asks for every bearing to fit (1.0) flags the lasting loss as before.
+    assert _dip_run(1.0, dip, fit=1.0)[0][0] == lasting[0]
 
 
 def test_a_place_found_after_a_kidnapping_is_not_judged_by_the_frames_before_it() -> None:

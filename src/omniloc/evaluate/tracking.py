@@ -33,7 +33,11 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
   to the first frame that is no longer localized-and-wrong (the localizer left ``localized``,
   flagged ``kidnapped``, or is already right again). *Recovery*: from the jump to the first
   correct frame. A *false alarm* is a frame flagged ``kidnapped`` where no kidnapping
-  happened (a stream without a jump, or before its jump).
+  happened (a stream without a jump, or before its jump). *Flag delay*: on a stream whose
+  last estimate before the jump was ``localized`` (there was a place to leave), from the
+  jump to the first frame flagged ``kidnapped`` (never: the kidnapping was not flagged).
+  The detection delay does not read the flag; the false alarms and the flag delay do, and
+  are read together: a localizer that never flags has no false alarm.
 """
 
 from __future__ import annotations
@@ -368,6 +372,10 @@ class RunScore:
     bound_time_to_localize_s: float = NAN
     bound_correct_after_rate: float = NAN
     bound_recovery_s: float = NAN
+    #: From the jump to the first frame flagged ``kidnapped`` at or after it, on a stream
+    #: whose last estimate before the jump was ``localized``; NaN otherwise (no jump, or no
+    #: place to leave); inf: never flagged.
+    flag_delay_s: float = NAN
 
     @property
     def realtime_factor(self) -> float:
@@ -440,6 +448,11 @@ def score_run(
         if back.any():
             recovery = float(t[np.flatnonzero(back)[0]] - jump)
     false_alarms = int((kid & pre).sum())
+    flag_delay = NAN
+    before = np.flatnonzero(~pre)
+    if math.isfinite(jump) and before.size and before[0] > 0 and loc[before[0] - 1]:
+        flagged = np.flatnonzero(kid & ~pre)
+        flag_delay = float(t[flagged[0]] - jump) if flagged.size else math.inf
     weight_bins = _weight_bins(estimates, truth, scored, pos_tol_m, heading_tol_deg)
     nees = _nees(estimates, est, truth, sel)
     ends = [float(stream.odometry.t[-1])] + ([t[-1]] if t.size else [])
@@ -463,6 +476,7 @@ def score_run(
         cov_frames=int(nees.size),
         cov_inside_50=int((nees <= CHI2_3DOF_50).sum()),
         cov_inside_99=int((nees <= CHI2_3DOF_99).sum()),
+        flag_delay_s=flag_delay,
     )
 
 
@@ -634,6 +648,7 @@ class TrackingResult:
         after = [r.correct_after_rate for r in rs if math.isfinite(r.correct_after_rate)]
         jumps = [r for r in rs if math.isfinite(r.jump_t)]
         plain = [r for r in rs if not math.isfinite(r.jump_t)]
+        flags = [r.flag_delay_s for r in jumps if not math.isnan(r.flag_delay_s)]
         cpu = sum(r.cpu_s for r in rs)
         cov = sum(r.cov_frames for r in rs)
         dur = sum(r.duration_s for r in rs)
@@ -663,6 +678,10 @@ class TrackingResult:
             "false_alarm_run_rate": (
                 sum(r.false_alarms > 0 for r in plain) / len(plain) if plain else NAN
             ),
+            "localized_at_jump": float(len(flags)),
+            "kidnaps_flagged": float(sum(math.isfinite(x) for x in flags)),
+            "flag_delay_median_s": censored_median(flags),
+            "flag_delay_median_flagged_s": _nanmedian(flags),
             "realtime_factor": dur / cpu if cpu > 0 else NAN,
             "best_weight_frames": float(sum(b[0] for b in bins)),
             "best_weight_ece": weight_ece(bins),
@@ -994,6 +1013,17 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
                 tj["recovery_median_recovered_s"],
             )
             + f"); confidently wrong {_fmt(100 * tj['confidently_wrong_rate'], '.2f')} %"
+            + (
+                f"; localized when carried off in {int(tj['localized_at_jump'])}: the "
+                f"kidnapping flagged in {int(tj['kidnaps_flagged'])}"
+                + (
+                    f", a median of {_seconds(tj['flag_delay_median_flagged_s'])} after the jump"
+                    if tj["kidnaps_flagged"]
+                    else ""
+                )
+                if tj["localized_at_jump"]
+                else ""
+            )
             + (
                 f"; told the correspondences, right again after a median of "
                 f"{_seconds(tj['bound_recovery_median_s'])} at best"

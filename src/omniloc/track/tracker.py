@@ -55,7 +55,10 @@ when the tracker wakes up.
   loses its mass more than ``kidnap_watch_s`` after the tracker stopped calling it
   ``localized`` is not flagged: the estimates have said ``ambiguous`` or ``lost`` all that
   while. With ``kidnap_confirm_s`` the loss must last that long before it is flagged (a
-  place that wins its mass back within it was not left).
+  place that wins its mass back within it was not left); with ``kidnap_fit`` the place must
+  also no longer explain the bearings seen since the loss began (a copy of it moved by the
+  odometry alone is tested against them: a place can lose its mass to missed detections
+  while every bearing reported still fits it).
 
 Bad input: times that go back, values that are not finite and frames before any odometry
 get a clear :class:`~omniloc.errors.InputError` or a stated behaviour (see
@@ -117,7 +120,7 @@ _PROBABILITIES = {
 }
 #: Probabilities that may be None (off).
 _OPTIONAL_PROBABILITIES = {"search_miss", "keep_probability"}
-_SHARES = {"fit_explained", "core_share", "miss_weight"}
+_SHARES = {"fit_explained", "core_share", "miss_weight", "kidnap_fit"}
 _BOOLS = {"core_update", "temper_update", "nonempty_frames"}
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
@@ -332,6 +335,18 @@ class TrackerConfig:
         back. The state says what it always says meanwhile (``ambiguous`` or ``lost``:
         the place no longer holds the mass); only the flag waits. The flag is raised at
         once when the tracker is ``localized`` at another place.
+    kidnap_fit : float
+        A place that lost its mass is flagged only if it no longer explains the bearings:
+        a copy of it, as it was at the last ``localized`` frame and moved by the odometry
+        alone (never corrected by the bearings, so it cannot follow them to another place),
+        must explain less than this share of the bearings seen since the loss began (0.5,
+        the default: most of them no longer fit; 0: the loss alone raises the flag, as
+        before 2026-12-04). While it explains more, the flag waits;
+        a place that still explains them ``kidnap_watch_s`` after its loss began is no
+        longer watched, without a flag. On MRCLAM the true place loses its mass to frames
+        that report few of the tubes in view while it still explains the bearings they do
+        report (docs/tracking-notebook.md, "A kidnapping is a place that no longer
+        explains the bearings").
     max_odometry_gap_s : float
         Odometry rows further apart than this (s) leave the motion unknown: the hypotheses
         are dropped and the tracker relocalizes.
@@ -398,6 +413,7 @@ class TrackerConfig:
     kidnap_share: float = 0.5
     kidnap_watch_s: float = 10.0
     kidnap_confirm_s: float = 0.0
+    kidnap_fit: float = 0.5
     max_odometry_gap_s: float = 2.0
     max_reported: int = 10
     seed: int = 0
@@ -692,6 +708,11 @@ class Tracker:
         # The first frame of the current run of frames in which the watched place held less
         # than kidnap_share (None: it holds at least that): kidnap_confirm_s runs from there.
         self._below_t: float | None = None
+        # The watched place as the last localized frame reported it, moved by the odometry
+        # alone (kidnap_fit), and the bearings it explained and saw since the loss began.
+        self._watch: tuple[FloatArray, FloatArray] | None = None
+        self._watch_m = 0.0
+        self._watch_n = 0
         #: Number of searches run so far (for reports).
         self.searches = 0
 
@@ -912,6 +933,7 @@ class Tracker:
         self._log_out = 0.0
         self._localized_id = None
         self._below_t = None
+        self._watch = None
         self._elsewhere.reset()
 
     def _exclude(self) -> None:
@@ -1262,6 +1284,9 @@ class Tracker:
             # the first row), so the frames after the gap can build up evidence again.
             self._hold = np.zeros(3)
         dt = 0.0 if t_prev is None else tf - t_prev
+        if self._watch is not None:
+            w_mu, w_P = move(self._watch[0], self._watch[1], delta, Q)
+            self._watch = (w_mu, w_P)
         self._elsewhere.move(delta, Q)
         self._mem_rot += float(delta[2])
         if self.n_hypotheses:
@@ -1359,21 +1384,46 @@ class Tracker:
             if share >= c.kidnap_share:
                 self._below_t = None
             else:
+                w_explained = self._watch_explained(b, model) if c.kidnap_fit > 0 else None
                 if self._below_t is None:
                     self._below_t = tf
+                    self._watch_m, self._watch_n = 0.0, 0
+                if w_explained is not None:
+                    self._watch_m += w_explained
+                    self._watch_n += int(b.size)
                 below = tf - self._below_t
+                since = f" (under {100 * c.kidnap_share:g} % for {below:.1f} s)" if below else ""
+                # Still explained: as many of the bearings since the loss as kidnap_fit asks
+                # (none seen yet counts as explained: nothing speaks against the place).
+                fits = w_explained is not None and (self._watch_m >= c.kidnap_fit * self._watch_n)
                 # (Localized now is localized at another place: this one holds under half.)
-                if below >= c.kidnap_confirm_s or state is TrackState.LOCALIZED:
+                if state is TrackState.LOCALIZED or (below >= c.kidnap_confirm_s and not fits):
                     kidnapped = True
                     self._localized_id = None
                     self._below_t = None
-                    since = ""
-                    if below:
-                        since = f" (under {100 * c.kidnap_share:g} % for {below:.1f} s)"
+                    fit = ""
+                    if w_explained is not None and self._watch_n:
+                        fit = (
+                            f", and explains {self._watch_m:.0f} of the {self._watch_n} "
+                            "bearings since"
+                        )
                     reason = (
                         f"the place it was localized at now holds {100 * share:.1f} % of the "
-                        f"mass{since}: kidnapped or lost; " + reason
+                        f"mass{since}{fit}: kidnapped or lost; " + reason
                     )
+                elif below >= c.kidnap_confirm_s:
+                    # The loss lasts, yet the place explains the bearings: not a kidnapping
+                    # (yet). Watched until kidnap_watch_s after the loss began.
+                    ended = below > c.kidnap_watch_s
+                    reason = (
+                        f"the place it was localized at holds {100 * share:.1f} % of the "
+                        f"mass{since} but explains {self._watch_m:.0f} of the "
+                        f"{self._watch_n} bearings since: not taken for a kidnapping"
+                        f"{' (no longer watched)' if ended else ''}; " + reason
+                    )
+                    if ended:
+                        self._localized_id = None
+                        self._below_t = None
         if state is TrackState.LOCALIZED and best is not None:
             self._localized_id = int(self._ids[best])
             # A kept frame does not vouch for the place anew: the watch runs from the first
@@ -1387,7 +1437,24 @@ class Tracker:
             self._localized_run = 0
             if self._unvouched_t is None:
                 self._unvouched_t = tf
-        return self._estimate(tf, state, reason, kidnapped, best)
+        est = self._estimate(tf, state, reason, kidnapped, best)
+        if self._localized_id is None:
+            self._watch = None
+        elif est.state is TrackState.LOCALIZED and c.kidnap_fit > 0:
+            assert est.pose is not None and est.covariance is not None
+            self._watch = (est.pose.as_array()[None], np.asarray(est.covariance)[None])
+        return est
+
+    def _watch_explained(self, b: FloatArray, model: FrameModel) -> float | None:
+        """How many of the bearings ``b`` the watched place, moved by the odometry alone
+        since its last localized frame, explains (the frame kernel's expected count of
+        bearings from landmarks, with its predicted covariance); None without a copy."""
+        if self._watch is None or b.size == 0:
+            return None if self._watch is None else 0.0
+        _, _, _, explained, _ = frame_update_clutter(
+            self._watch[0], self._watch[1], b, self._L, model, None
+        )
+        return float(explained[0])
 
     def _watched_share(self) -> float:
         """The mass of the place the tracker was localized at (0 when its hypotheses are
