@@ -1054,3 +1054,29 @@ def test_kept_frames_do_not_lengthen_the_kidnap_watch() -> None:
         else:
             assert tr._unvouched_t is not None
     assert n_kept > 0
+
+
+def test_the_watched_copy_is_the_last_localized_estimate_moved_by_the_odometry() -> None:
+    # A loss of 5 s on the straight run (1.25 m of travel): the copy, moved by the odometry,
+    # still explains the bearings -- not flagged; a copy left where the place was would not.
+    jump = KIDNAP[0]
+    flagged, _ = _dip_run(1.0, (18.5, 23.5), fit=0.5)
+    assert flagged and all(t >= jump for t in flagged)
+    # The copy is the estimate of every localized frame (not only of the first one).
+    run, _ = _scenario()
+    tr = Tracker(GRID, SENSOR, MOTION, replace(CONFIG, kidnap_fit=0.5))
+    k, seen = 0, 0
+    for f in run.frames:
+        if f.t >= jump:
+            break
+        k1 = int(np.searchsorted(run.odometry.t, f.t, side="right"))
+        if k1 > k:
+            tr.odometry(run.odometry.t[k:k1], run.odometry.v[k:k1], run.odometry.w[k:k1])
+            k = k1
+        e = tr.frame(f.t, f.bearings)
+        if e.localized:
+            assert tr._watch is not None and e.pose is not None
+            np.testing.assert_array_equal(tr._watch[0][0], e.pose.as_array())
+            np.testing.assert_array_equal(tr._watch[1][0], e.covariance)
+            seen += 1
+    assert seen > 10
