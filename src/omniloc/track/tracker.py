@@ -341,9 +341,9 @@ class TrackerConfig:
         alone (never corrected by the bearings, so it cannot follow them to another place),
         must explain less than this share of the bearings seen since the loss began (0.5,
         the default: most of them no longer fit; 0: the loss alone raises the flag, as
-        before 2026-12-04). While it explains more, the flag waits;
-        a place that still explains them ``kidnap_watch_s`` after its loss began is no
-        longer watched, without a flag. On MRCLAM the true place loses its mass to frames
+        before 2026-12-04). While it explains more, the flag waits; a place that still
+        explains them ``kidnap_watch_s`` after its loss began is no longer watched, without
+        a flag. On MRCLAM the true place loses its mass to frames
         that report few of the tubes in view while it still explains the bearings they do
         report (docs/tracking-notebook.md, "A kidnapping is a place that no longer
         explains the bearings").
@@ -1440,9 +1440,9 @@ class Tracker:
         est = self._estimate(tf, state, reason, kidnapped, best)
         if self._localized_id is None:
             self._watch = None
-        elif est.state is TrackState.LOCALIZED and c.kidnap_fit > 0:
-            assert est.pose is not None and est.covariance is not None
-            self._watch = (est.pose.as_array()[None], np.asarray(est.covariance)[None])
+        elif c.kidnap_fit > 0 and est.localized and est.pose is not None:
+            P = est.covariance if est.covariance is not None else np.zeros((3, 3))
+            self._watch = (est.pose.as_array()[None], np.asarray(P)[None])
         return est
 
     def _watch_explained(self, b: FloatArray, model: FrameModel) -> float | None:
