@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 from dataclasses import replace
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -171,15 +172,18 @@ def test_a_place_is_watched_for_kidnap_watch_s_after_it_was_last_called_localize
     t = [f.t for f in _scenario()[0].frames]
     before = [s for s, ti in zip(states, t, strict=True) if ti < jump - 4.0]
     assert "localized" in before  # localized before the doubt below
-    # Called ambiguous for the 1 s before the jump: still watched, flagged at the same frame.
-    assert _flags(1.0, 2.0)[0] == flagged
+    # Called ambiguous for the 1 s before the jump: still watched, flagged within 1 s of it
+    # (its copy, 1 s older, explains 2 of the first 5 bearings by chance, more than the
+    # tracker's belief does until the search after the jump: the flag waits two frames).
+    doubted, _ = _flags(1.0, 2.0)
+    assert doubted and jump <= doubted[0] < jump + 1.0
     # Ambiguous for 4 s: no longer watched -- the estimates have said so for 4 s, and the
     # place's loss after the jump is not reported as a kidnapping ...
     late, late_states = _flags(4.0, 2.0)
     assert late == [] and late_states != states
     # ... unless it is watched until its mass falls; the states are the same.
     always, always_states = _flags(4.0, 1e6)
-    assert always == flagged and always_states == late_states
+    assert always and jump <= always[0] < jump + 1.0 and always_states == late_states
     # No frames for 4 s before the jump while localized: the place is still vouched for.
     blind, _ = _flags(0.0, 2.0, blind_s=4.0)
     assert blind and jump <= blind[0] < jump + 6.0
@@ -283,8 +287,13 @@ def test_a_place_that_still_explains_the_bearings_is_not_flagged() -> None:
     said = [r for r in tr.reasons if "not taken for a kidnapping" in r]
     assert said and "explains" in said[0]
     assert "no longer watched" in said[-1] and all("no longer" not in r for r in said[:-1])
-    # A test that asks for every bearing to fit (1.0) flags the lasting loss as before.
-    assert _dip_run(1.0, dip, fit=1.0)[0][0] == lasting[0]
+    # A test that asks for every bearing to fit (1.0): the copy misses a little of some, but
+    # the tracker's belief (the same place) explains no more of them -- still not flagged.
+    config = replace(CONFIG, kidnap_confirm_s=1.0, kidnap_fit=1.0)
+    tr = _Reasons(GRID, SENSOR, MOTION, config)
+    tr.dip = dip
+    assert _feed(tr)[0] == late
+    assert any("the places it now holds no more" in r for r in tr.reasons)
 
 
 def test_a_place_found_after_a_kidnapping_is_not_judged_by_the_frames_before_it() -> None:
@@ -1086,3 +1095,50 @@ def test_the_watched_copy_is_the_last_localized_estimate_moved_by_the_odometry()
         assert e.pose is not None
         np.testing.assert_array_equal(mu[0], e.pose.as_array())
         np.testing.assert_array_equal(P[0], e.covariance)
+
+
+def test_on_mrclam_robot5_other_robots_for_seconds_are_not_a_kidnapping(
+    shared_data: Path,
+) -> None:
+    # Robot 5, 126-131 s into its run: every bearing is another robot's. The place it was
+    # localized at (right, 0.07 m off) loses the mass and explains none of the bearings, but
+    # neither do the places that took the mass: clutter, not a kidnapping. Without the test
+    # of the bearings (kidnap_fit 0) it was flagged.
+    from omniloc.track import load_frames, load_odometry, preset
+
+    data = shared_data / "mrclam-ds6"
+    sensor, motion, config = preset("mrclam")
+    lm = LandmarkMap.load(data / "landmarks.csv")
+    odometry = load_odometry(data / "robot5_odometry.csv")
+    frames = load_frames(data / "robot5_frames.csv")
+    t0 = frames[0].t
+    frames = [f for f in frames if f.t < t0 + 135.0]
+    run = track(lm, odometry, frames, sensor=sensor, motion=motion, config=config)
+    assert not any(e.kidnapped for e in run.estimates)
+    said = [e for e in run.estimates if ": clutter: not taken for a kidnapping" in e.reason]
+    assert said and 130.0 < said[0].t - t0 < 131.0
+    why = "explains 0 of the 7 bearings since, and the places it now holds no more (0)"
+    assert why in said[0].reason
+    old = track(
+        lm, odometry, frames, sensor=sensor, motion=motion, config=replace(config, kidnap_fit=0.0)
+    )
+    assert [round(e.t - t0, 1) for e in old.estimates if e.kidnapped] == [130.6]
+    assert [e.state for e in old.estimates] == [e.state for e in run.estimates]
+    # Under elsewhere's seed 1 the belief explains 0.26 of the 7 against the copy's 0.24: a
+    # tie, which KIDNAP_MARGIN keeps from being read as another place.
+    seeded = track(
+        lm, odometry, frames, sensor=sensor, motion=motion, config=replace(config, seed=1)
+    )
+    assert not any(e.kidnapped for e in seeded.estimates)
+    assert any(": clutter: not taken" in e.reason for e in seeded.estimates)
+
+
+def test_the_belief_explains_a_frame_as_its_masses_weigh_each_count() -> None:
+    from omniloc.track.tracker import _posterior_explained
+
+    hyp = np.log([1.0, 3.0])
+    assert _posterior_explained(hyp, np.array([1.0, 2.0]), -np.inf, 5.0) == pytest.approx(1.75)
+    # elsewhere holds half the mass and explains none of the bearings
+    assert _posterior_explained(hyp, np.array([1.0, 2.0]), np.log(4.0), 0.0) == pytest.approx(0.875)
+    assert _posterior_explained(np.zeros(0), np.zeros(0), 0.3, 2.5) == pytest.approx(2.5)
+    assert _posterior_explained(np.zeros(0), np.zeros(0), -np.inf, 2.5) == 0.0

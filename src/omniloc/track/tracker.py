@@ -58,7 +58,8 @@ when the tracker wakes up.
   place that wins its mass back within it was not left); with ``kidnap_fit`` the place must
   also no longer explain the bearings seen since the loss began (a copy of it moved by the
   odometry alone is tested against them: a place can lose its mass to missed detections
-  while every bearing reported still fits it).
+  while every bearing reported still fits it), and the tracker's belief must explain more
+  of them than that copy (bearings that no place takes for landmarks are clutter).
 
 Bad input: times that go back, values that are not finite and frames before any odometry
 get a clear :class:`~omniloc.errors.InputError` or a stated behaviour (see
@@ -135,6 +136,13 @@ _INT_MAX = {"elsewhere_samples": 100_000, "max_hypotheses": 10_000, "max_candida
 
 #: Largest seed of elsewhere's random generator.
 SEED_MAX = 2**63 - 1
+
+#: How many more of the bearings since a loss began the tracker's belief must explain than
+#: the copy of the lost place before the loss is taken for a kidnapping (``kidnap_fit``):
+#: half a bearing, the least difference of expected counts that rounds to another whole
+#: count (on MRCLAM robot 5's seconds of other robots alone, 0.26 of 7 against the copy's
+#: 0.24 under one of elsewhere's seeds: a tie, not evidence of another place).
+KIDNAP_MARGIN = 0.5
 
 #: Below this many pairs of poses, all pairs are compared directly (building two k-d trees
 #: costs more).
@@ -341,12 +349,17 @@ class TrackerConfig:
         alone (never corrected by the bearings, so it cannot follow them to another place),
         must explain less than this share of the bearings seen since the loss began (0.5,
         the default: most of them no longer fit; 0: the loss alone raises the flag, as
-        before 2026-12-04). While it explains more, the flag waits; a place that still
-        explains them ``kidnap_watch_s`` after its loss began is no longer watched, without
-        a flag. On MRCLAM the true place loses its mass to frames
-        that report few of the tubes in view while it still explains the bearings they do
-        report (docs/tracking-notebook.md, "A kidnapping is a place that no longer
-        explains the bearings").
+        before 2026-12-04). Nor is it flagged while the tracker's belief now (its
+        hypotheses and elsewhere's particles, each weighed by the frames) explains no more
+        of those bearings than the copy does (by :data:`KIDNAP_MARGIN`, half a bearing):
+        bearings that no place takes for landmarks are clutter (other robots, people), not
+        the evidence of another place. While either holds, the flag waits; a place that
+        still explains them ``kidnap_watch_s`` after its loss began is no longer watched,
+        without a flag. On MRCLAM the true place loses its mass to frames that report few
+        of the tubes in view while it still explains the bearings they do report, and
+        robot 5's to seconds in which every bearing is another robot
+        (docs/tracking-notebook.md, "A kidnapping is a place that no longer explains the
+        bearings" and "Bearings that no place explains").
     max_odometry_gap_s : float
         Odometry rows further apart than this (s) leave the motion unknown: the hypotheses
         are dropped and the tracker relocalizes.
@@ -537,6 +550,21 @@ class TrackerConfig:
             )
 
 
+def _posterior_explained(
+    hyp_logw: FloatArray, hyp_explained: FloatArray, else_logw: float, else_explained: float
+) -> float:
+    """The expected number of a frame's bearings that are landmarks under the tracker's
+    posterior: each hypothesis's count (``hyp_explained``) and elsewhere's
+    (``else_explained``, its particles' mean as weighed by the frame) weighed by their
+    log-masses after the frame (``hyp_logw``, ``else_logw``; not normalised)."""
+    logw = np.append(hyp_logw, else_logw)
+    top = float(logw.max())
+    if not math.isfinite(top):
+        return 0.0
+    w = np.exp(logw - top)
+    return float(w @ np.append(hyp_explained, else_explained) / w.sum())
+
+
 def _logsumexp_rows(a: FloatArray) -> FloatArray:
     """ln of the sum of exp over each row of ``a`` (C, K); -inf for a row of -inf. (By hand:
     scipy.special.logsumexp costs more than the sums it does here.)"""
@@ -713,6 +741,7 @@ class Tracker:
         self._watch: tuple[FloatArray, FloatArray] | None = None
         self._watch_m = 0.0
         self._watch_n = 0
+        self._watch_mix = 0.0  # ... and the tracker's belief explained (_posterior_explained)
         #: Number of searches run so far (for reports).
         self.searches = 0
 
@@ -1320,6 +1349,8 @@ class Tracker:
                 self._mem_w = persist * post
             best_lr = float(lr.max())
             self._logw = self._logw + c.evidence_weight * lr
+            # (What the frame's posterior explains, for the kidnapping test below.)
+            hyp_logw, hyp_explained = self._logw, explained
             decay = math.exp(-dt / c.fit_window_s)
             fit_m0 = self._fit_m * decay
             self._fit_m = fit_m0 + explained
@@ -1331,6 +1362,7 @@ class Tracker:
                 self._keep(np.flatnonzero(inside))
         else:
             best_lr = -math.inf
+            hyp_logw, hyp_explained = np.zeros(0), np.zeros(0)
             if b.size:
                 self._mem_w = np.zeros((0, b.size))
         lr_else, post_else = log_ratios_clutter(
@@ -1350,6 +1382,16 @@ class Tracker:
         pf = self._elsewhere.weigh(c.evidence_weight * lr_else)
         if c.search_miss is not None:
             pf = max(pf, c.evidence_weight * best_lr)
+        # What the belief now explains of the frame, while a place is watched (kidnap_fit):
+        # elsewhere's count is its particles' mean as weighed by the frame.
+        mix = 0.0
+        if self._localized_id is not None and c.kidnap_fit > 0 and b.size:
+            else_explained = (
+                float(np.exp(self._elsewhere.logw) @ (b.size - post_else.sum(axis=1)))
+                if post_else.shape[0]
+                else 0.0
+            )
+            mix = _posterior_explained(hyp_logw, hyp_explained, self._log_out + pf, else_explained)
         self._log_out += pf
         self._normalise()
         self._exclude()
@@ -1387,17 +1429,29 @@ class Tracker:
                 w_explained = self._watch_explained(b, model) if c.kidnap_fit > 0 else None
                 if self._below_t is None:
                     self._below_t = tf
-                    self._watch_m, self._watch_n = 0.0, 0
+                    self._watch_m, self._watch_n, self._watch_mix = 0.0, 0, 0.0
                 if w_explained is not None:
                     self._watch_m += w_explained
                     self._watch_n += int(b.size)
+                    self._watch_mix += mix
                 below = tf - self._below_t
                 since = f" (under {100 * c.kidnap_share:g} % for {below:.1f} s)" if below else ""
                 # Still explained: as many of the bearings since the loss as kidnap_fit asks
                 # (none seen yet counts as explained: nothing speaks against the place).
                 fits = w_explained is not None and (self._watch_m >= c.kidnap_fit * self._watch_n)
+                # ... or nothing explains them better: bearings that the tracker's belief
+                # now (its hypotheses and elsewhere, weighed by the frames) does not take for
+                # landmarks more often than the old place does (by KIDNAP_MARGIN) are
+                # clutter, not the evidence of another place.
+                clutter = (
+                    w_explained is not None
+                    and not fits
+                    and self._watch_mix < self._watch_m + KIDNAP_MARGIN
+                )
                 # (Localized now is localized at another place: this one holds under half.)
-                if state is TrackState.LOCALIZED or (below >= c.kidnap_confirm_s and not fits):
+                if state is TrackState.LOCALIZED or (
+                    below >= c.kidnap_confirm_s and not fits and not clutter
+                ):
                     kidnapped = True
                     self._localized_id = None
                     self._below_t = None
@@ -1405,20 +1459,26 @@ class Tracker:
                     if w_explained is not None and self._watch_n:
                         fit = (
                             f", and explains {self._watch_m:.0f} of the {self._watch_n} "
-                            "bearings since"
+                            f"bearings since, the places it now holds {self._watch_mix:.0f}"
                         )
                     reason = (
                         f"the place it was localized at now holds {100 * share:.1f} % of the "
                         f"mass{since}{fit}: kidnapped or lost; " + reason
                     )
                 elif below >= c.kidnap_confirm_s:
-                    # The loss lasts, yet the place explains the bearings: not a kidnapping
-                    # (yet). Watched until kidnap_watch_s after the loss began.
+                    # The loss lasts, yet the place explains the bearings, or nothing else
+                    # does: not a kidnapping (yet). Watched until kidnap_watch_s after the
+                    # loss began.
                     ended = below > c.kidnap_watch_s
+                    why = (
+                        f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since, "
+                        f"and the places it now holds no more ({self._watch_mix:.0f}): clutter"
+                        if clutter
+                        else f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since"
+                    )
                     reason = (
                         f"the place it was localized at holds {100 * share:.1f} % of the "
-                        f"mass{since} but explains {self._watch_m:.0f} of the "
-                        f"{self._watch_n} bearings since: not taken for a kidnapping"
+                        f"mass{since} but {why}: not taken for a kidnapping"
                         f"{' (no longer watched)' if ended else ''}; " + reason
                     )
                     if ended:
