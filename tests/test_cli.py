@@ -121,6 +121,7 @@ def test_no_solution_is_a_sentence_and_exit_0(tmp_path, capsys) -> None:
         (["localize", "--map", "missing.csv", "--bearings", "b.txt"], "missing.csv"),
         (["localize", "--map", "{map}", "--bearings", "{bad}"], "line 2"),
         (["localize", "--map", "{map}", "--bearings", "{few}"], "at least 3"),
+        (["localize", "--map", "{map}", "--bearings", "{deg}"], "--degrees"),
         (["localize", "--map", "{map}", "--bearings", "{b}", "--threshold", "x"], "threshold"),
         (["localize", "--map", "{map}"], "required"),
         (["localize", "--map", "{map}", "--bearings", "{b}", "--method", "x"], "method"),
@@ -142,7 +143,10 @@ def test_bad_input_is_one_line_and_exit_1(room_files, tmp_path, capsys, args, me
     bad.write_text("1.0\nabc\n")
     few = tmp_path / "few.txt"
     few.write_text("1.0 2.0\n")
+    deg = tmp_path / "deg.txt"
+    deg.write_text("30 -45 170\n")
     subst = {"{map}": str(m), "{b}": str(b), "{bad}": str(bad), "{few}": str(few)}
+    subst["{deg}"] = str(deg)
     subst["{nowhere}"] = str(tmp_path / "nowhere")
     argv = [subst.get(a, a) for a in args]
     assert main(argv) == 1

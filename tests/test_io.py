@@ -203,6 +203,31 @@ def test_load_bearings_bad(
     assert str(path) in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("name", "text", "expected"),
+    [
+        ("b.csv", "bearing\n0.5\n45\n-120\n", "b.csv: bearings[1] is 45, more than a full turn"),
+        ("b.csv", "bearing_rad\n-7\n", "b.csv: bearings[0] is -7, more than a full turn"),
+        ("b.json", "[10, 20, 30.5]", "b.json: bearings[0] is 10, more than a full turn"),
+        ("b.txt", "0.1 0.2\n350\n", "b.txt: bearings[2] is 350, more than a full turn"),
+    ],
+)
+def test_load_bearings_in_degrees_without_saying_so_is_an_error(
+    tmp_path: Path, name: str, text: str, expected: str
+) -> None:
+    # Degrees read as radians would localize the robot somewhere, wrongly: a value beyond a
+    # full turn in radians is refused, naming it and the flag that reads degrees.
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(ObservationError) as info:
+        load_bearings(path)
+    assert expected in str(info.value) and "--degrees" in str(info.value)
+    # A full turn and a hair under it are still radians.
+    ok = tmp_path / "ok.txt"
+    ok.write_text("6.283185307179586\n-6.28\n6.2\n")
+    np.testing.assert_allclose(load_bearings(ok), [0.0, 0.00318531, -0.08318531], atol=1e-8)
+
+
 @pytest.mark.parametrize("name", ["b.csv", "b.json", "b.txt"])
 def test_load_bearings_unreadable(tmp_path: Path, name: str) -> None:
     with pytest.raises(

@@ -98,6 +98,16 @@ def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: 
         load_frames(path)
 
 
+def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> None:
+    # Read as radians, degrees would be wrapped into bearings the robot never saw.
+    path = tmp_path / "f.csv"
+    path.write_text("t,bearing\n0.5,0.1\n0.5,\n1.0,-0.2\n1.0,120\n")
+    with pytest.raises(InputError, match=r"f\.csv:5: bearing is 120, more than a full turn"):
+        load_frames(path)
+    frames = load_frames(path, degrees=True)
+    assert np.allclose(np.rad2deg(frames[1].bearings), [-0.2, 120])
+
+
 def test_the_truth_as_tum_is_the_track_at_the_times_asked(tmp_path: Path) -> None:
     t = np.linspace(0.0, 10.0, 11)
     truth = GroundTruth(t, t * 0.5, -t, np.linspace(-3.0, 3.0, 11))

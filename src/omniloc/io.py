@@ -40,10 +40,12 @@ from omniloc.errors import InputError, MapError, ObservationError
 
 __all__ = [
     "MAX_COORDINATE",
+    "MAX_FILE_RADIANS",
     "MapFileData",
     "as_path",
     "check_bearings",
     "check_positions",
+    "check_radians",
     "content_lines",
     "finite_number",
     "json_float",
@@ -549,7 +551,9 @@ def load_bearings(path: PathLike, *, degrees: bool = False) -> NDArray[np.float6
     ------
     ObservationError
         If the file cannot be read, is empty, has a value that is not a finite number (the
-        message names the file and the line or entry), or its units conflict with ``degrees``.
+        message names the file and the line or entry), its units conflict with ``degrees``,
+        or it is read as radians and a value exceeds a full turn (:func:`check_radians`:
+        degrees without the flag).
 
     Examples
     --------
@@ -574,7 +578,42 @@ def load_bearings(path: PathLike, *, degrees: bool = False) -> NDArray[np.float6
     arr = np.array(values, dtype=np.float64)
     if in_degrees:
         arr = np.deg2rad(arr)
+    else:
+        check_radians(arr, lambda k: f"{src}: bearings[{k}]")
     return _wrap_keep_in_range(arr)
+
+
+#: Largest magnitude (rad) a bearing read from a file as radians may have: a full turn.
+#: Beyond it the numbers are degrees read as radians far more often than angles summed past
+#: a turn, and read as radians they would localize the robot somewhere, wrongly.
+MAX_FILE_RADIANS = 2.0 * math.pi
+
+
+def check_radians(
+    values: NDArray[np.float64],
+    where: Callable[[int], str],
+    error: type[Exception] = ObservationError,
+) -> None:
+    """Refuse bearings read from a file as radians that exceed a full turn
+    (:data:`MAX_FILE_RADIANS`): they are degrees without the flag that says so. ``where(k)``
+    names the place of value ``k`` in the file, for the message.
+
+    Examples
+    --------
+    >>> check_radians(np.array([0.5, -3.0, 6.2]), lambda k: f"b.csv: bearings[{k}]")
+    >>> check_radians(np.array([0.5, 45.0]), lambda k: f"b.csv: bearings[{k}]")
+    ... # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    omniloc.errors.ObservationError: b.csv: bearings[1] is 45, more than a full turn in ...
+    """
+    over = np.flatnonzero(np.abs(values) > MAX_FILE_RADIANS)
+    if over.size:
+        k = int(over[0])
+        raise error(
+            f"{where(k)} is {float(values[k]):g}, more than a full turn in radians: are the "
+            "bearings in degrees? Say so (--degrees, degrees=True, or a bearing_deg column)"
+        )
 
 
 def _float_text(value: float) -> str:

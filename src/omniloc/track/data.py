@@ -29,7 +29,15 @@ from numpy.typing import NDArray
 
 from ..angles import wrap
 from ..errors import InputError
-from ..io import PathLike, content_lines, parse_float, read_text, shorten, split_csv_line
+from ..io import (
+    PathLike,
+    check_radians,
+    content_lines,
+    parse_float,
+    read_text,
+    shorten,
+    split_csv_line,
+)
 from ..pose import Pose
 
 __all__ = [
@@ -327,6 +335,14 @@ def load_frames(
     -------
     list of Frame
         In time order; a generic file's frames each hold the rows sharing one ``t``.
+
+    Raises
+    ------
+    InputError
+        The file cannot be read or is not a frames file, a value is not a number, times go
+        back, or a generic file read as radians has a bearing beyond a full turn (degrees
+        without ``degrees=True``: :func:`omniloc.io.check_radians`); the message names the
+        line.
     """
     src, header, rows = _table(path, "frames")
     if "landmarks" in header and "robot_detections" in header:
@@ -348,6 +364,9 @@ def load_frames(
     _check_times(src, t, strict=False, lines=[n for n, _ in rows])
     if degrees or col == "bearing_deg":
         b = np.deg2rad(b)
+    else:
+        lines = [n for (n, _), ok in zip(rows, seen, strict=True) if ok]
+        check_radians(b, lambda k: f"{src}:{lines[k]}: bearing", InputError)
     # Each bearing's place among the rows that have one: frame s..e holds b[at[s]:at[e]].
     at = np.concatenate([[0], np.cumsum(seen)])
     frames = []
