@@ -98,6 +98,27 @@ def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: 
         load_frames(path)
 
 
+def test_odometry_in_other_units_is_warned_of_with_its_line(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    path = tmp_path / "o.csv"
+    path.write_text("t,v,w\n0,0.2,0.5\n1,0.2,-30\n2,0.2,3\n")
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        odo = load_odometry(path)
+    assert odo.w[1] == -30.0  # read as written: a warning, not an error
+    assert "o.csv:3: turn rate w -30 rad/s" in caplog.text and "degrees per second" in caplog.text
+    caplog.clear()
+    path.write_text("t,v,w\n0,250,0.1\n1,0.2,6.2\n")
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        load_odometry(path)
+    assert "o.csv:2: speed v 250 m/s" in caplog.text and "turn rate" not in caplog.text
+    caplog.clear()
+    path.write_text("t,v,w\n0,9.9,6.28\n1,-0.2,-6.2\n")
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        load_odometry(path)
+    assert caplog.text == ""
+
+
 def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> None:
     # Read as radians, degrees would be wrapped into bearings the robot never saw.
     path = tmp_path / "f.csv"

@@ -21,6 +21,7 @@ ground truth
 
 from __future__ import annotations
 
+import logging
 import math
 from dataclasses import dataclass, field
 
@@ -39,6 +40,8 @@ from ..io import (
     split_csv_line,
 )
 from ..pose import Pose
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "Frame",
@@ -279,8 +282,19 @@ def _columns(
     return out
 
 
+#: Above these an odometry file is probably in other units (a warning, not an error: some
+#: platforms are that fast): a turn a second (rad/s; degrees per second read as radians
+#: exceed it at 6 deg/s), and 10 m/s (mm/s or cm/s read as m/s exceed it at once).
+ODOMETRY_W_WARN = 2.0 * math.pi
+ODOMETRY_V_WARN = 10.0
+
+
 def load_odometry(path: PathLike) -> Odometry:
     """Read an odometry file (``t,v,w``; see the module's documentation).
+
+    A turn rate above :data:`ODOMETRY_W_WARN` (a turn a second) or a speed above
+    :data:`ODOMETRY_V_WARN` (10 m/s) is logged as a warning naming the line: the file is
+    probably in degrees per second or in mm/s, which are read as rad/s and m/s.
 
     Raises
     ------
@@ -293,6 +307,24 @@ def load_odometry(path: PathLike) -> Odometry:
     if t.size == 0:
         raise InputError(f"{src}: no odometry rows")
     _check_times(src, t, strict=False, lines=[n for n, _ in rows])
+    for values, limit, what, unit, other in (
+        (w, ODOMETRY_W_WARN, "turn rate w", "rad/s", "degrees per second"),
+        (v, ODOMETRY_V_WARN, "speed v", "m/s", "mm/s or cm/s"),
+    ):
+        k = int(np.argmax(np.abs(values)))
+        if abs(values[k]) > limit:
+            log.warning(
+                "%s:%d: %s %g %s, more than %.3g %s: is the file in %s? omniloc reads %s",
+                src,
+                rows[k][0],
+                what,
+                values[k],
+                unit,
+                limit,
+                unit,
+                other,
+                unit,
+            )
     return Odometry(t, v, w)
 
 
