@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import math
 from dataclasses import replace
 from functools import cache
 from pathlib import Path
@@ -782,6 +783,23 @@ def test_a_sharp_core_reaches_the_frame_model_and_widens_with_the_turn() -> None
 def test_a_sharp_core_needs_a_share_below_one_and_a_positive_sigma(kw, match) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(InputError, match=match):
         TrackerConfig(**kw)
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "tolerance_heading",
+        "merge_heading",
+        "candidate_min_sd_heading",
+        "clutter_persistence_sd",
+        "core_sigma",
+    ],
+)
+def test_an_angle_beyond_a_half_turn_is_refused_as_degrees(name: str) -> None:
+    # tolerance_heading=5 meant 5 deg; read as 5 rad it takes every heading as right.
+    with pytest.raises(InputError, match=rf"{name}=5 rad is more than a half turn.*degrees"):
+        TrackerConfig(**{name: 5.0})
+    assert getattr(TrackerConfig(**{name: math.pi}), name) == math.pi
 
 
 def test_the_covariance_inflation_scales_what_is_reported_and_decided_not_the_filter() -> None:

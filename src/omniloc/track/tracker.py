@@ -121,6 +121,15 @@ _PROBABILITIES = {
 }
 #: Probabilities that may be None (off).
 _OPTIONAL_PROBABILITIES = {"search_miss", "keep_probability"}
+#: Angles (rad) of the configuration that a heading or bearing error is compared with or
+#: spread by: beyond a half turn they take every error, a sure sign of degrees.
+_HALF_TURN_ANGLES = (
+    "tolerance_heading",
+    "merge_heading",
+    "candidate_min_sd_heading",
+    "clutter_persistence_sd",
+    "core_sigma",
+)
 _SHARES = {"fit_explained", "core_share", "miss_weight", "kidnap_fit"}
 _BOOLS = {"core_update", "temper_update", "nonempty_frames"}
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
@@ -155,7 +164,10 @@ class TrackerConfig:
     tuned sets). Every value is checked when the configuration is made: real values finite,
     >= 0 and at most :data:`VALUE_MAX`, counts whole and at most :data:`INT_MAX`
     (``elsewhere_samples`` at most 100,000, ``max_hypotheses`` 10,000, ``max_candidates``
-    1,000,000); an ``InputError`` names the field.
+    1,000,000), the angles a heading or bearing error is compared with or spread by
+    (``tolerance_heading``, ``merge_heading``, ``candidate_min_sd_heading``,
+    ``clutter_persistence_sd``, ``core_sigma``) at most a half turn, pi (more is degrees
+    passed as radians); an ``InputError`` names the field.
 
     Parameters
     ----------
@@ -548,6 +560,13 @@ class TrackerConfig:
             raise InputError(
                 f"search_min_bearings must be at least 3, got {self.search_min_bearings}"
             )
+        for name in _HALF_TURN_ANGLES:
+            v = getattr(self, name)
+            if v > math.pi:
+                raise InputError(
+                    f"{name}={v:g} rad is more than a half turn, which no heading or bearing "
+                    "error exceeds: angles are in radians (did you pass degrees?)"
+                )
 
 
 def _posterior_explained(
