@@ -119,6 +119,22 @@ def test_odometry_in_other_units_is_warned_of_with_its_line(
     assert caplog.text == ""
 
 
+def test_a_ground_truth_in_degrees_is_warned_of_with_its_line(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    path = tmp_path / "gt.csv"
+    path.write_text("t,x,y,theta\n0,1,2,45\n1,1,2,-170\n")
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        gt = load_groundtruth(path)
+    assert gt.theta[1] == -170.0  # read as written: a warning, not an error
+    assert "gt.csv:3: heading theta -170 is more than a full turn" in caplog.text
+    caplog.clear()
+    path.write_text("t,x,y,theta\n0,1,2,3.1\n1,1,2,-6.28\n")
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        load_groundtruth(path)
+    assert caplog.text == ""
+
+
 def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> None:
     # Read as radians, degrees would be wrapped into bearings the robot never saw.
     path = tmp_path / "f.csv"

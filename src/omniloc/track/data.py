@@ -329,11 +329,24 @@ def load_odometry(path: PathLike) -> Odometry:
 
 
 def load_groundtruth(path: PathLike) -> GroundTruth:
-    """Read a ground-truth track (``t,x,y,theta[,gap]``)."""
+    """Read a ground-truth track (``t,x,y,theta[,gap]``; theta in radians).
+
+    A heading beyond a full turn is logged as a warning naming the line: degrees, probably
+    (radians unwrapped over several turns are read correctly and may ignore it)."""
     src, header, rows = _table(path, "ground truth")
     t, x, y, th = _columns(src, header, rows, ("t", "x", "y", "theta"))
     gap = _columns(src, header, rows, ("gap",))[0] if "gap" in header else None
     _check_times(src, t, lines=[n for n, _ in rows])
+    if th.size:
+        k = int(np.argmax(np.abs(th)))
+        if abs(th[k]) > 2.0 * math.pi:
+            log.warning(
+                "%s:%d: heading theta %g is more than a full turn: is it in degrees? omniloc "
+                "reads radians (radians unwrapped over turns are read correctly)",
+                src,
+                rows[k][0],
+                th[k],
+            )
     return GroundTruth(t, x, y, th, gap)
 
 
