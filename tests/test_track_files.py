@@ -98,41 +98,33 @@ def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: 
         load_frames(path)
 
 
-def test_odometry_in_other_units_is_warned_of_with_its_line(
-    tmp_path: Path, caplog: pytest.LogCaptureFixture
+@pytest.mark.parametrize(
+    ("text", "warning"),
+    [
+        # odometry: a turn rate in degrees per second, a speed in mm/s, neither at the limits
+        ("t,v,w\n0,0.2,0.5\n1,0.2,-30\n2,0.2,3\n", "o.csv:3: turn rate w -30 rad/s"),
+        ("t,v,w\n0,250,0.1\n1,0.2,6.2\n", "o.csv:2: speed v 250 m/s"),
+        ("t,v,w\n0,9.9,6.28\n1,-0.2,-6.2\n", ""),
+        # ground truth: headings in degrees, none within a full turn
+        ("t,x,y,theta\n0,1,2,45\n1,1,2,-170\n", "o.csv:3: heading theta -170 is more than"),
+        ("t,x,y,theta\n0,1,2,3.1\n1,1,2,-6.28\n", ""),
+    ],
+)
+def test_recordings_in_other_units_are_warned_of_with_their_line(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, text: str, warning: str
 ) -> None:
     path = tmp_path / "o.csv"
-    path.write_text("t,v,w\n0,0.2,0.5\n1,0.2,-30\n2,0.2,3\n")
+    path.write_text(text)
+    load = load_odometry if text.startswith("t,v,w") else load_groundtruth
     with caplog.at_level("WARNING", logger="omniloc.track.data"):
-        odo = load_odometry(path)
-    assert odo.w[1] == -30.0  # read as written: a warning, not an error
-    assert "o.csv:3: turn rate w -30 rad/s" in caplog.text and "degrees per second" in caplog.text
-    caplog.clear()
-    path.write_text("t,v,w\n0,250,0.1\n1,0.2,6.2\n")
-    with caplog.at_level("WARNING", logger="omniloc.track.data"):
-        load_odometry(path)
-    assert "o.csv:2: speed v 250 m/s" in caplog.text and "turn rate" not in caplog.text
-    caplog.clear()
-    path.write_text("t,v,w\n0,9.9,6.28\n1,-0.2,-6.2\n")
-    with caplog.at_level("WARNING", logger="omniloc.track.data"):
-        load_odometry(path)
-    assert caplog.text == ""
-
-
-def test_a_ground_truth_in_degrees_is_warned_of_with_its_line(
-    tmp_path: Path, caplog: pytest.LogCaptureFixture
-) -> None:
-    path = tmp_path / "gt.csv"
-    path.write_text("t,x,y,theta\n0,1,2,45\n1,1,2,-170\n")
-    with caplog.at_level("WARNING", logger="omniloc.track.data"):
-        gt = load_groundtruth(path)
-    assert gt.theta[1] == -170.0  # read as written: a warning, not an error
-    assert "gt.csv:3: heading theta -170 is more than a full turn" in caplog.text
-    caplog.clear()
-    path.write_text("t,x,y,theta\n0,1,2,3.1\n1,1,2,-6.28\n")
-    with caplog.at_level("WARNING", logger="omniloc.track.data"):
-        load_groundtruth(path)
-    assert caplog.text == ""
+        rec = load(path)
+    if not warning:
+        assert caplog.text == ""
+        return
+    assert warning in caplog.text and caplog.text.count("WARNING") == 1
+    # Read as written: a warning, not an error.
+    values = rec.w if isinstance(rec, Odometry) else rec.theta
+    assert values[-1] == float(text.splitlines()[-1].split(",")[-1])
 
 
 def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> None:
