@@ -105,9 +105,12 @@ def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: 
         ("t,v,w\n0,0.2,0.5\n1,0.2,-30\n2,0.2,3\n", "o.csv:3: turn rate w -30 rad/s"),
         ("t,v,w\n0,250,0.1\n1,0.2,6.2\n", "o.csv:2: speed v 250 m/s"),
         ("t,v,w\n0,9.9,6.28\n1,-0.2,-6.2\n", ""),
+        ("t,v,w\n0,0.2,0.1\n1,9.9,-6.3\n", "o.csv:3: turn rate w -6.3 rad/s"),
+        ("t,v,w\n0,0.2,0.1\n1,-10.1,0.1\n", "o.csv:3: speed v -10.1 m/s"),
         # ground truth: headings in degrees, none within a full turn
         ("t,x,y,theta\n0,1,2,45\n1,1,2,-170\n", "o.csv:3: heading theta -170 is more than"),
         ("t,x,y,theta\n0,1,2,3.1\n1,1,2,-6.28\n", ""),
+        ("t,x,y,theta\n0,1,2,3.1\n1,1,2,6.3\n", "o.csv:3: heading theta 6.3 is more than"),
     ],
 )
 def test_recordings_in_other_units_are_warned_of_with_their_line(

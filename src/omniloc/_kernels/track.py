@@ -921,17 +921,22 @@ def _same_pose(
     mu_b: FloatArray,
     Pb: FloatArray,
     b: int,
+    max_d2: float,
     max_heading: float,
     max_form: float,
 ) -> bool:
-    """Whether poses ``mu_a[a]`` and ``mu_b[b]`` are the same beyond their positions: the
-    wrapped heading difference within ``max_heading`` and :func:`_pair_form` of the
-    difference on the summed covariances at most ``max_form`` (False for a NaN)."""
+    """Whether poses ``mu_a[a]`` and ``mu_b[b]`` are the same: their positions within
+    ``max_d2`` (squared distance; inf: any), the wrapped heading difference within
+    ``max_heading`` and :func:`_pair_form` of the difference on the summed covariances at
+    most ``max_form`` (False for a NaN). The one test of :func:`same_of_pairs`,
+    :func:`near_pairs` and :func:`grid_pairs`."""
+    g0 = mu_a[a, 0] - mu_b[b, 0]
+    g1 = mu_a[a, 1] - mu_b[b, 1]
+    if not g0 * g0 + g1 * g1 <= max_d2:
+        return False
     g2 = wrap_float(mu_a[a, 2] - mu_b[b, 2])
     if not abs(g2) <= max_heading:
         return False
-    g0 = mu_a[a, 0] - mu_b[b, 0]
-    g1 = mu_a[a, 1] - mu_b[b, 1]
     return _pair_form(Pa[a], Pb[b], g0, g1, g2) <= max_form
 
 
@@ -950,7 +955,7 @@ def same_of_pairs(
     the same pose (:func:`_same_pose`)."""
     out = np.zeros(ia.shape[0], dtype=np.bool_)
     for k in range(ia.shape[0]):
-        out[k] = _same_pose(mu_a, Pa, ia[k], mu_b, Pb, ib[k], max_heading, max_form)
+        out[k] = _same_pose(mu_a, Pa, ia[k], mu_b, Pb, ib[k], math.inf, max_heading, max_form)
     return out
 
 
@@ -973,32 +978,11 @@ def near_pairs(
     n = 0
     for a in range(mu_a.shape[0]):
         for b in range(mu_b.shape[0]):
-            if _near_same(mu_a, Pa, a, mu_b, Pb, b, max_d2, max_heading, max_form):
+            if _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_d2, max_heading, max_form):
                 ia[n] = a
                 ib[n] = b
                 n += 1
     return ia[:n].copy(), ib[:n].copy()
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def _near_same(
-    mu_a: FloatArray,
-    Pa: FloatArray,
-    a: int,
-    mu_b: FloatArray,
-    Pb: FloatArray,
-    b: int,
-    max_d2: float,
-    max_heading: float,
-    max_form: float,
-) -> bool:
-    """Poses ``a`` and ``b`` within ``max_d2`` (squared distance) of each other and the same
-    pose (:func:`_same_pose`): the one test of :func:`near_pairs` and :func:`grid_pairs`."""
-    g0 = mu_a[a, 0] - mu_b[b, 0]
-    g1 = mu_a[a, 1] - mu_b[b, 1]
-    if not g0 * g0 + g1 * g1 <= max_d2:
-        return False
-    return _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_heading, max_form)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -1085,7 +1069,7 @@ def grid_pairs(
                 while j < n_in and keys[j] == key:
                     b = members[j]
                     j += 1
-                    if _near_same(mu_a, Pa, a, mu_b, Pb, b, max_d2, max_heading, max_form):
+                    if _same_pose(mu_a, Pa, a, mu_b, Pb, b, max_d2, max_heading, max_form):
                         found[m] = b
                         m += 1
         if m == 0:
