@@ -1,0 +1,161 @@
+"""The tracker's frame on large maps: how long elsewhere's particles take to weigh and a
+whole frame takes, on maps of 1,000 and 10,000 landmarks, with a range.
+
+Run:  python benchmarks/track_large_maps.py [--frames N] [--repeat N] [--out PATH]
+
+Each map is landmarks uniform over 100 m x 100 m; the sensor is the ``mrclam`` preset's
+(67 deg field of view, 7 m range, 1 deg), the tracker's settings the preset's but for the
+region (the map's bounding box). Two figures per map, each the median over ``--frames``
+frames:
+
+* the weighing: elsewhere's 3,000 particles weighed against a frame of two bearings
+  (``log_ratios_clutter``, the frame kernel on exactly known poses), with the particles
+  grouped by cells a range wide and with the whole map scanned for every particle -- the
+  same numbers, bit for bit, checked here -- and which of the two the library picks
+  (``likelihood._cell_groups``: from ``CELL_MIN_LANDMARKS`` landmarks, where the pairs it
+  saves outweigh ``CELL_CALL_PAIRS`` a cell);
+* a whole ``Tracker.frame``: two random bearings at 4 frames a second after odometry of a
+  robot driving at 0.3 m/s and turning at 0.2 rad/s (a robot that is not localized; its
+  searches, at most one a second, are in the figure).
+
+Writes ``results_track_large_maps.json`` and ``.md`` beside this file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "src"))
+sys.path.insert(0, str(HERE))
+
+import omniloc.track.likelihood as lk  # noqa: E402
+from _results import run_meta, write_results  # noqa: E402
+from omniloc import LandmarkMap  # noqa: E402
+from omniloc.track import Tracker, preset  # noqa: E402
+
+SIDE_M = 100.0
+PARTICLES = 3000
+
+
+def weighing_ms(n: int, frames: int, repeat: int, cells: bool, seed: int = 0) -> tuple[float, list]:
+    """Median milliseconds to weigh 3,000 particles on a map of ``n`` landmarks (grouped
+    by cells or not), and the last frame's numbers."""
+    rng = np.random.default_rng(seed)
+    L = rng.uniform(0.0, SIDE_M, (n, 2))
+    sensor, _, config = preset("mrclam")
+    model = lk.FrameModel.of(sensor, p_detect=sensor.p_detect, clutter=sensor.clutter)
+    model = replace(
+        model, fresh=1.0 - config.clutter_persistence, object_var=config.clutter_persistence_sd**2
+    )
+    saved = lk.CELL_MIN_LANDMARKS, lk.CELL_CALL_PAIRS
+    if cells:
+        lk.CELL_CALL_PAIRS = 0  # (grouped even where the default would not)
+    else:
+        lk.CELL_MIN_LANDMARKS = 2**62
+    try:
+        times = []
+        out: list = []
+        for _ in range(frames):
+            xy = rng.uniform(0.0, SIDE_M, (PARTICLES, 2))
+            poses = np.column_stack([xy, rng.uniform(-math.pi, math.pi, PARTICLES)])
+            bearings = rng.uniform(-0.5, 0.5, 2)
+            objects = lk.Objects(rng.uniform(-0.5, 0.5, 1), rng.uniform(0.0, 0.75, (PARTICLES, 1)))
+            best = math.inf
+            for _ in range(repeat):
+                t0 = time.perf_counter()
+                out = list(lk.log_ratios_clutter(poses, bearings, L, model, objects))
+                best = min(best, time.perf_counter() - t0)
+            times.append(best)
+        return 1e3 * statistics.median(times), out
+    finally:
+        lk.CELL_MIN_LANDMARKS, lk.CELL_CALL_PAIRS = saved
+
+
+def frame_ms(n: int, frames: int, seed: int = 0) -> float:
+    """Median milliseconds of a whole ``Tracker.frame`` on a map of ``n`` landmarks."""
+    rng = np.random.default_rng(seed)
+    lm = LandmarkMap(rng.uniform(0.0, SIDE_M, (n, 2)))
+    sensor, motion, config = preset("mrclam")
+    tracker = Tracker(lm, sensor, motion, replace(config, region=None))
+    times = []
+    t = 0.0
+    for _ in range(frames + 5):
+        tracker.odometry([t], [0.3], [0.2])
+        t += 0.25
+        bearings = rng.uniform(-0.5, 0.5, 2)
+        t0 = time.perf_counter()
+        tracker.frame(t, bearings)
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times[5:])  # (the first frames compile and fill caches)
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--frames", type=int, default=50, help="frames per figure (median)")
+    ap.add_argument("--repeat", type=int, default=3, help="weighings of each frame (fastest)")
+    ap.add_argument("--out", type=Path, default=HERE / "results_track_large_maps")
+    args = ap.parse_args(argv)
+    weighing_ms(300, 2, 1, True)  # compile the kernels once
+    rows = []
+    for n in (1000, 10_000):
+        cells, a = weighing_ms(n, args.frames, args.repeat, True)
+        whole, b = weighing_ms(n, args.frames, args.repeat, False)
+        same = all(np.array_equal(x, y) for x, y in zip(a, b, strict=True))
+        rng = np.random.default_rng(0)
+        L = rng.uniform(0.0, SIDE_M, (n, 2))
+        poses = np.column_stack(
+            [rng.uniform(0.0, SIDE_M, (PARTICLES, 2)), rng.uniform(-math.pi, math.pi, PARTICLES)]
+        )
+        picked = "cells" if lk._cell_groups(poses, L, 7.0) is not None else "whole map"
+
+        frame = frame_ms(n, args.frames)
+        rows.append(
+            {
+                "landmarks": n,
+                "weighing_cells_ms": cells,
+                "weighing_whole_map_ms": whole,
+                "same_numbers": same,
+                "default": picked,
+                "frame_ms": frame,
+            }
+        )
+        print(
+            f"{n:6d} landmarks: weighing {cells:.1f} ms by cells, {whole:.1f} ms scanning the "
+            f"whole map (same numbers: {same}; the default: {picked}); a whole frame {frame:.1f} ms"
+        )
+    meta = run_meta("track_large_maps.py", argv, particles=PARTICLES, side_m=SIDE_M)
+    write_results(args.out.with_suffix(".json"), meta, rows=rows)
+    lines = [
+        "# The tracker's frame on large maps (`benchmarks/track_large_maps.py`)",
+        "",
+        f"{meta['date']}, {meta['machine']}; `{meta['command']}`. Landmarks uniform over "
+        f"100 m x 100 m, the `mrclam` preset's sensor (7 m range); elsewhere's {PARTICLES:,} "
+        "particles weighed against two bearings (median over the frames), and a whole frame "
+        "of a tracker that is not localized.",
+        "",
+        "| landmarks | weighing, by cells | weighing, whole map scanned | same numbers | "
+        "the library's choice | whole frame |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['landmarks']:,} | {r['weighing_cells_ms']:.1f} ms | "
+            f"{r['weighing_whole_map_ms']:.1f} ms | {'yes' if r['same_numbers'] else 'NO'} | "
+            f"{r['default']} | {r['frame_ms']:.1f} ms |"
+        )
+    args.out.with_suffix(".md").write_text("\n".join(lines) + "\n")
+    print(f"wrote {args.out.with_suffix('.md')}")
+    return 0 if all(r["same_numbers"] for r in rows) else 1
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
