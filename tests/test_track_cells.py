@@ -112,6 +112,10 @@ def test_a_large_map_is_weighed_by_cells_and_a_small_one_is_not() -> None:
     far = L.copy()
     far[0] = (1e9, 1e9)
     assert lk._cell_groups(poses, far, 7.0) is None
+    # A pose that is not a number: the whole scan, whatever it makes of it.
+    bad = poses.copy()
+    bad[5, 0] = np.nan
+    assert lk._cell_groups(bad, L, 7.0) is None
     # A range as wide as the map: one cell's work is the whole scan plus a call, not kept.
     assert lk._cell_groups(poses, L, 500.0) is None
 

@@ -427,6 +427,8 @@ def _cell_groups(
     span = (L.max(axis=0) - L.min(axis=0)) / side
     if not (np.isfinite(span).all() and span.max() < CELL_MAX_SPAN):
         return None
+    if not np.isfinite(poses[:, :2]).all():
+        return None  # (a pose that is not a number: the whole scan says what it gives)
     cells = _cells_of(L, side)
     pkey = cells.keys(poses[:, :2])
     ukeys, pinv = np.unique(pkey, return_inverse=True)
