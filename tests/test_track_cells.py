@@ -159,3 +159,29 @@ def test_the_cells_kept_between_frames_are_bounded() -> None:
         assert np.array_equal(got[0], want[0])
     finally:
         lk.CELL_NEAR_KEPT = saved
+
+
+def test_a_tracker_on_a_large_map_reports_the_same_with_and_without_cells() -> None:
+    from omniloc import LandmarkMap
+    from omniloc.track import Tracker, preset
+
+    rng = np.random.default_rng(5)
+    lm = LandmarkMap(rng.uniform(0.0, 60.0, (1500, 2)))
+    sensor, motion, config = preset("mrclam")
+    config = replace(config, region=None, elsewhere_samples=600, search_max_nodes=2000)
+    frames = [(0.25 * (i + 1), rng.uniform(-0.5, 0.5, int(rng.integers(0, 4)))) for i in range(12)]
+
+    def run() -> list[str]:
+        tracker = Tracker(lm, sensor, motion, config)
+        out = []
+        for t, bearings in frames:
+            tracker.odometry([t - 0.25], [0.3], [0.2])
+            e = tracker.frame(t, bearings)
+            out.append(repr((e.state, e.pose, e.reason, e.kidnapped, e.hypotheses)))
+        return out
+
+    with _cells(1, 0):  # every frame weighed by cells
+        by_cells = run()
+    with _cells(2**62, 0):  # every frame scanned whole
+        whole = run()
+    assert by_cells == whole
