@@ -15,8 +15,9 @@ frames:
   (``likelihood._cell_groups``: from ``CELL_MIN_LANDMARKS`` landmarks, where the pairs it
   saves outweigh ``CELL_CALL_PAIRS`` a cell);
 * a whole ``Tracker.frame``: two random bearings at 4 frames a second after odometry of a
-  robot driving at 0.3 m/s and turning at 0.2 rad/s (a robot that is not localized; its
-  searches, at most one a second, are in the figure).
+  robot driving at 0.3 m/s and turning at 0.2 rad/s (a robot that is not localized). Its
+  searches, about one a second, take up to 2 s each on 10,000 landmarks; a frame with one
+  is among the frames, but the median is a frame without one.
 
 Writes ``results_track_large_maps.json`` and ``.md`` beside this file.
 """
