@@ -1,4 +1,4 @@
-"""Elsewhere's particles weighed cell by cell on large maps: the same numbers as the scan
+"""Particles and hypotheses weighed cell by cell on large maps: the same numbers as the scan
 of the whole map, bit for bit."""
 
 from __future__ import annotations
@@ -14,7 +14,12 @@ from hypothesis import strategies as st
 
 import omniloc.track.likelihood as lk
 from omniloc import SensorModel
-from omniloc.track.likelihood import FrameModel, Objects, log_ratios_clutter
+from omniloc.track.likelihood import (
+    FrameModel,
+    Objects,
+    frame_update_clutter,
+    log_ratios_clutter,
+)
 
 
 def _model(max_range: float, fov_deg: float | None) -> FrameModel:
@@ -55,6 +60,11 @@ def _cells(min_landmarks: int, call_pairs: int) -> Iterator[None]:
         lk.CELL_MIN_LANDMARKS, lk.CELL_CALL_PAIRS = saved
 
 
+def _covariances(rng: np.random.Generator, H: int, scale: float) -> np.ndarray:
+    A = rng.normal(scale=scale, size=(H, 3, 3))
+    return A @ np.swapaxes(A, 1, 2) + 1e-6 * np.eye(3)
+
+
 @settings(max_examples=40, deadline=None)  # (the first example compiles the kernel)
 @given(
     seed=st.integers(0, 2**32 - 1),
@@ -65,6 +75,7 @@ def _cells(min_landmarks: int, call_pairs: int) -> Iterator[None]:
     k=st.integers(0, 3),
     K=st.integers(0, 2),
     fov=st.sampled_from([None, 67.0, 200.0]),
+    spread=st.sampled_from([None, 0.01, 0.3, 3.0]),
 )
 def test_weighing_cell_by_cell_is_the_whole_scan_bit_for_bit_and_misses_no_landmark(
     seed: int,
@@ -75,28 +86,44 @@ def test_weighing_cell_by_cell_is_the_whole_scan_bit_for_bit_and_misses_no_landm
     k: int,
     K: int,
     fov: float | None,
+    spread: float | None,
 ) -> None:
     # (A map `cells` ranges across; the grouping is forced whenever it looks at fewer
-    # pairs, so that every example takes it.)
+    # pairs, so that every example takes it. `spread` None: exactly known poses
+    # (particles); else hypotheses with covariances of that scale, which the bearings move
+    # -- from 3 on often farther than the cells' margin, and weighed again.)
     L, poses, bearings, objects = _scene(seed, n, cells * max_range, H, k, K)
     model = _model(max_range, fov)
-    with _cells(1, 0):
-        groups = lk._cell_groups(poses, L, max_range)
-        got = log_ratios_clutter(poses, bearings, L, model, objects)
-    assert groups is not None
-    # Each pose is in one group, handed every landmark in its range, in the map's order.
-    seen = np.zeros(H, dtype=int)
-    for idx, lm in groups:
-        assert np.all(np.diff(lm) > 0)
-        seen[idx] += 1
-        d2 = ((L[None, :, :] - poses[idx, None, :2]) ** 2).sum(axis=2)
-        assert not ((d2 <= max_range**2) & ~np.isin(np.arange(n), lm)[None, :]).any()
-    assert np.all(seen == 1)
-    with _cells(2**62, 0):
-        want = log_ratios_clutter(poses, bearings, L, model, objects)
+    margin = 0.0 if spread is None else lk.CELL_REACH_SHARE * max_range
+    if spread is None:
+        with _cells(1, 0):
+            groups = lk._cell_groups(poses, L, max_range)
+            got = log_ratios_clutter(poses, bearings, L, model, objects)
+        with _cells(2**62, 0):
+            want = log_ratios_clutter(poses, bearings, L, model, objects)
+    else:
+        P = _covariances(np.random.default_rng(seed + 1), H, spread)
+        with _cells(1, 0):
+            groups = lk._cell_groups(poses, L, max_range, margin)
+            got = frame_update_clutter(poses, P, bearings, L, model, objects)
+        with _cells(2**62, 0):
+            want = frame_update_clutter(poses, P, bearings, L, model, objects)
+    if cells > 8.0:  # (on a smaller map the 3 x 3 cells may hold every landmark)
+        assert groups is not None
+    if groups is not None:
+        # Each pose is in one group, handed every landmark within its range and the
+        # margin, in the map's order.
+        seen = np.zeros(H, dtype=int)
+        for idx, lm in groups:
+            assert np.all(np.diff(lm) > 0)
+            seen[idx] += 1
+            d2 = ((L[None, :, :] - poses[idx, None, :2]) ** 2).sum(axis=2)
+            near = d2 <= (max_range + margin) ** 2
+            assert not (near & ~np.isin(np.arange(n), lm)[None, :]).any()
+        assert np.all(seen == 1)
     for g, w in zip(got, want, strict=True):
         assert g.shape == w.shape
-        assert np.array_equal(g, w)
+        assert np.array_equal(g, w, equal_nan=True)
 
 
 def test_a_large_map_is_weighed_by_cells_and_a_small_one_is_not() -> None:
@@ -153,7 +180,7 @@ def test_the_cells_kept_between_frames_are_bounded() -> None:
                 assert lk._cell_groups(poses, L, 7.0) is not None
                 got = log_ratios_clutter(poses, bearings, L, model, None)
             assert lk._cells_cache is not None
-            assert len(lk._cells_cache[2]._near) <= 500
+            assert all(len(c._near) <= 500 for c in lk._cells_cache[1].values())
         with _cells(2**62, 0):
             want = log_ratios_clutter(poses, bearings, L, model, None)
         assert np.array_equal(got[0], want[0])

@@ -582,13 +582,17 @@ def frame_update_kernel(
     obj_b: FloatArray,
     obj_w: FloatArray,
     obj_var: float,
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """Take one frame of bearings into H Gaussian hypotheses ``(mu, P)`` (copies are
     returned; ``P`` as given when ``update`` is False): the log-likelihood ratio of the
     frame (H,), the expected number of its bearings that are landmarks (H,), each
     hypothesis updated by the mixture of each bearing's readings, one bearing at a time
-    (see :mod:`omniloc.track.likelihood`), and each bearing's posterior probability of
-    being clutter (H, k).
+    (see :mod:`omniloc.track.likelihood`), each bearing's posterior probability of
+    being clutter (H, k), and how far (m) each hypothesis's position moved from where it
+    began the frame before a bearing was predicted from it (H,; 0 when no bearing was
+    predicted from a moved position, always so for exactly known poses): the landmarks
+    within range of the positions predicted from are those within range plus that of the
+    first.
     ``update`` False: exactly known poses (particles, ``P`` zero: one (1, 3, 3) zero matrix
     is enough), which no bearing moves -- the ratio only, from one prediction per pose;
     ``mu`` and ``P`` are returned as given.
@@ -629,6 +633,7 @@ def frame_update_kernel(
     log_ratio = np.zeros(H)
     explained = np.zeros(H)
     clutter_post = np.zeros((H, bearings.shape[0]))
+    reach = np.zeros(H)
     obj_norm = 1.0 / (math.sqrt(2.0 * math.pi * obj_var) * kappa) if K else 0.0
     fresh_cost = (
         (1.0 - fresh) * kappa * 2.0 * math.pi
@@ -731,9 +736,14 @@ def frame_update_kernel(
         # The prediction is redone only after a bearing has moved the hypothesis (the same
         # pose and covariance predict the same, bit for bit).
         moved = False
+        x0, y0 = m[0], m[1]
         for iz in range(bearings.shape[0]):
             z = bearings[iz]
             if update and moved:
+                # (How far the position predicted from has moved in the frame.)
+                r = math.hypot(m[0] - x0, m[1] - y0)
+                if not r <= reach[k]:
+                    reach[k] = r
                 _predict_one(
                     m,
                     C,
@@ -836,7 +846,7 @@ def frame_update_kernel(
                 m[i] += mean[i]
             m[2] = wrap_float(m[2])
             moved = True
-    return mu, P, log_ratio, explained, clutter_post
+    return mu, P, log_ratio, explained, clutter_post, reach
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

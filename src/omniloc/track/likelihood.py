@@ -277,7 +277,8 @@ def _kernel(
     update: bool,
     objects: Objects | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """The compiled kernel on the model's numbers (:func:`frame_update_kernel`)."""
+    """The compiled kernel on the model's numbers (:func:`frame_update_kernel`), on the
+    whole map or, on a large one with a range, cell by cell (:func:`_by_cells`)."""
     if objects is None or objects.bearings.size == 0 or model.object_var <= 0.0:
         ob, ow = np.zeros(0), np.zeros((mu.shape[0], 0))
     else:
@@ -311,20 +312,32 @@ def _kernel(
         ob,
     )
     var = model.object_var if ob.size else 1.0
-    H = mu.shape[0]
-    if not update and model.max_range is not None:
-        groups = _cell_groups(mu, rest[1], model.max_range)
+    if model.max_range is not None:
+        margin = CELL_REACH_SHARE * model.max_range if update else 0.0
+        groups = _cell_groups(mu, rest[1], model.max_range, margin)
         if groups is not None:
-            return _by_cells(mu, P, rest, ow, var, groups)
+            return _by_cells(mu, P, rest, ow, var, groups, update, margin)
+    return _scan(mu, P, rest, ow, var, update)[:5]
+
+
+def _scan(
+    mu: FloatArray, P: FloatArray, rest: tuple[Any, ...], ow: FloatArray, var: float, update: bool
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """:func:`frame_update_kernel` on the map of ``rest``: in two halves side by side from
+    ``PARALLEL_MIN`` hypotheses on."""
+    H = mu.shape[0]
     pool = _shared_pool() if H >= PARALLEL_MIN else None
     if pool is None:
-        return frame_update_kernel(mu, P, *rest, ow, var)
+        whole: tuple[Any, ...] = (mu, P, *rest, ow, var)
+        return frame_update_kernel(*whole)
     half = H // 2
     # (Exactly known poses: P is the one zero covariance, shared by both halves; mu and P
     # come back as they were given.)
     Pa, Pb = (P[:half], P[half:]) if update else (P, P)
-    first = pool.submit(frame_update_kernel, mu[:half], Pa, *rest, ow[:half], var)
-    second = frame_update_kernel(mu[half:], Pb, *rest, ow[half:], var)
+    lower: tuple[Any, ...] = (mu[:half], Pa, *rest, ow[:half], var)
+    upper: tuple[Any, ...] = (mu[half:], Pb, *rest, ow[half:], var)
+    first = pool.submit(frame_update_kernel, *lower)
+    second = frame_update_kernel(*upper)
     a = first.result()
     return (
         np.concatenate([a[0], second[0]]) if update else mu,
@@ -332,6 +345,7 @@ def _kernel(
         np.concatenate([a[2], second[2]]),
         np.concatenate([a[3], second[3]]),
         np.concatenate([a[4], second[4]]),
+        np.concatenate([a[5], second[5]]),
     )
 
 
@@ -349,6 +363,10 @@ CELL_CALL_PAIRS = 20_000
 CELL_MAX_SPAN = 1_000_000
 #: At most this many cells' lists of landmarks are kept between frames.
 CELL_NEAR_KEPT = 65_536
+#: Hypotheses (with a covariance, moved by each bearing) are handed the landmarks within
+#: their range plus this share of it; one that moves farther within a frame is weighed
+#: again against the whole map.
+CELL_REACH_SHARE = 0.5
 
 
 class _Cells:
@@ -394,28 +412,33 @@ class _Cells:
         return got
 
 
-#: The last map's cells (a copy of its landmarks, the cell side, and the cells): a tracker
-#: weighs every frame against one map.
-_cells_cache: tuple[FloatArray, float, _Cells] | None = None
+#: The last map's cells (a copy of its landmarks, and its cells by their side: the
+#: particles' and the hypotheses'): a tracker weighs every frame against one map.
+_cells_cache: tuple[FloatArray, dict[float, _Cells]] | None = None
 
 
 def _cells_of(L: FloatArray, side: float) -> _Cells:
-    """The cells of map ``L`` (those of the last call when it is the same map)."""
+    """The cells of map ``L`` of side ``side`` (made once for the same map)."""
     global _cells_cache
     cached = _cells_cache
-    if cached is not None and cached[1] == side and np.array_equal(cached[0], L):
-        return cached[2]
-    cells = _Cells(L, side)
-    _cells_cache = (L.copy(), side, cells)
+    if cached is None or not np.array_equal(cached[0], L):
+        cached = (L.copy(), {})
+        _cells_cache = cached
+    by_side = cached[1]
+    cells = by_side.get(side)
+    if cells is None:
+        if len(by_side) >= 4:
+            by_side.clear()  # (more sides than a tracker uses: the model changed)
+        cells = by_side[side] = _Cells(L, side)
     return cells
 
 
 def _cell_groups(
-    poses: FloatArray, L: FloatArray, max_range: float
+    poses: FloatArray, L: FloatArray, max_range: float, margin: float = 0.0
 ) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]] | None:
-    """The exactly known ``poses`` grouped by square cells a range wide, each group with
+    """The ``poses`` grouped by square cells ``max_range + margin`` wide, each group with
     the landmarks of the 3 x 3 cells around its cell, in ascending order: every landmark
-    within ``max_range`` of a pose of the group is among them. The kernel gives a landmark
+    within ``max_range + margin`` of a pose of the group is among them. The kernel gives a landmark
     out of range nothing but its zero detection probability, and sums the others in the
     order of the map, so weighing a group against its landmarks gives the same numbers as
     against the whole map, bit for bit. None where a grouping does not pay (a small map, a
@@ -423,7 +446,7 @@ def _cell_groups(
     N, H = L.shape[0], poses.shape[0]
     if N < CELL_MIN_LANDMARKS or H == 0 or not (math.isfinite(max_range) and max_range > 0.0):
         return None
-    side = max_range * (1.0 + 1e-6) + 1e-9
+    side = (max_range + margin) * (1.0 + 1e-6) + 1e-9
     span = (L.max(axis=0) - L.min(axis=0)) / side
     if not (np.isfinite(span).all() and span.max() < CELL_MAX_SPAN):
         return None
@@ -453,20 +476,26 @@ def _by_cells(
     ow: FloatArray,
     var: float,
     groups: list[tuple[NDArray[np.int64], NDArray[np.int64]]],
+    update: bool,
+    margin: float,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """:func:`_kernel` for exactly known poses, cell by cell (``groups`` from
-    :func:`_cell_groups`): the same numbers, bit for bit. With many poses the cells are
-    shared between the caller and the pool's thread, each taking about half the work."""
+    """:func:`_kernel` cell by cell (``groups`` from :func:`_cell_groups`): the same
+    numbers, bit for bit. With many poses the cells are shared between the caller and the
+    pool's thread, each taking about half the work. A hypothesis that moved farther than
+    ``margin`` before a bearing was predicted from it may have had landmarks in range that
+    its cell's list does not hold: it is weighed again against the whole map."""
     H, k = mu.shape[0], int(np.asarray(rest[0]).size)
     L = np.asarray(rest[1])
     log_ratio, explained, post = np.zeros(H), np.zeros(H), np.zeros((H, k))
+    mu_out, P_out = (mu.copy(), P.copy()) if update else (mu, P)
+    far = np.zeros(H, dtype=bool)
 
     def run(part: list[tuple[NDArray[np.int64], NDArray[np.int64]]]) -> None:
         for idx, lm in part:
             # (The whole scan's arguments, with the cell's poses, landmarks and memory.)
             args: tuple[Any, ...] = (
                 np.ascontiguousarray(mu[idx]),
-                P,
+                np.ascontiguousarray(P[idx]) if update else P,
                 rest[0],
                 np.ascontiguousarray(L[lm]),
                 *rest[2:],
@@ -475,6 +504,9 @@ def _by_cells(
             )
             out = frame_update_kernel(*args)
             log_ratio[idx], explained[idx], post[idx] = out[2], out[3], out[4]
+            if update:
+                mu_out[idx], P_out[idx] = out[0], out[1]
+                far[idx] = ~(out[5] <= margin)
 
     pool = _shared_pool() if H >= PARALLEL_MIN else None
     if pool is None:
@@ -485,7 +517,14 @@ def _by_cells(
         first = pool.submit(run, groups[:cut])
         run(groups[cut:])
         first.result()
-    return mu, P, log_ratio, explained, post
+    if far.any():
+        idx = np.flatnonzero(far)
+        out = _scan(
+            np.ascontiguousarray(mu[idx]), np.ascontiguousarray(P[idx]), rest, ow[idx], var, True
+        )
+        mu_out[idx], P_out[idx] = out[0], out[1]
+        log_ratio[idx], explained[idx], post[idx] = out[2], out[3], out[4]
+    return mu_out, P_out, log_ratio, explained, post
 
 
 def log_ratios(
