@@ -28,7 +28,11 @@ either of two tubes of a cluster leaves the pose between them with a covariance 
 both, rather than a confident guess.
 
 All functions work on H hypotheses at once (``mu`` of shape ``(H, 3)``, ``P`` of shape
-``(H, 3, 3)``); a frame costs ``O(H N k)`` with N landmarks and k bearings.
+``(H, 3, 3)``); a frame costs ``O(H N k)`` with N landmarks and k bearings. On a large map
+with a range (from ``CELL_MIN_LANDMARKS`` landmarks, where it pays) the hypotheses are
+grouped by square cells and each group is handed only the landmarks of the 3 x 3 cells
+around it, which hold every landmark it could see: a landmark out of range contributes
+nothing, so the numbers are those of the whole map, bit for bit (:func:`_cell_groups`).
 """
 
 from __future__ import annotations
