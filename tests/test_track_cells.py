@@ -43,7 +43,7 @@ def _scene(
     # Poses over the map and beyond its edges (some far outside).
     xy = rng.uniform(-0.5 * spread, 1.5 * spread, (H, 2))
     poses = np.column_stack([xy, rng.uniform(-math.pi, math.pi, H)])
-    # Bearings where the poses see landmarks, so that readings are not all faint.
+    # Bearings within a narrow camera's view (the landmarks seen there are weighed).
     bearings = rng.uniform(-0.6, 0.6, k)
     objects = Objects(rng.uniform(-0.6, 0.6, K), rng.uniform(0.0, 0.75, (H, K))) if K else None
     return L, poses, bearings, objects

@@ -588,11 +588,10 @@ def frame_update_kernel(
     frame (H,), the expected number of its bearings that are landmarks (H,), each
     hypothesis updated by the mixture of each bearing's readings, one bearing at a time
     (see :mod:`omniloc.track.likelihood`), each bearing's posterior probability of
-    being clutter (H, k), and how far (m) each hypothesis's position moved from where it
-    began the frame before a bearing was predicted from it (H,; 0 when no bearing was
-    predicted from a moved position, always so for exactly known poses): the landmarks
-    within range of the positions predicted from are those within range plus that of the
-    first.
+    being clutter (H, k), and the farthest (m) each hypothesis's position had moved from
+    where it began the frame when a bearing was predicted from it (H,; 0 for exactly known
+    poses): every landmark in range of a position predicted from lies within the range plus
+    that distance of the first.
     ``update`` False: exactly known poses (particles, ``P`` zero: one (1, 3, 3) zero matrix
     is enough), which no bearing moves -- the ratio only, from one prediction per pose;
     ``mu`` and ``P`` are returned as given.
