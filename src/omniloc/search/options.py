@@ -39,6 +39,13 @@ class Budget:
 
     A search stopped by its budget returns what it found, with ``result.complete`` False.
     ``None`` is no limit.
+
+    Where a search runs in pieces side by side (a large map's chunks of landmarks, or a
+    chunk per seed under a time budget; two threads), each piece may spend what the pieces
+    finished before it left: the nodes visited may then reach up to twice ``max_nodes``
+    (``result.stats.nodes`` says how many). With ``max_nodes`` alone, where a search stops
+    depends on the nodes only, not on the threads' timing: the same search stops at the
+    same place on any machine.
     """
 
     max_nodes: int | None = None
