@@ -230,7 +230,9 @@ class TrackerConfig:
     search_max_nodes : int
         Work budget of one search (nodes of the interpretation tree). It decides where a
         search stops, so that a run gives the same states on any machine and under any load
-        (the largest search on the MRCLAM runs visits about 40,000 nodes).
+        (the largest search on the MRCLAM runs visits about 40,000 nodes). Pieces of a
+        search that run side by side may together spend up to twice it (see
+        :class:`~omniloc.Budget`).
     search_timeout_s : float
         Time budget of one search: a safety net above the node budget (at the usual 60,000
         to 80,000 nodes per second, the node budget is reached first).
