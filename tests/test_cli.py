@@ -188,6 +188,8 @@ def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
     lines = out[out.index("Over time (omniloc.track)") :].splitlines()
     states = [ln.split()[2] for ln in lines[1:] if ln.startswith("  ") and " s  " in ln]
     assert states == ["ambiguous", "localized", "ambiguous", "KIDNAPPED", "ambiguous", "localized"]
+    # The flag says what the old place and the places held now explain of the bearings since.
+    assert "explains 1 of the 4 bearings since (the places it holds now: 2): kidnapped" in out
     assert "localized in 207 of 240 frames, right (0.3 m, 5 deg) in 207 of them" in out
     assert (tmp_path / "track.png").stat().st_size > 10_000
 

@@ -294,7 +294,7 @@ def test_a_place_that_still_explains_the_bearings_is_not_flagged() -> None:
     tr = _Reasons(GRID, SENSOR, MOTION, config)
     tr.dip = dip
     assert _feed(tr)[0] == late
-    assert any("the places it now holds no more" in r for r in tr.reasons)
+    assert any("the places it holds now explain no more" in r for r in tr.reasons)
 
 
 def test_a_place_found_after_a_kidnapping_is_not_judged_by_the_frames_before_it() -> None:
@@ -1135,7 +1135,7 @@ def test_on_mrclam_robot5_other_robots_for_seconds_are_not_a_kidnapping(
     assert not any(e.kidnapped for e in run.estimates)
     said = [e for e in run.estimates if ": clutter: not taken for a kidnapping" in e.reason]
     assert said and 130.0 < said[0].t - t0 < 131.0
-    why = "explains 0 of the 7 bearings since, and the places it now holds no more (0)"
+    why = "explains 0 of the 7 bearings since, and the places it holds now explain no more (0)"
     assert why in said[0].reason
     old = track(
         lm, odometry, frames, sensor=sensor, motion=motion, config=replace(config, kidnap_fit=0.0)

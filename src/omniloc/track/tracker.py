@@ -1480,7 +1480,7 @@ class Tracker:
                     if w_explained is not None and self._watch_n:
                         fit = (
                             f", and explains {self._watch_m:.0f} of the {self._watch_n} "
-                            f"bearings since, the places it now holds {self._watch_mix:.0f}"
+                            f"bearings since (the places it holds now: {self._watch_mix:.0f})"
                         )
                     reason = (
                         f"the place it was localized at now holds {100 * share:.1f} % of the "
@@ -1493,7 +1493,8 @@ class Tracker:
                     ended = below > c.kidnap_watch_s
                     why = (
                         f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since, "
-                        f"and the places it now holds no more ({self._watch_mix:.0f}): clutter"
+                        f"and the places it holds now explain no more "
+                        f"({self._watch_mix:.0f}): clutter"
                         if clutter
                         else f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since"
                     )
