@@ -1684,10 +1684,26 @@ def _tracker_targets() -> list[Target]:
         ("string", "region"),
         ("1e300", (-1e300, 1e300, -1e300, 1e300)),
     )
+    tables: Pool = (
+        ("valid", ((0.5, 0.2), (0.99, 0.9))),
+        ("nan", ((0.5, float("nan")),)),
+        ("probabilities not increasing", ((0.9, 0.2), (0.5, 0.3))),
+        ("confidence decreasing", ((0.5, 0.9), (0.9, 0.2))),
+        ("above 1", ((0.5, 1.5),)),
+        ("three columns", ((0.5, 0.2, 0.1),)),
+        ("flat", (0.5, 0.2)),
+        ("string", "table"),
+        ("1e300", ((1e300, 0.5),)),
+        ("400-digit int", ((10**400, 0.5),)),
+        ("a thousand knots", tuple((k / 1000, k / 1000) for k in range(1000))),
+        ("empty", ()),
+    )
     cfg: dict[str, Arg] = {}
     for f in dataclasses.fields(TrackerConfig):
         if f.name == "region":
             pool = regions
+        elif f.name.startswith("confidence_"):
+            pool = tables
         elif f.name in _INTS:
             pool = COUNTS
         elif f.name in _PROBABILITIES or f.name in _SHARES or f.name == "search_miss":

@@ -330,7 +330,47 @@ def _build_parser() -> argparse.ArgumentParser:
         "keeps one Gaussian (docs/tracking.md, 'A sharp core and a heavier tail')",
     )
     _add_settings_out(fs)
+    _add_fit_confidence_parser(sub)
     return parser
+
+
+def _add_fit_confidence_parser(sub: Any) -> None:
+
+    fc = sub.add_parser(
+        "fit-confidence",
+        help="fit the tracker's confidence tables on recordings with a ground truth "
+        "(settings for track)",
+    )
+    fc.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
+    for name, what in (
+        ("--odometry", "odometry CSV: t,v,w"),
+        ("--frames", "frames: CSV t,bearing or MRCLAM robotR_frames.csv"),
+        ("--groundtruth", "true track t,x,y,theta"),
+    ):
+        fc.add_argument(
+            name,
+            required=True,
+            type=Path,
+            action="append",
+            help=f"{what}; one per run, repeated for several runs (in the same order)",
+        )
+    _add_tracker_options(fc)
+    _add_settings_out(fc)
+
+
+def _add_tracker_options(p: argparse.ArgumentParser) -> None:
+    """``--degrees``, ``--preset``, ``--config`` and ``--set`` of the commands that run the
+    tracker."""
+    from .track.presets import Preset
+
+    p.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
+    p.add_argument(
+        "--preset",
+        choices=[q.value for q in Preset],
+        default=Preset.GENERIC.value,
+        help="sensor, motion and tracker parameters (default generic)",
+    )
+    _add_settings_options(p)
 
 
 def _add_settings_out(p: argparse.ArgumentParser) -> None:
@@ -379,7 +419,6 @@ def _settings(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _add_track_parser(sub: Any) -> None:
-    from .track.presets import Preset
 
     t = sub.add_parser("track", help="localize over time from odometry and frames of bearings")
     t.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
@@ -390,14 +429,7 @@ def _add_track_parser(sub: Any) -> None:
         type=Path,
         help="frames: CSV t,bearing (rows with equal t form a frame) or MRCLAM robotR_frames.csv",
     )
-    t.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
-    t.add_argument(
-        "--preset",
-        choices=[p.value for p in Preset],
-        default=Preset.GENERIC.value,
-        help="sensor, motion and tracker parameters (default generic)",
-    )
-    _add_settings_options(t)
+    _add_tracker_options(t)
     t.add_argument("--sigma", type=_positive, help="bearing noise std, deg (overrides the preset)")
     t.add_argument("--fov", type=_fov_deg, help="full field of view, deg (overrides the preset)")
     t.add_argument("--max-range", type=_positive, help="sensor range, m (overrides the preset)")
@@ -1178,6 +1210,95 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_fit_confidence(args: argparse.Namespace) -> int:
+    from .evaluate.common import calibration
+    from .evaluate.tracking import errors_against
+    from .io import write_text
+    from .maps import LandmarkMap
+    from .track import (
+        fit_confidence,
+        load_frames,
+        load_groundtruth,
+        load_odometry,
+        preset,
+        track,
+        with_settings,
+    )
+    from .track.confidence import held_out_confidence
+
+    n = len(args.odometry)
+    if not n == len(args.frames) == len(args.groundtruth):
+        raise InputError(
+            f"{n} --odometry, {len(args.frames)} --frames and {len(args.groundtruth)} "
+            "--groundtruth: give the three files of each run, in the same order"
+        )
+    sensor, motion, config = preset(args.preset)
+    settings = {
+        **_settings(args),
+        # (The tables being fitted must not be read from the settings: they change no
+        # decision, and the fit reads the model's own probability.)
+        "confidence_localized": None,
+        "confidence_ambiguous": None,
+    }
+    sensor, motion, config = with_settings(sensor, motion, config, settings)
+    lm = LandmarkMap.load(args.map)
+    runs = [
+        (load_odometry(o), load_frames(f, degrees=args.degrees), load_groundtruth(g))
+        for o, f, g in zip(args.odometry, args.frames, args.groundtruth, strict=True)
+    ]
+    states: list[str] = []
+    probs: list[float] = []
+    right: list[bool] = []
+    group: list[int] = []
+    for k, (odo, frames, truth) in enumerate(runs):
+        if not frames:
+            raise InputError(f"{args.frames[k]}: no frames")
+        est = track(lm, odo, frames, sensor=sensor, motion=motion, config=config).estimates
+        ok, d_pos, _ = errors_against(
+            truth, est, config.tolerance_m, float(np.rad2deg(config.tolerance_heading))
+        )
+        for e, r, d in zip(est, ok, d_pos, strict=True):
+            if e.probability is None or not np.isfinite(d):
+                continue  # (lost, or no truth at that time)
+            states.append(e.state.value)
+            probs.append(e.probability)
+            right.append(bool(r))
+            group.append(k)
+    if not states:
+        raise InputError("no frame with a pose and a ground truth: nothing to fit on")
+    fit = fit_confidence(states, probs, right)
+    tol = (
+        f"within {config.tolerance_m:g} m and {np.rad2deg(config.tolerance_heading):g} deg of "
+        "the truth"
+    )
+    for state in ("localized", "ambiguous"):
+        print(
+            f"{state}: {fit.frames[state]} frames, {fit.right[state]} of them {tol}; table of "
+            f"{len(getattr(fit, state) or ())} knots"
+        )
+    print(
+        f"the tracker's own probability against the truth: expected calibration error "
+        f"{calibration(probs, right).ece:.3f} over {len(probs)} frames"
+    )
+    if n > 1:
+        held = held_out_confidence(states, probs, right, group)
+        use = np.isfinite(held)
+        print(
+            f"tables fitted on the other runs, each run's frames: expected calibration error "
+            f"{calibration(held[use].tolist(), np.asarray(right)[use].tolist()).ece:.3f} over "
+            f"{int(use.sum())} frames (what to expect on a run not fitted on)"
+        )
+    else:
+        print(
+            "one run: the tables are fitted on the frames they would be checked on; give "
+            "several runs to see how they do on a run they were not fitted on"
+        )
+    if args.out is not None:
+        write_text(args.out, json.dumps(fit.settings(), indent=1) + "\n", InputError)
+        print(f"written: {args.out} (omniloc track --config {args.out})")
+    return 0
+
+
 _COMMANDS = {
     "localize": _cmd_localize,
     "bearings": _cmd_bearings,
@@ -1186,6 +1307,7 @@ _COMMANDS = {
     "track": _cmd_track,
     "fit-motion": _cmd_fit_motion,
     "fit-sensor": _cmd_fit_sensor,
+    "fit-confidence": _cmd_fit_confidence,
 }
 
 

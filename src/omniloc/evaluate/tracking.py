@@ -22,7 +22,9 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
 * *weight calibration*: over the frames with hypotheses, the weight of the strongest one
   (the localizer's probability that the robot is there) against whether it is within
   tolerance, in tenths of [0, 1]; its expected calibration error (``best_weight_ece``) says
-  how far those weights are from the frequencies (0: calibrated).
+  how far those weights are from the frequencies (0: calibrated). The same for the
+  estimates' own ``probability`` that their pose is within tolerance (``probability_ece``)
+  and their ``confidence`` (``confidence_ece``), over the frames that carry one.
 * *RMSE*: position and heading errors over the ``localized`` frames.
 * *covariance consistency*: over the ``localized`` frames with a covariance, whether the
   truth lies inside the reported covariance's 50 % and 99 % regions of the pose (its
@@ -80,6 +82,7 @@ __all__ = [
     "errors_against",
     "evaluate_mrclam_tracking",
     "evaluate_tracking",
+    "frames_within_tolerance",
     "mrclam_bound",
     "run_stream",
     "score_run",
@@ -361,6 +364,10 @@ class RunScore:
     #: Per tenth of [0, 1] of the strongest hypothesis's weight: (frames, sum of the weights,
     #: frames where that hypothesis was within tolerance).
     weight_bins: tuple[tuple[int, float, int], ...] = ()
+    #: The same bins for the estimates' ``probability`` and ``confidence`` against whether
+    #: their pose is within tolerance (the frames that carry one).
+    probability_bins: tuple[tuple[int, float, int], ...] = ()
+    confidence_bins: tuple[tuple[int, float, int], ...] = ()
     #: Localized frames with a covariance, and of them those whose truth lies inside the
     #: covariance's 50 % and 99 % regions (see the module's definitions).
     cov_frames: int = 0
@@ -386,10 +393,14 @@ class RunScore:
         """The run as one CSV row: every figure, the weight bins as their frame count and
         expected calibration error."""
         row: dict[str, object] = {
-            f.name: getattr(self, f.name) for f in fields(self) if f.name != "weight_bins"
+            f.name: getattr(self, f.name) for f in fields(self) if not f.name.endswith("_bins")
         }
         row["best_weight_frames"] = sum(int(b[0]) for b in self.weight_bins)
         row["best_weight_ece"] = weight_ece(self.weight_bins)
+        for name in ("probability", "confidence"):
+            bins = getattr(self, f"{name}_bins")
+            row[f"{name}_frames"] = sum(int(b[0]) for b in bins)
+            row[f"{name}_ece"] = weight_ece(bins)
         return row
 
 
@@ -413,16 +424,10 @@ def score_run(
             f"one estimate per frame: {len(estimates)} estimates for {len(stream.frames)} frames"
         )
     t = np.array([e.t for e in estimates], dtype=np.float64)
-    truth, gap = stream.truth_at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
-    scored = np.isfinite(truth).all(axis=1) & (gap <= max_gap_s)
+    truth, est, d_pos, d_hdg, scored, right = _frame_errors(
+        stream, estimates, pos_tol_m, heading_tol_deg, max_gap_s
+    )
     loc = np.array([e.state is TrackState.LOCALIZED for e in estimates], dtype=bool)
-    est = np.array(
-        [e.pose.as_array() if e.pose is not None else (np.nan,) * 3 for e in estimates]
-    ).reshape(-1, 3)
-    d_pos = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])
-    d_hdg = np.degrees(np.abs((est[:, 2] - truth[:, 2] + np.pi) % (2 * np.pi) - np.pi))
-    with np.errstate(invalid="ignore"):
-        right = (d_pos <= pos_tol_m) & (d_hdg <= heading_tol_deg)
     correct = loc & right & scored
     wrong = loc & ~right & scored
     kid = np.array([e.kidnapped for e in estimates], dtype=bool)
@@ -454,6 +459,10 @@ def score_run(
         flagged = np.flatnonzero(kid & ~pre)
         flag_delay = float(t[flagged[0]] - jump) if flagged.size else math.inf
     weight_bins = _weight_bins(estimates, truth, scored, pos_tol_m, heading_tol_deg)
+    own = {
+        name: _value_bins([getattr(e, name) for e in estimates], scored, right)
+        for name in ("probability", "confidence")
+    }
     nees = _nees(estimates, est, truth, sel)
     ends = [float(stream.odometry.t[-1])] + ([t[-1]] if t.size else [])
     return RunScore(
@@ -473,11 +482,80 @@ def score_run(
         false_alarms=false_alarms,
         cpu_s=cpu_s,
         weight_bins=weight_bins,
+        probability_bins=own["probability"],
+        confidence_bins=own["confidence"],
         cov_frames=int(nees.size),
         cov_inside_50=int((nees <= CHI2_3DOF_50).sum()),
         cov_inside_99=int((nees <= CHI2_3DOF_99).sum()),
         flag_delay_s=flag_delay,
     )
+
+
+def _frame_errors(
+    stream: Stream,
+    estimates: Sequence[TrackEstimate],
+    pos_tol_m: float,
+    heading_tol_deg: float,
+    max_gap_s: float,
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
+    """Each frame's truth (N, 3), estimated pose (NaN when lost), position and heading
+    errors (m, deg), whether it is scored, and whether its pose is within tolerance."""
+    t = np.array([e.t for e in estimates], dtype=np.float64)
+    truth, gap = stream.truth_at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
+    scored = np.isfinite(truth).all(axis=1) & (gap <= max_gap_s)
+    est, d_pos, d_hdg, right = _pose_errors(estimates, truth, pos_tol_m, heading_tol_deg)
+    return truth, est, d_pos, d_hdg, scored, right
+
+
+def _pose_errors(
+    estimates: Sequence[TrackEstimate], truth: FloatArray, pos_tol_m: float, heading_tol_deg: float
+) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
+    """The estimates' poses (NaN when lost), their position and heading errors against
+    ``truth`` (m, deg) and whether they are within tolerance."""
+    est = np.array(
+        [e.pose.as_array() if e.pose is not None else (np.nan,) * 3 for e in estimates]
+    ).reshape(-1, 3)
+    d_pos = np.hypot(est[:, 0] - truth[:, 0], est[:, 1] - truth[:, 1])
+    d_hdg = np.degrees(np.abs((est[:, 2] - truth[:, 2] + np.pi) % (2 * np.pi) - np.pi))
+    with np.errstate(invalid="ignore"):
+        right = (d_pos <= pos_tol_m) & (d_hdg <= heading_tol_deg)
+    return est, d_pos, d_hdg, right
+
+
+def frames_within_tolerance(
+    stream: Stream,
+    estimates: Sequence[TrackEstimate],
+    *,
+    pos_tol_m: float = 0.3,
+    heading_tol_deg: float = 5.0,
+    max_gap_s: float = MAX_GAP_S,
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Which frames are scored (the truth known there), and which estimates' poses are
+    within tolerance of it (False when lost): what :func:`score_run` counts, frame by
+    frame (e.g. to fit :func:`~omniloc.track.fit_confidence`)."""
+    if len(estimates) != len(stream.frames):
+        raise InputError(
+            f"one estimate per frame: {len(estimates)} estimates for {len(stream.frames)} frames"
+        )
+    *_, scored, right = _frame_errors(stream, estimates, pos_tol_m, heading_tol_deg, max_gap_s)
+    return scored, right
+
+
+def _value_bins(
+    values: Sequence[float | None], scored: NDArray[np.bool_], right: NDArray[np.bool_]
+) -> tuple[tuple[int, float, int], ...]:
+    """Per tenth of [0, 1]: the scored frames that carry a value, its sum, and those right."""
+    v: list[float] = []
+    ok: list[bool] = []
+    for k, x in enumerate(values):
+        if x is None or not scored[k] or not math.isfinite(x):
+            continue
+        v.append(min(max(float(x), 0.0), 1.0))
+        ok.append(bool(right[k]))
+    if not v:
+        return ()
+    n, total, hit = confidence_bins(v, ok, WEIGHT_BINS)
+    return tuple((int(a), float(c), int(r)) for a, c, r in zip(n, total, hit, strict=True))
 
 
 def _nees(
@@ -652,10 +730,18 @@ class TrackingResult:
         cpu = sum(r.cpu_s for r in rs)
         cov = sum(r.cov_frames for r in rs)
         dur = sum(r.duration_s for r in rs)
-        bins = [
-            tuple(sum(float(r.weight_bins[b][i]) for r in rs if r.weight_bins) for i in range(3))
-            for b in range(WEIGHT_BINS)
-        ]
+
+        def pooled_bins(attr: str) -> list[tuple[float, ...]]:
+            return [
+                tuple(
+                    sum(float(getattr(r, attr)[b][i]) for r in rs if getattr(r, attr))
+                    for i in range(3)
+                )
+                for b in range(WEIGHT_BINS)
+            ]
+
+        bins = pooled_bins("weight_bins")
+        own = {name: pooled_bins(f"{name}_bins") for name in ("probability", "confidence")}
         return {
             "runs": float(len(rs)),
             "frames_scored": float(scored),
@@ -685,6 +771,14 @@ class TrackingResult:
             "realtime_factor": dur / cpu if cpu > 0 else NAN,
             "best_weight_frames": float(sum(b[0] for b in bins)),
             "best_weight_ece": weight_ece(bins),
+            **{
+                key: value
+                for name, b in own.items()
+                for key, value in (
+                    (f"{name}_frames", float(sum(x[0] for x in b))),
+                    (f"{name}_ece", weight_ece(b)),
+                )
+            },
             "cov_frames": float(cov),
             "cov_inside_50_rate": sum(r.cov_inside_50 for r in rs) / cov if cov else NAN,
             "cov_inside_99_rate": sum(r.cov_inside_99 for r in rs) / cov if cov else NAN,
@@ -795,13 +889,7 @@ def errors_against(
     heading error (deg); NaN errors where there is no pose or no truth."""
     t = np.array([e.t for e in estimates], dtype=np.float64)
     true, _ = truth.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
-    est = np.array(
-        [e.pose.as_array() if e.pose is not None else (np.nan,) * 3 for e in estimates]
-    ).reshape(-1, 3)
-    d_pos = np.hypot(est[:, 0] - true[:, 0], est[:, 1] - true[:, 1])
-    d_hdg = np.degrees(np.abs(np.asarray(wrap(est[:, 2] - true[:, 2]))))
-    with np.errstate(invalid="ignore"):
-        ok = (d_pos <= pos_tol_m) & (d_hdg <= heading_tol_deg)
+    _, d_pos, d_hdg, ok = _pose_errors(estimates, true, pos_tol_m, heading_tol_deg)
     return ok, d_pos, d_hdg
 
 
@@ -986,6 +1074,18 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
         f"strongest hypothesis's weight against the truth ({int(tot['best_weight_frames'])} "
         f"frames with hypotheses): expected calibration error {_fmt(tot['best_weight_ece'], '.3f')}"
     )
+    if tot.get("probability_frames"):
+        conf = (
+            f"; its confidence (the probability mapped by the configuration's tables), "
+            f"{_fmt(tot['confidence_ece'], '.3f')} over {int(tot['confidence_frames'])} frames"
+            if tot.get("confidence_frames")
+            else "; no confidence tables given"
+        )
+        lines.append(
+            f"the localizer's own probability that its pose is within tolerance against the "
+            f"truth ({int(tot['probability_frames'])} frames): expected calibration error "
+            f"{_fmt(tot['probability_ece'], '.3f')}{conf}"
+        )
     if tot["cov_frames"]:
         lines.append(
             f"reported covariance over {int(tot['cov_frames'])} localized frames: the truth "
@@ -1055,6 +1155,8 @@ SPREAD_FIGURES: tuple[tuple[str, str, str, bool | None, float, str, str], ...] =
     ("correct after (mean over runs)", "whole", "correct_after_rate", None, 100.0, "%", ".1f"),
     ("position RMSE", "whole", "pos_rmse_m", None, 1.0, "m", ".3f"),
     ("weight ECE", "whole", "best_weight_ece", None, 1.0, "", ".3f"),
+    ("probability ECE", "whole", "probability_ece", None, 1.0, "", ".3f"),
+    ("confidence ECE", "whole", "confidence_ece", None, 1.0, "", ".3f"),
     ("kidnapped: confidently wrong", "kidnap", "confidently_wrong_rate", True, 100.0, "%", ".2f"),
     ("kidnapped: recovered", "kidnap", "recovered", True, 1.0, "", ".0f"),
     ("kidnapped: recovery, median", "kidnap", "recovery_median_s", True, 1.0, "s", ".1f"),

@@ -10,6 +10,8 @@
   hypotheses, and how it moves them;
 * :mod:`.window`, :mod:`.relocalize` -- the recent frames, and new hypotheses from the
   interpretation tree;
+* :mod:`.confidence` -- the tracker's own probability mapped to what recordings measured
+  (:func:`fit_confidence`);
 * :mod:`.presets` -- tuned parameters (``generic``, ``mrclam``), and single values changed by
   name (:func:`with_settings`);
 * :mod:`.data` -- odometry, frames of bearings and ground-truth tracks, and their files;
@@ -27,6 +29,7 @@ import types
 from typing import Any
 
 from .calibrate import MotionFit, SensorFit, estimate_frame_sensor, estimate_motion
+from .confidence import ConfidenceFit, fit_confidence
 from .data import Frame, GroundTruth, Odometry, load_frames, load_groundtruth, load_odometry
 from .io import (
     read_tum,
@@ -45,6 +48,7 @@ from .simulate import SimulatedRun, simulate_run
 from .tracker import Tracker, TrackerConfig
 
 __all__ = [
+    "ConfidenceFit",
     "Frame",
     "GroundTruth",
     "Hypothesis",
@@ -61,6 +65,7 @@ __all__ = [
     "TrackerConfig",
     "estimate_frame_sensor",
     "estimate_motion",
+    "fit_confidence",
     "load_frames",
     "load_groundtruth",
     "load_odometry",

@@ -87,6 +87,18 @@ class TrackEstimate:
         True on the frame at which the localizer concluded that the pose it was tracking no
         longer explains the bearings (a kidnapping, or a tracking failure) and started to
         relocalize.
+    probability : float or None
+        The localizer's own probability that ``pose`` is within its tolerance of the truth
+        (the :class:`~omniloc.track.Tracker`: the best place's share of the mass times the
+        chance its covariance gives the tolerance). As good as the model: on MRCLAM it is
+        overconfident (0.97 is right about two times in three). None when lost, or from a
+        localizer that does not say.
+    confidence : float or None
+        The same probability as measured on recordings with a ground truth: ``probability``
+        mapped, per state, by the calibration the localizer was given
+        (:class:`~omniloc.track.TrackerConfig`'s ``confidence_localized`` and
+        ``confidence_ambiguous``, fitted by :func:`~omniloc.track.fit_confidence`). None
+        without one, or when lost.
     """
 
     t: float
@@ -96,10 +108,16 @@ class TrackEstimate:
     hypotheses: tuple[Hypothesis, ...] = ()
     reason: str = ""
     kidnapped: bool = False
+    probability: float | None = None
+    confidence: float | None = None
 
     def __post_init__(self) -> None:
         if not math.isfinite(float(self.t)):
             raise InputError(f"t must be finite, got {self.t!r}")
+        for name in ("probability", "confidence"):
+            v = getattr(self, name)
+            if v is not None and not 0.0 <= float(v) <= 1.0:
+                raise InputError(f"{name} must be in [0, 1] or None, got {v!r}")
         object.__setattr__(self, "state", TrackState(self.state))
         if self.state is not TrackState.LOST and self.pose is None:
             raise InputError(f"a {self.state.value} estimate needs a pose")
@@ -111,8 +129,9 @@ class TrackEstimate:
 
     def as_dict(self) -> dict[str, object]:
         """Plain-JSON dictionary: ``t``, ``state``, ``reason``, ``kidnapped`` and, unless
-        lost, ``x``, ``y``, ``theta``, ``covariance`` (3x3 nested lists) and
-        ``hypotheses`` (each ``x``, ``y``, ``theta``, ``weight``, ``covariance``)."""
+        lost, ``x``, ``y``, ``theta``, ``covariance`` (3x3 nested lists), ``probability``
+        and ``confidence`` (null when not given) and ``hypotheses`` (each ``x``, ``y``,
+        ``theta``, ``weight``, ``covariance``)."""
         out: dict[str, object] = {
             "t": float(self.t),
             "state": self.state.value,
@@ -123,6 +142,9 @@ class TrackEstimate:
             out.update(x=self.pose.x, y=self.pose.y, theta=self.pose.theta)
             cov = self.covariance
             out["covariance"] = None if cov is None else np.asarray(cov, float).tolist()
+            for name in ("probability", "confidence"):
+                v = getattr(self, name)
+                out[name] = None if v is None else float(v)
             out["hypotheses"] = [
                 {
                     "x": h.pose.x,

@@ -86,6 +86,7 @@ from ..io import finite_number, shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
+from .confidence import confidence_of, confidence_table
 from .data import _float_array
 from .elsewhere import Elsewhere
 from .likelihood import FrameModel, Objects, frame_update_clutter, log_ratios_clutter
@@ -379,6 +380,13 @@ class TrackerConfig:
         are dropped and the tracker relocalizes.
     max_reported : int
         At most this many hypotheses in an estimate.
+    confidence_localized, confidence_ambiguous : tuple of (float, float), or None
+        Confidence tables (:mod:`omniloc.track.confidence`): knots ``(probability,
+        confidence)`` that map the tracker's own probability of a ``localized`` (an
+        ``ambiguous``) frame to the share of such frames that a recording with a ground
+        truth found within tolerance (:func:`~omniloc.track.fit_confidence`). With one, each
+        estimate in that state carries its ``confidence``; None (default): no confidence is
+        reported, only the model's ``probability``.
     seed : int
         Seed of elsewhere's particles (their uniform start, motion noise, resampling and
         injection): a run is the same for the same seed; other seeds show how much of a
@@ -443,11 +451,16 @@ class TrackerConfig:
     kidnap_fit: float = 0.5
     max_odometry_gap_s: float = 2.0
     max_reported: int = 10
+    confidence_localized: tuple[tuple[float, float], ...] | None = None
+    confidence_ambiguous: tuple[tuple[float, float], ...] | None = None
     seed: int = 0
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name in ("confidence_localized", "confidence_ambiguous"):
+                object.__setattr__(self, f.name, confidence_table(f.name, v))
+                continue
             if f.name == "seed":
                 whole = isinstance(v, (int, np.integer)) and not isinstance(v, bool)
                 if not (whole and 0 <= v <= SEED_MAX):
@@ -750,7 +763,8 @@ class Tracker:
         self._localized_run = 0
         self._kept = False
         # The best place's estimate as the last decision made it (index, mean, covariance).
-        self._best_place: tuple[int, FloatArray, FloatArray] | None = None
+        #: (best hypothesis, its place's pose, covariance and probability within tolerance)
+        self._best_place: tuple[int, FloatArray, FloatArray, float] | None = None
         # The first frame since the last localized one that was not localized (None while
         # localized): kidnap_watch_s runs from there.
         self._unvouched_t: float | None = None
@@ -1576,10 +1590,10 @@ class Tracker:
             return TrackState.LOST, "no hypothesis explains the recent bearings yet", None
         i = int(np.argmax(self._logw))
         mu_i, P, mass = self._place_estimate(i)
-        # (kept for the estimate of this frame: nothing moves the hypotheses in between)
-        self._best_place = (i, mu_i, P)
         p_tol = within_tolerance(P, c.tolerance_m, c.tolerance_heading)
         p = mass * p_tol
+        # (kept for the estimate of this frame: nothing moves the hypotheses in between)
+        self._best_place = (i, mu_i, P, p)
         place = self._place(i)
         rivals = H - int(place.sum())
         if out >= c.lost_share:
@@ -1671,13 +1685,19 @@ class Tracker:
             )
             for j, k in enumerate(order)
         )
-        if self._best_place is not None and self._best_place[0] == best:
-            _, mu, P = self._best_place
-        else:
-            mu, P, _ = self._place_estimate(best)
-        self._best_place = None
+        c = self.config
+        cached, self._best_place = self._best_place, None
         if state is TrackState.LOST:
             return TrackEstimate(t, state, reason=reason, kidnapped=kidnapped)
+        if cached is not None and cached[0] == best:
+            _, mu, P, prob = cached
+        else:
+            mu, P, mass = self._place_estimate(best)
+            prob = mass * within_tolerance(P, c.tolerance_m, c.tolerance_heading)
+        # The model's probability that the pose is within tolerance (what _decide reads),
+        # and what the configuration's table says such frames turned out to be.
+        p = min(max(prob, 0.0), 1.0) if math.isfinite(prob) else None
+        table = c.confidence_localized if state is TrackState.LOCALIZED else c.confidence_ambiguous
         return TrackEstimate(
             t,
             state,
@@ -1686,4 +1706,6 @@ class Tracker:
             hypotheses=hyps,
             reason=reason,
             kidnapped=kidnapped,
+            probability=p,
+            confidence=None if p is None else confidence_of(table, p),
         )

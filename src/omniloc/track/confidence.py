@@ -1,0 +1,289 @@
+"""A tracker's confidence: its own probability, mapped to what recordings measured.
+
+The :class:`~omniloc.track.Tracker` says, every frame, how probable it is that its pose is
+within its tolerance of the truth (:attr:`~omniloc.track.TrackEstimate.probability`: the
+best place's share of the mass times the chance its covariance gives the tolerance). That
+is the model's number, and a model is never the camera: on MRCLAM, whose bearing errors
+and detections repeat from frame to frame, 0.97 is right about two times in three.
+
+A *confidence map* is what a recording with a ground truth says instead: per state
+(``localized``, ``ambiguous``), the share of frames whose pose was within the tolerance,
+as a non-decreasing function of the model's probability (isotonic regression,
+``scipy.optimize.isotonic_regression``, on the frames sorted by it; each block's share
+taken with half a frame right and half wrong added, so that a block of a few frames, all
+right, does not say 1). It is given to the tracker as two tables of knots ``(probability,
+confidence)`` (``TrackerConfig.confidence_localized`` and ``confidence_ambiguous``),
+linear between knots and flat beyond them, and the tracker then reports
+:attr:`~omniloc.track.TrackEstimate.confidence` beside its own probability.
+
+:func:`fit_confidence` fits the tables from frames scored against a ground truth;
+:func:`confidence_of` applies one; :func:`held_out_confidence` gives each frame the
+confidence of tables fitted without its own run (what to expect on a run not fitted on).
+A map is a measurement of one robot, camera and map: check it on runs it was not fitted on
+(``benchmarks/track_confidence.py`` fits on four of MRCLAM's robots and scores the fifth).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+from scipy.optimize import isotonic_regression
+
+from ..errors import InputError
+from ..io import shorten
+from .records import TrackState
+
+__all__ = [
+    "ConfidenceFit",
+    "confidence_of",
+    "confidence_table",
+    "fit_confidence",
+    "held_out_confidence",
+]
+
+#: At most this many knots in a table (a fit merges neighbouring blocks beyond it).
+MAX_KNOTS = 200
+
+#: A table: knots ``(probability, confidence)``, the probabilities increasing.
+Knots = tuple[tuple[float, float], ...]
+
+
+def confidence_table(name: str, value: Any) -> Knots | None:
+    """A confidence table checked: None, or 1 to ``MAX_KNOTS`` pairs ``(probability,
+    confidence)`` in [0, 1], the probabilities strictly increasing and the confidences
+    non-decreasing (a higher probability of the model never means a lower confidence).
+
+    Raises
+    ------
+    InputError
+        Naming ``name`` and what is wrong.
+
+    Examples
+    --------
+    >>> confidence_table("t", [[0.5, 0.2], [0.99, 0.9]])
+    ((0.5, 0.2), (0.99, 0.9))
+    """
+    if value is None:
+        return None
+    if isinstance(value, (str, bytes)) or not isinstance(value, (Sequence, np.ndarray)):
+        raise InputError(
+            f"{name} must be None or pairs (probability, confidence), got {shorten(value)}"
+        )
+    try:
+        a = np.array(value, dtype=np.float64)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise InputError(
+            f"{name} must be pairs (probability, confidence) of numbers, got {shorten(value)}"
+        ) from exc
+    if a.ndim != 2 or a.shape[1] != 2 or not 1 <= a.shape[0] <= MAX_KNOTS:
+        raise InputError(
+            f"{name} must be 1 to {MAX_KNOTS} pairs (probability, confidence), got {shorten(value)}"
+        )
+    if not (np.isfinite(a).all() and (a >= 0.0).all() and (a <= 1.0).all()):
+        raise InputError(f"{name} must hold numbers in [0, 1], got {shorten(value)}")
+    if not (np.diff(a[:, 0]) > 0.0).all():
+        raise InputError(f"{name}: the probabilities must increase, got {shorten(value)}")
+    if not (np.diff(a[:, 1]) >= 0.0).all():
+        raise InputError(
+            f"{name}: the confidences must not decrease as the probability grows, got "
+            f"{shorten(value)}"
+        )
+    return tuple((float(p), float(c)) for p, c in a)
+
+
+def confidence_of(table: Knots | None, probability: float) -> float | None:
+    """The confidence a table gives a model probability: linear between knots, flat beyond
+    them; None without a table or for a probability that is not a number.
+
+    Examples
+    --------
+    >>> round(confidence_of(((0.5, 0.2), (0.9, 0.6)), 0.7), 6)
+    0.4
+    >>> confidence_of(((0.5, 0.2), (0.9, 0.6)), 0.99)
+    0.6
+    """
+    if table is None or not math.isfinite(probability):
+        return None
+    p = [k[0] for k in table]
+    c = [k[1] for k in table]
+    return float(min(max(np.interp(probability, p, c), 0.0), 1.0))
+
+
+@dataclass(frozen=True)
+class ConfidenceFit:
+    """Confidence tables fitted on scored frames (:func:`fit_confidence`).
+
+    Attributes
+    ----------
+    localized, ambiguous : tuple of (probability, confidence), or None
+        The knots of each state's table (None: no frame in that state).
+    frames : dict of str to int
+        Frames each table was fitted on, by state.
+    right : dict of str to int
+        Of them, those within tolerance.
+    """
+
+    localized: Knots | None
+    ambiguous: Knots | None
+    frames: dict[str, int]
+    right: dict[str, int]
+
+    def settings(self) -> dict[str, Knots | None]:
+        """The tables as tracker settings (``with_settings``, ``--config``):
+        ``confidence_localized`` and ``confidence_ambiguous``."""
+        return {"confidence_localized": self.localized, "confidence_ambiguous": self.ambiguous}
+
+    def __call__(self, state: TrackState | str, probability: float) -> float | None:
+        """The confidence of a frame in ``state`` with the model's ``probability``."""
+        s = TrackState(state)
+        if s is TrackState.LOST:
+            return None
+        table = self.localized if s is TrackState.LOCALIZED else self.ambiguous
+        return confidence_of(table, probability)
+
+
+def _isotonic_knots(p: np.ndarray, right: np.ndarray) -> Knots:
+    """One state's knots: the frames' equal probabilities pooled, isotonic regression of
+    the share right on them, each block's share with half a frame right and half wrong
+    added, at the block's mean probability."""
+    u, inv = np.unique(p, return_inverse=True)
+    n = np.bincount(inv, minlength=u.size).astype(np.float64)
+    k = np.bincount(inv, weights=right.astype(np.float64), minlength=u.size)
+    fit = isotonic_regression(k / n, weights=n, increasing=True)
+    starts = np.asarray(fit.blocks[:-1], dtype=np.int64)
+    blocks_n = np.add.reduceat(n, starts)
+    blocks_k = np.add.reduceat(k, starts)
+    blocks_p = np.add.reduceat(u * n, starts)
+    while blocks_n.size > MAX_KNOTS:
+        # (Neighbouring blocks merged in pairs: the shares stay in order.)
+        cut = np.arange(0, blocks_n.size, 2)
+        blocks_n = np.add.reduceat(blocks_n, cut)
+        blocks_k = np.add.reduceat(blocks_k, cut)
+        blocks_p = np.add.reduceat(blocks_p, cut)
+    centre = blocks_p / blocks_n
+    share = np.maximum.accumulate((blocks_k + 0.5) / (blocks_n + 1.0))
+    return tuple((float(a), float(b)) for a, b in zip(centre, share, strict=True))
+
+
+def fit_confidence(
+    states: Sequence[TrackState | str], probabilities: ArrayLike, right: ArrayLike
+) -> ConfidenceFit:
+    """Fit confidence tables on frames scored against a ground truth.
+
+    Parameters
+    ----------
+    states : sequence of TrackState or str
+        Each frame's state (``lost`` frames are left out: they report no pose).
+    probabilities : array_like of float, shape (n,)
+        Each frame's :attr:`~omniloc.track.TrackEstimate.probability` (NaN for a lost frame).
+    right : array_like of bool, shape (n,)
+        Whether each frame's pose was within the tolerance of the truth (the tracker's
+        ``tolerance_m`` and ``tolerance_heading``: the confidence is a probability of that).
+
+    Returns
+    -------
+    ConfidenceFit
+
+    Raises
+    ------
+    InputError
+        Lengths that differ, a state that is not one, a probability outside [0, 1] for a
+        frame that is not lost, or no frame with a pose.
+
+    Examples
+    --------
+    >>> fit = fit_confidence(["localized"] * 4, [0.9, 0.95, 0.99, 0.999], [True] * 4)
+    >>> fit.frames["localized"], fit("localized", 0.99) > 0.8
+    (4, True)
+    """
+    try:
+        st = [TrackState(s) for s in states]
+    except ValueError as exc:
+        raise InputError(f"states must be {[s.value for s in TrackState]}: {exc}") from exc
+    try:
+        p = np.asarray(probabilities, dtype=np.float64).reshape(-1)
+        ok = np.asarray(right).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"probabilities and right must be 1-D arrays: {exc}") from exc
+    if not (len(st) == p.size == ok.size):
+        raise InputError(
+            f"states, probabilities and right must have one entry per frame, got "
+            f"{len(st)}, {p.size} and {ok.size}"
+        )
+    if ok.dtype != np.bool_:
+        if not np.isin(ok, (0, 1)).all():
+            raise InputError("right must hold booleans (within tolerance or not)")
+        ok = ok.astype(bool)
+    kind = np.array([s.value for s in st], dtype=object)
+    posed = kind != TrackState.LOST.value
+    if not posed.any():
+        raise InputError("fit_confidence needs frames with a pose (every frame is lost)")
+    bad = posed & ~((p >= 0.0) & (p <= 1.0))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError(
+            f"probabilities must lie in [0, 1] for frames with a pose: frame {i} has {p[i]!r}"
+        )
+    tables: dict[str, Knots | None] = {}
+    frames: dict[str, int] = {}
+    rights: dict[str, int] = {}
+    for s in (TrackState.LOCALIZED, TrackState.AMBIGUOUS):
+        sel = kind == s.value
+        frames[s.value] = int(sel.sum())
+        rights[s.value] = int(ok[sel].sum())
+        tables[s.value] = _isotonic_knots(p[sel], ok[sel]) if sel.any() else None
+    return ConfidenceFit(tables["localized"], tables["ambiguous"], frames, rights)
+
+
+def held_out_confidence(
+    states: Sequence[TrackState | str],
+    probabilities: ArrayLike,
+    right: ArrayLike,
+    groups: ArrayLike,
+) -> np.ndarray:
+    """Each frame's confidence from tables fitted on the frames of the other groups (runs,
+    robots): how a table fitted on some runs does on another.
+
+    Parameters
+    ----------
+    states, probabilities, right
+        As for :func:`fit_confidence`.
+    groups : array_like, shape (n,)
+        Each frame's run (any labels); at least two.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        The held-out confidence (NaN for a lost frame, or where the other groups have no
+        frame in that state).
+
+    Raises
+    ------
+    InputError
+        Fewer than two groups, or ``groups`` of another length.
+    """
+    st = np.array([TrackState(s).value for s in states], dtype=object)
+    g = np.asarray(groups).reshape(-1)
+    if g.size != st.size:
+        raise InputError(f"groups must have one entry per frame, got {g.size} for {st.size}")
+    labels = list(dict.fromkeys(g.tolist()))
+    if len(labels) < 2:
+        raise InputError("held_out_confidence needs frames of at least two runs (groups)")
+    p = np.asarray(probabilities, dtype=np.float64).reshape(-1)
+    ok = np.asarray(right).reshape(-1)
+    out = np.full(st.size, np.nan)
+    for label in labels:
+        mine = g == label
+        others = ~mine & (st != TrackState.LOST.value)
+        if not others.any():
+            continue
+        fit = fit_confidence(st[~mine], p[~mine], ok[~mine])
+        for i in np.flatnonzero(mine & (st != TrackState.LOST.value)).tolist():
+            c = fit(st[i], float(p[i]))
+            out[i] = np.nan if c is None else c
+    return out
