@@ -290,6 +290,34 @@ def test_fit_confidence_on_two_runs_writes_tables_that_track_reports(tmp_path, c
     posed = [x for x in lines if x["state"] != "lost"]
     assert posed and all(x["confidence"] is not None for x in posed)
     assert all(0.0 <= x["probability"] <= 1.0 for x in posed)
+    # The summary's last line says the last frame's confidence (not with the generic
+    # preset's none).
+    assert main(["-q", "track", *common, *runs[:6], "--config", str(out)]) == 0
+    last = capsys.readouterr().out.splitlines()[-1]
+    assert (
+        last.startswith("last frame: ") and f", confidence {posed[-1]['confidence']:.4f} (" in last
+    )
+    assert main(["-q", "track", *common, *runs[:6]]) == 0
+    assert "confidence" not in capsys.readouterr().out.splitlines()[-1]
+
+
+def test_the_summary_lines_of_streams_carry_both_calibration_errors() -> None:
+    from omniloc.evaluate.tracking import _calibration_note
+
+    assert _calibration_note({"probability_frames": 0.0}) == ""
+    note = _calibration_note(
+        {"probability_frames": 10.0, "probability_ece": 0.25, "confidence_frames": 0.0}
+    )
+    assert note == "; expected calibration error of its own probability 0.250"
+    note = _calibration_note(
+        {
+            "probability_frames": 10.0,
+            "probability_ece": 0.25,
+            "confidence_frames": 10.0,
+            "confidence_ece": 0.03,
+        }
+    )
+    assert note.endswith("0.250, of its confidence 0.030")
 
 
 def test_fit_confidence_refuses_runs_of_unequal_files(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]

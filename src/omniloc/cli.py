@@ -1027,6 +1027,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
     if last.pose is not None:
         p = last.pose
         where = f"x = {p.x:.3f} m, y = {p.y:.3f} m, theta = {np.rad2deg(p.theta):.2f} deg"
+        if last.confidence is not None:
+            where += f", confidence {last.confidence:.4f}"
     print(f"last frame: {last.state.value}: {where} ({last.reason})")
     return 0
 

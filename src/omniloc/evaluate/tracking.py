@@ -1130,6 +1130,7 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
                 if not math.isnan(tj["bound_recovery_median_s"])
                 else ""
             )
+            + _calibration_note(tj)
         )
         lines.append(
             f"same segments without a jump ({int(tp['runs'])}): false alarm on "
@@ -1142,8 +1143,23 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
                 tp["time_to_localize_median_localized_s"],
             )
             + ")"
+            + _calibration_note(tp)
         )
     return "\n".join(lines)
+
+
+def _calibration_note(tot: Mapping[str, float]) -> str:
+    """``; ECE of the probability X, of the confidence Y`` for a summary line (empty when
+    the localizer reports neither)."""
+    if not tot.get("probability_frames"):
+        return ""
+    conf = (
+        f", of its confidence {_fmt(tot['confidence_ece'], '.3f')}"
+        if tot.get("confidence_frames")
+        else ""
+    )
+    own = _fmt(tot["probability_ece"], ".3f")
+    return f"; expected calibration error of its own probability {own}{conf}"
 
 
 #: The figures :func:`seed_spread` compares across draws: (name, where, key of
