@@ -357,3 +357,39 @@ def test_on_a_recording_the_confidence_is_calibrated_where_the_probability_is_no
     for e in res.estimates:
         if e.state is TrackState.LOCALIZED:
             assert e.confidence == confidence_of(config.confidence_localized, e.probability)
+
+
+@pytest.mark.parametrize(
+    ("probability", "confidence", "label"),
+    [
+        (0.9, 0.6, "confidence"),
+        (0.9, None, "own probability (uncalibrated)"),
+        (None, None, None),
+    ],
+)
+def test_the_figure_draws_the_confidence_beside_the_state(
+    monkeypatch, tmp_path, probability, confidence, label
+) -> None:  # type: ignore[no-untyped-def]
+    import omniloc.plot.track as pt
+
+    figures = []
+    monkeypatch.setattr(pt, "save_figure", lambda fig, path: figures.append(fig) or path)
+    state = TrackState.LOST if probability is None else TrackState.AMBIGUOUS
+    pose = None if probability is None else Pose(1.0, 2.0, 0.3)
+    est = [
+        TrackEstimate(
+            float(k),
+            state,
+            pose=pose,
+            covariance=None if pose is None else np.eye(3) * 0.01,
+            probability=probability,
+            confidence=confidence,
+        )
+        for k in range(5)
+    ]
+    pt.plot_track(GRID, est, tmp_path / "x.png")
+    labels = [ax.get_ylabel() for ax in figures[0].axes]
+    if label is None:
+        assert not any("confidence" in x or "probability" in x for x in labels)
+    else:
+        assert label in labels

@@ -121,6 +121,19 @@ def plot_track(
     ax_state.set_yticks([0, 1, 2], ["lost", "ambiguous", "localized"])
     ax_state.set_ylim(-0.5, 2.8)
     ax_state.grid(alpha=0.3)
+    # Beside the state: the confidence (the tracker's own probability where it has no
+    # confidence tables), which says how far to trust the pose of each frame.
+    conf = np.array([np.nan if e.confidence is None else e.confidence for e in estimates])
+    label = "confidence"
+    if np.isnan(conf).all():
+        conf = np.array([np.nan if e.probability is None else e.probability for e in estimates])
+        label = "own probability (uncalibrated)"
+    if not np.isnan(conf).all():
+        ax_c = ax_state.twinx()
+        ax_c.plot(t - t0, conf, "-", color="tab:cyan", lw=0.6, alpha=0.9)
+        ax_c.set_ylim(-0.25, 1.4)
+        ax_c.set_yticks([0.0, 0.5, 1.0])
+        ax_c.set_ylabel(label, color="tab:cyan", fontsize=8)
 
     if truth is not None:
         true, _ = truth.at(t)
