@@ -289,3 +289,27 @@ def test_the_flag_delay_is_read_where_there_was_a_place_to_leave() -> None:
 
     text = tracking_summary(TrackingReport(TrackingResult("w", [flagged]), res))
     assert "localized when carried off in 2: the kidnapping flagged in 1, a median of 2.0 s" in text
+
+
+def test_a_false_alarm_that_left_a_wrong_place_is_counted_apart() -> None:
+    from omniloc.evaluate.tracking import TrackingReport, tracking_summary
+
+    stream = _stream(10)
+
+    def run(dx: float) -> list[TrackEstimate]:
+        # Localized 0-4 at dx from the truth, flagged at 6 (lost), ambiguous otherwise.
+        out = [_localized(float(k), dx, 0.01) for k in range(5)]
+        out += [_ambiguous(5.0, TRUE, 0.5), TrackEstimate(6.0, TrackState.LOST, kidnapped=True)]
+        return out + [_ambiguous(float(k), TRUE, 0.5) for k in range(7, 10)]
+
+    right = score_run(stream, run(0.0))  # the place it left was right: a false alarm proper
+    wrong = score_run(stream, run(2.0))  # the place it left was 2 m off
+    assert right.false_alarms == wrong.false_alarms == 1
+    assert right.false_alarms_left_right == 1 and wrong.false_alarms_left_right == 0
+    quiet = score_run(stream, [_ambiguous(float(k), TRUE, 0.5) for k in range(10)])
+    res = TrackingResult("t", [right, wrong, quiet, quiet])
+    tot = res.totals(False)
+    assert tot["false_alarm_run_rate"] == 0.5
+    assert tot["false_alarm_left_right_run_rate"] == 0.25
+    text = tracking_summary(TrackingReport(TrackingResult("w", [right]), res))
+    assert "false alarm on 50.0 % of runs (leaving a place that was right: 25.0 %" in text

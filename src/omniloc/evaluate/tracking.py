@@ -39,7 +39,10 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
   last estimate before the jump was ``localized`` (there was a place to leave), from the
   jump to the first frame flagged ``kidnapped`` (never: the kidnapping was not flagged).
   The detection delay does not read the flag; the false alarms and the flag delay do, and
-  are read together: a localizer that never flags has no false alarm.
+  are read together: a localizer that never flags has no false alarm. Of the false alarms,
+  those that left a place that was right (all but those whose last ``localized`` frame
+  before the flag was scored and wrong) are counted apart: the others left a wrong place,
+  which was right to leave.
 """
 
 from __future__ import annotations
@@ -383,6 +386,9 @@ class RunScore:
     #: whose last estimate before the jump was ``localized``; NaN otherwise (no jump, or no
     #: place to leave); inf: never flagged.
     flag_delay_s: float = NAN
+    #: Of the false alarms, those that left a place that was right: all but those whose last
+    #: localized frame before the flag was scored and wrong (those left a wrong place).
+    false_alarms_left_right: int = 0
 
     @property
     def realtime_factor(self) -> float:
@@ -453,6 +459,14 @@ def score_run(
         if back.any():
             recovery = float(t[np.flatnonzero(back)[0]] - jump)
     false_alarms = int((kid & pre).sum())
+    # Of them, the flags that left a place that was right: all but those whose last
+    # localized frame before the flag was wrong (scored, and out of tolerance), which the
+    # flag was right to leave.
+    loc_at = np.flatnonzero(loc)
+    left_right = 0
+    for k in np.flatnonzero(kid & pre).tolist():
+        j = int(np.searchsorted(loc_at, k)) - 1
+        left_right += int(j < 0 or not bool(wrong[loc_at[j]]))
     flag_delay = NAN
     before = np.flatnonzero(~pre)
     if math.isfinite(jump) and before.size and before[0] > 0 and loc[before[0] - 1]:
@@ -480,6 +494,7 @@ def score_run(
         detection_delay_s=delay,
         recovery_s=recovery,
         false_alarms=false_alarms,
+        false_alarms_left_right=left_right,
         cpu_s=cpu_s,
         weight_bins=weight_bins,
         probability_bins=own["probability"],
@@ -763,6 +778,9 @@ class TrackingResult:
             "unrecovered": float(sum(not math.isfinite(r.recovery_s) for r in jumps)),
             "false_alarm_run_rate": (
                 sum(r.false_alarms > 0 for r in plain) / len(plain) if plain else NAN
+            ),
+            "false_alarm_left_right_run_rate": (
+                sum(r.false_alarms_left_right > 0 for r in plain) / len(plain) if plain else NAN
             ),
             "localized_at_jump": float(len(flags)),
             "kidnaps_flagged": float(sum(math.isfinite(x) for x in flags)),
@@ -1134,7 +1152,15 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
         )
         lines.append(
             f"same segments without a jump ({int(tp['runs'])}): false alarm on "
-            f"{_fmt(100 * tp['false_alarm_run_rate'], '.1f')} % of runs; confidently wrong "
+            f"{_fmt(100 * tp['false_alarm_run_rate'], '.1f')} % of runs"
+            + (
+                f" (leaving a place that was right: "
+                f"{_fmt(100 * tp['false_alarm_left_right_run_rate'], '.1f')} %; the others left "
+                "a wrong one)"
+                if tp["false_alarm_run_rate"] > 0
+                else ""
+            )
+            + "; confidently wrong "
             f"{_fmt(100 * tp['confidently_wrong_rate'], '.2f')} %; time to localize median "
             f"{_seconds(tp['time_to_localize_median_s'])} ({int(tp['never_localized'])} never"
             + _of_those(
@@ -1178,6 +1204,15 @@ SPREAD_FIGURES: tuple[tuple[str, str, str, bool | None, float, str, str], ...] =
     ("kidnapped: recovery, median", "kidnap", "recovery_median_s", True, 1.0, "s", ".1f"),
     ("plain: confidently wrong", "kidnap", "confidently_wrong_rate", False, 100.0, "%", ".2f"),
     ("plain: false alarms", "kidnap", "false_alarm_run_rate", False, 100.0, "%", ".1f"),
+    (
+        "plain: false alarms leaving a right place",
+        "kidnap",
+        "false_alarm_left_right_run_rate",
+        False,
+        100.0,
+        "%",
+        ".1f",
+    ),
 )
 
 
