@@ -2064,6 +2064,64 @@ def _bounds_targets() -> list[Target]:
     ]
 
 
+def _confidence_targets() -> list[Target]:
+    """The tracker's confidence tables: fitted on frames, held out by run, applied."""
+    from omniloc.track import confidence as C
+
+    states: Pool = (
+        ("valid", ["localized", "ambiguous", "lost", "ambiguous"]),
+        ("unknown state", ["localized", "moving", "lost", "ambiguous"]),
+        ("all lost", ["lost"] * 4),
+        ("numbers", [1, 2, 3, 4]),
+        ("None", None),
+        ("string", "localized"),
+        ("one", ["localized"]),
+    )
+    rights: Pool = (
+        ("valid", [True, False, True, True]),
+        ("counts", [2, 0, 1, 1]),
+        ("nan", [float("nan")] * 4),
+        ("strings", ["a", "b", "c", "d"]),
+        ("None", None),
+        ("2-D", [[True, False], [True, True]]),
+    )
+    frames = {
+        "states": Arg(("states",), states),
+        "probabilities": Arg(("probabilities", "frame"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+        "right": Arg(("right",), rights),
+    }
+    base = lambda: {  # noqa: E731
+        "states": ["localized", "ambiguous", "lost", "ambiguous"],
+        "probabilities": [0.99, 0.4, float("nan"), 0.7],
+        "right": [True, False, False, True],
+    }
+    return [
+        Target("fit_confidence", lambda kw: C.fit_confidence(**kw), base, frames),
+        Target(
+            "held_out_confidence",
+            lambda kw: C.held_out_confidence(**kw),
+            lambda: {**base(), "groups": [0, 0, 1, 1]},
+            {
+                **frames,
+                "groups": Arg(("groups", "two runs"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+            },
+            check=lambda kw, v: None,  # (NaN: a lost frame)
+        ),
+        Target(
+            "confidence_of",
+            lambda kw: C.confidence_of(**kw),
+            lambda: {"table": ((0.5, 0.2), (0.9, 0.6)), "probability": 0.7},
+            {"probability": Arg(("probability",), NUMBERS)},
+            check=_confidence_check,
+        ),
+    ]
+
+
+def _confidence_check(kw: dict[str, Any], v: Any) -> None:
+    if v is not None and not 0.0 <= v <= 1.0:
+        raise Insane(f"confidence {v}")
+
+
 def all_targets() -> dict[str, Target]:
     """Every target by name (the census walks them all)."""
     out: dict[str, Target] = {}
@@ -2080,6 +2138,7 @@ def all_targets() -> dict[str, Target]:
         + _plot_targets()
         + _scenario_targets()
         + _bounds_targets()
+        + _confidence_targets()
     ):
         out[t.name] = t
     return out

@@ -157,7 +157,10 @@ def test_a_fit_keeps_the_states_apart() -> None:
     ("states", "p", "right", "message"),
     [
         (["localized"], [0.5, 0.6], [True, True], "one entry per frame"),
-        (["moving"], [0.5], [True], "states must be"),
+        (["moving"], [0.5], [True], "states must each be one of"),
+        ("localized", [0.5], [True], "states must be a sequence"),
+        (["localized"], ["a"], [True], "probabilities"),
+        (["localized"], [10**400], [True], "probabilities"),
         (["localized"], [1.5], [True], "frame 0"),
         (["ambiguous"], [math.nan], [True], "frame 0"),
         (["lost"], [math.nan], [False], "every frame is lost"),
@@ -393,3 +396,22 @@ def test_the_figure_draws_the_confidence_beside_the_state(
         assert not any("confidence" in x or "probability" in x for x in labels)
     else:
         assert label in labels
+
+
+def test_held_out_needs_two_runs_and_a_label_per_frame() -> None:
+    from omniloc.track.confidence import held_out_confidence
+
+    frames = (["localized", "ambiguous", "lost", "ambiguous"], [0.99, 0.4, math.nan, 0.7])
+    right = [True, False, False, True]
+    out = held_out_confidence(*frames, right, ["a", "a", "b", "b"])
+    assert np.isnan(out[2])  # lost: no pose, no confidence
+    # Run b's ambiguous frame is mapped by run a's table (one ambiguous frame, wrong).
+    assert out[3] == pytest.approx(0.25)
+    # Run a's localized frame: no localized frame elsewhere, so no table.
+    assert np.isnan(out[0])
+    with pytest.raises(InputError, match="at least two runs"):
+        held_out_confidence(*frames, right, [1, 1, 1, 1])
+    with pytest.raises(InputError, match="one run label per frame"):
+        held_out_confidence(*frames, right, [1, 2])
+    with pytest.raises(InputError, match="probability must be a number"):
+        confidence_of(TABLE, "0.5")  # type: ignore[arg-type]

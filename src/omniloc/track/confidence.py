@@ -35,7 +35,7 @@ from numpy.typing import ArrayLike
 from scipy.optimize import isotonic_regression
 
 from ..errors import InputError
-from ..io import shorten
+from ..io import real_array, shorten
 from .records import TrackState
 
 __all__ = [
@@ -97,8 +97,14 @@ def confidence_table(name: str, value: Any) -> Knots | None:
 
 
 def confidence_of(table: Knots | None, probability: float) -> float | None:
-    """The confidence a table gives a model probability: linear between knots, flat beyond
-    them; None without a table or for a probability that is not a number.
+    """The confidence a table (as :func:`confidence_table` returns it) gives a model
+    probability: linear between knots, flat beyond them; None without a table or for a
+    probability that is NaN.
+
+    Raises
+    ------
+    InputError
+        A probability that is not a real number.
 
     Examples
     --------
@@ -107,11 +113,17 @@ def confidence_of(table: Knots | None, probability: float) -> float | None:
     >>> confidence_of(((0.5, 0.2), (0.9, 0.6)), 0.99)
     0.6
     """
-    if table is None or not math.isfinite(probability):
+    if isinstance(probability, bool) or not isinstance(probability, (int, float, np.number)):
+        raise InputError(f"probability must be a number, got {shorten(probability)}")
+    try:
+        x = float(probability)
+    except (OverflowError, TypeError) as exc:
+        raise InputError(f"probability must be a number, got {shorten(probability)}") from exc
+    if table is None or math.isnan(x):
         return None
     p = [k[0] for k in table]
     c = [k[1] for k in table]
-    return float(min(max(np.interp(probability, p, c), 0.0), 1.0))
+    return float(min(max(np.interp(x, p, c), 0.0), 1.0))
 
 
 @dataclass(frozen=True)
@@ -170,6 +182,42 @@ def _isotonic_knots(p: np.ndarray, right: np.ndarray) -> Knots:
     return tuple((float(a), float(b)) for a, b in zip(centre, share, strict=True))
 
 
+def _frames(
+    states: Any, probabilities: Any, right: Any
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The frames of :func:`fit_confidence` checked: states (their values, an object
+    array), probabilities (float) and right (bool), one each per frame."""
+    names = [s.value for s in TrackState]
+    if isinstance(states, (str, bytes)) or not isinstance(states, (Sequence, np.ndarray)):
+        raise InputError(f"states must be a sequence of {names}, got {shorten(states)}")
+    try:
+        kind = np.array([TrackState(s).value for s in states], dtype=object)
+    except (ValueError, TypeError) as exc:
+        raise InputError(f"states must each be one of {names}: {exc}") from exc
+    p = real_array(probabilities, "probabilities", InputError)
+    ok = np.asarray(right) if right is not None else np.zeros(0)
+    if p.ndim != 1 or ok.ndim != 1 or not (kind.size == p.size == ok.size):
+        raise InputError(
+            f"states, probabilities and right must have one entry per frame (1-D), got "
+            f"{kind.size}, shape {p.shape} and shape {ok.shape}"
+        )
+    if ok.dtype != np.bool_:
+        if not (ok.dtype.kind in "iuf" and np.isin(ok, (0, 1)).all()):
+            raise InputError("right must hold booleans (within tolerance or not)")
+        ok = ok.astype(bool)
+    posed = kind != TrackState.LOST.value
+    if not posed.any():
+        raise InputError("states: every frame is lost; a fit needs frames with a pose")
+    with np.errstate(invalid="ignore"):
+        bad = posed & ~((p >= 0.0) & (p <= 1.0))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise InputError(
+            f"probabilities must lie in [0, 1] for frames with a pose: frame {i} has {p[i]!r}"
+        )
+    return kind, p, ok
+
+
 def fit_confidence(
     states: Sequence[TrackState | str], probabilities: ArrayLike, right: ArrayLike
 ) -> ConfidenceFit:
@@ -201,34 +249,7 @@ def fit_confidence(
     >>> fit.frames["localized"], fit("localized", 0.99) > 0.8
     (4, True)
     """
-    try:
-        st = [TrackState(s) for s in states]
-    except ValueError as exc:
-        raise InputError(f"states must be {[s.value for s in TrackState]}: {exc}") from exc
-    try:
-        p = np.asarray(probabilities, dtype=np.float64).reshape(-1)
-        ok = np.asarray(right).reshape(-1)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"probabilities and right must be 1-D arrays: {exc}") from exc
-    if not (len(st) == p.size == ok.size):
-        raise InputError(
-            f"states, probabilities and right must have one entry per frame, got "
-            f"{len(st)}, {p.size} and {ok.size}"
-        )
-    if ok.dtype != np.bool_:
-        if not np.isin(ok, (0, 1)).all():
-            raise InputError("right must hold booleans (within tolerance or not)")
-        ok = ok.astype(bool)
-    kind = np.array([s.value for s in st], dtype=object)
-    posed = kind != TrackState.LOST.value
-    if not posed.any():
-        raise InputError("fit_confidence needs frames with a pose (every frame is lost)")
-    bad = posed & ~((p >= 0.0) & (p <= 1.0))
-    if bad.any():
-        i = int(np.flatnonzero(bad)[0])
-        raise InputError(
-            f"probabilities must lie in [0, 1] for frames with a pose: frame {i} has {p[i]!r}"
-        )
+    kind, p, ok = _frames(states, probabilities, right)
     tables: dict[str, Knots | None] = {}
     frames: dict[str, int] = {}
     rights: dict[str, int] = {}
@@ -267,15 +288,18 @@ def held_out_confidence(
     InputError
         Fewer than two groups, or ``groups`` of another length.
     """
-    st = np.array([TrackState(s).value for s in states], dtype=object)
-    g = np.asarray(groups).reshape(-1)
-    if g.size != st.size:
-        raise InputError(f"groups must have one entry per frame, got {g.size} for {st.size}")
+    st, p, ok = _frames(states, probabilities, right)
+    if groups is None or isinstance(groups, (str, bytes, dict)):
+        raise InputError(f"groups must hold one run label per frame, got {shorten(groups)}")
+    g = np.asarray(groups)
+    if g.ndim != 1 or g.size != st.size:
+        raise InputError(
+            f"groups must hold one run label per frame (1-D), got shape {g.shape} for "
+            f"{st.size} frames"
+        )
     labels = list(dict.fromkeys(g.tolist()))
     if len(labels) < 2:
-        raise InputError("held_out_confidence needs frames of at least two runs (groups)")
-    p = np.asarray(probabilities, dtype=np.float64).reshape(-1)
-    ok = np.asarray(right).reshape(-1)
+        raise InputError("groups: held_out_confidence needs frames of at least two runs")
     out = np.full(st.size, np.nan)
     for label in labels:
         mine = g == label
