@@ -111,9 +111,9 @@ def table(results: dict[str, TrackingResult]) -> str:
         "| scenario | streams | first correct localized, median / max s | never | "
         "correct after it | confidently wrong | position RMSE m | heading RMSE deg | "
         "kidnap detected, median s | correct again, median s | unrecovered | "
-        "false-alarm runs | weight ECE | truth in the covariance's 50 % / 99 % region | "
-        "CPU s per s |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "false-alarm runs | weight ECE | own probability ECE | "
+        "truth in the covariance's 50 % / 99 % region | CPU s per s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, res in results.items():
         for label, sel in (("without a jump", False), ("kidnapped at 30 s", True)):
@@ -130,6 +130,7 @@ def table(results: dict[str, TrackingResult]) -> str:
                 f"{int(t['unrecovered']) if sel else '-'} | "
                 f"{'-' if sel else _f(100 * t['false_alarm_run_rate'], '.0f') + ' %'} | "
                 f"{_f(t['best_weight_ece'], '.3f')} | "
+                f"{_f(t['probability_ece'], '.3f')} | "
                 f"{_f(100 * t['cov_inside_50_rate'], '.0f')} / "
                 f"{_f(100 * t['cov_inside_99_rate'], '.0f')} % | "
                 f"{_f(1.0 / t['realtime_factor'], '.3f')} |"
