@@ -415,3 +415,15 @@ def test_held_out_needs_two_runs_and_a_label_per_frame() -> None:
         held_out_confidence(*frames, right, [1, 2])
     with pytest.raises(InputError, match="probability must be a number"):
         confidence_of(TABLE, "0.5")  # type: ignore[arg-type]
+
+
+def test_frames_of_equal_probability_weigh_by_their_number() -> None:
+    # Ten frames at 0.2 (8 right), one at 0.4 (wrong), ten at 0.6 (5 right): pooled by
+    # their counts, 8/11 at the first two is above 5/10, so all three pool into one block
+    # of 13 right in 21 (with half a frame each way: 13.5 / 22).
+    p = [0.2] * 10 + [0.4] + [0.6] * 10
+    right = [True] * 8 + [False] * 2 + [False] + [True] * 5 + [False] * 5
+    fit = fit_confidence(["ambiguous"] * 21, p, right)
+    assert fit.ambiguous is not None and len(fit.ambiguous) == 1
+    assert fit.ambiguous[0][1] == pytest.approx(13.5 / 22)
+    assert fit.ambiguous[0][0] == pytest.approx(sum(p) / 21)
