@@ -427,3 +427,21 @@ def test_frames_of_equal_probability_weigh_by_their_number() -> None:
     assert fit.ambiguous is not None and len(fit.ambiguous) == 1
     assert fit.ambiguous[0][1] == pytest.approx(13.5 / 22)
     assert fit.ambiguous[0][0] == pytest.approx(sum(p) / 21)
+
+
+def test_a_new_tolerance_drops_the_tables_measured_at_the_old_one(caplog) -> None:  # type: ignore[no-untyped-def]
+    import logging
+
+    sensor, motion, config = preset("mrclam")
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.presets"):
+        _, _, wider = with_settings(sensor, motion, config, {"tolerance_m": 0.5})
+    assert wider.confidence_localized is None and wider.confidence_ambiguous is None
+    assert "tolerance_m changed" in caplog.text
+    # Given with it, a table stays; the same tolerance, or another setting, keeps them.
+    _, _, given = with_settings(
+        sensor, motion, config, {"tolerance_m": 0.5, "confidence_ambiguous": ((0.5, 0.3),)}
+    )
+    assert given.confidence_ambiguous == ((0.5, 0.3),) and given.confidence_localized is None
+    for same in ({"tolerance_m": config.tolerance_m}, {"min_age_s": 10.0}):
+        _, _, kept = with_settings(sensor, motion, config, same)
+        assert kept.confidence_localized == config.confidence_localized

@@ -17,6 +17,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import enum
+import logging
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -30,6 +31,13 @@ from .motion import MotionModel
 from .tracker import TrackerConfig
 
 __all__ = ["Preset", "load_settings", "preset", "settings_names", "with_settings"]
+
+log = logging.getLogger(__name__)
+
+#: The tracker's settings that say what its confidence tables measured ("right": within
+#: these tolerances of the truth).
+_TABLES = ("confidence_localized", "confidence_ambiguous")
+_TOLERANCES = ("tolerance_m", "tolerance_heading")
 
 
 class Preset(str, enum.Enum):
@@ -266,6 +274,9 @@ def with_settings(
     >>> s, m, c = with_settings(*preset("mrclam"), {"min_age_s": 10.0, "sigma": 0.02})
     >>> c.min_age_s, s.sigma
     (10.0, 0.02)
+
+    A new tolerance drops confidence tables that are not given with it: they measured how
+    often a pose was within the old one (a warning in the log says so).
     """
     if not isinstance(settings, Mapping):
         raise InputError(
@@ -282,6 +293,7 @@ def with_settings(
                 "or TrackerConfig"
             )
         parts[names[name]][name] = value
+    before = config
     try:
         if parts["sensor"]:
             sensor = sensor.replace(**parts["sensor"])
@@ -293,6 +305,18 @@ def with_settings(
         raise
     except (TypeError, ValueError, OverflowError) as exc:
         raise InputError(f"settings {shorten(dict(settings))}: {shorten(str(exc), 200)}") from exc
+    moved = [n for n in _TOLERANCES if getattr(config, n) != getattr(before, n)]
+    kept = [n for n in _TABLES if n not in parts["tracker"] and getattr(config, n) is not None]
+    if moved and kept:
+        # The tables say how often a pose was within the old tolerances: of the new ones they
+        # say nothing, and a confidence read from them would be a wrong answer given quietly.
+        dropped: dict[str, Any] = dict.fromkeys(kept)
+        config = dataclasses.replace(config, **dropped)
+        log.warning(
+            "%s changed: the confidence tables measured at the old tolerance are dropped "
+            "(confidence None; fit new ones with omniloc fit-confidence)",
+            " and ".join(moved),
+        )
     return sensor, motion, config
 
 
