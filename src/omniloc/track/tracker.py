@@ -386,7 +386,9 @@ class TrackerConfig:
         ``ambiguous``) frame to the share of such frames that a recording with a ground
         truth found within tolerance (:func:`~omniloc.track.fit_confidence`). With one, each
         estimate in that state carries its ``confidence``; None (default): no confidence is
-        reported, only the model's ``probability``.
+        reported, only the model's ``probability``. A table holds for the tolerances, and
+        the rest of the configuration, it was fitted with: after a change, fit it again
+        (:func:`~omniloc.track.with_settings` drops tables a new tolerance leaves behind).
     seed : int
         Seed of elsewhere's particles (their uniform start, motion noise, resampling and
         injection): a run is the same for the same seed; other seeds show how much of a
