@@ -15,6 +15,9 @@ the Vicon track: within 0.3 m and 5 degrees, or not (``frames_within_tolerance``
   together are compared with what happened (expected calibration error over tenths of
   [0, 1], and per state).
 * *the model's probability*: the tracker's own ``probability``, compared the same way.
+* *every hypothesis*: each reported hypothesis's weight, and its held-out confidence (the
+  hypotheses' table fitted on the other robots, ``fit_table``), against whether the truth
+  is within tolerance of its pose.
 * *the preset's tables*: fitted on all five robots (and every seed given), printed as the
   ``mrclam`` preset holds them -- those are in-sample on these runs; the held-out figures
   are what to expect of them on a run they were not fitted on.
@@ -25,6 +28,7 @@ Writes ``results_track_confidence.json`` and ``.md`` beside this file.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -35,6 +39,7 @@ sys.path.insert(0, str(HERE.parent / "src"))
 sys.path.insert(0, str(HERE))
 
 from _results import run_meta, write_results  # noqa: E402
+from omniloc.angles import wrap  # noqa: E402
 from omniloc.evaluate.common import calibration  # noqa: E402
 from omniloc.evaluate.tracking import (  # noqa: E402
     evaluate_tracking,
@@ -42,9 +47,18 @@ from omniloc.evaluate.tracking import (  # noqa: E402
     mrclam_streams,
     tracker_factory,
 )
-from omniloc.track.confidence import fit_confidence, held_out_confidence  # noqa: E402
+from omniloc.track.confidence import (  # noqa: E402
+    confidence_of,
+    fit_confidence,
+    fit_table,
+    held_out_confidence,
+)
 
-NO_TABLES = {"confidence_localized": None, "confidence_ambiguous": None}
+NO_TABLES = {
+    "confidence_localized": None,
+    "confidence_ambiguous": None,
+    "confidence_hypothesis": None,
+}
 BINS = 10
 
 
@@ -53,11 +67,23 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
     state, the tracker's probability, and whether the pose was within tolerance."""
     streams = mrclam_streams(path)
     robot, seed_of, state, prob, right = [], [], [], [], []
+    h_robot, h_weight, h_right = [], [], []
     for seed in seeds:
         make = tracker_factory("mrclam", {**NO_TABLES, "seed": seed})
         _, estimates = evaluate_tracking(streams, make, name=f"seed {seed}", progress=False)
         for k, (s, est) in enumerate(zip(streams, estimates, strict=True)):
             scored, ok = frames_within_tolerance(s, est)
+            t = np.array([e.t for e in est])
+            truth, _ = s.truth_at(t)
+            for e, sc, true in zip(est, scored, truth, strict=True):
+                if not sc:
+                    continue
+                for h in e.hypotheses:
+                    d_hdg = abs(float(wrap(h.pose.theta - true[2])))
+                    near = math.hypot(h.pose.x - true[0], h.pose.y - true[1]) <= 0.3
+                    h_robot.append(k + 1)
+                    h_weight.append(min(float(h.weight), 1.0))
+                    h_right.append(near and d_hdg <= math.radians(5.0))
             for e, sc, r in zip(est, scored, ok, strict=True):
                 if not sc or e.probability is None:
                     continue
@@ -73,6 +99,9 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
         "state": np.asarray(state),
         "probability": np.asarray(prob, dtype=np.float64),
         "right": np.asarray(right, dtype=bool),
+        "h_robot": np.asarray(h_robot),
+        "h_weight": np.asarray(h_weight, dtype=np.float64),
+        "h_right": np.asarray(h_right, dtype=bool),
     }
 
 
@@ -113,7 +142,27 @@ def main(argv: list[str] | None = None) -> int:
             f"(localized {entry['localized']['ece']:.3f}, ambiguous "
             f"{entry['ambiguous']['ece']:.3f})"
         )
-    full = fit_confidence(f["state"], f["probability"], f["right"])
+    h_held = np.full(f["h_weight"].size, np.nan)
+    for r in range(1, 6):
+        mine = f["h_robot"] == r
+        table = fit_table(f["h_weight"][~mine], f["h_right"][~mine])
+        h_held[mine] = [confidence_of(table, float(w)) for w in f["h_weight"][mine]]
+    for label, values in (
+        ("hypotheses' weights", f["h_weight"]),
+        ("hypotheses, held out", h_held),
+    ):
+        out[label] = {"all": reliability(values, f["h_right"])}
+        print(
+            f"{label}: ECE {out[label]['all']['ece']:.3f} over "  # type: ignore[index]
+            f"{out[label]['all']['frames']} hypotheses"  # type: ignore[index]
+        )
+    full = fit_confidence(
+        f["state"],
+        f["probability"],
+        f["right"],
+        hypothesis_weights=f["h_weight"],
+        hypothesis_right=f["h_right"],
+    )
     print("tables fitted on every robot (the preset's):")
     for name, table in full.settings().items():
         print(f"    {name}={table!r},")
@@ -140,9 +189,13 @@ def main(argv: list[str] | None = None) -> int:
     ]
     for label, entry in out.items():
         e = entry  # type: ignore[assignment]
+        per_state = (
+            f"{e['localized']['ece']:.3f} | {e['ambiguous']['ece']:.3f}"  # type: ignore[index]
+            if "localized" in e
+            else "- | -"
+        )
         lines.append(
-            f"| {label} | {e['all']['frames']:,} | {e['all']['ece']:.3f} | "  # type: ignore[index]
-            f"{e['localized']['ece']:.3f} | {e['ambiguous']['ece']:.3f} |"  # type: ignore[index]
+            f"| {label} | {e['all']['frames']:,} | {e['all']['ece']:.3f} | {per_state} |"  # type: ignore[index]
         )
     lines += ["", "Reliability (all frames): mean value and share right, per tenth", ""]
     lines += ["| bin | frames | model probability | right | held-out confidence | right |"]

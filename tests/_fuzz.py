@@ -2108,6 +2108,15 @@ def _confidence_targets() -> list[Target]:
             check=lambda kw, v: None,  # (NaN: a lost frame)
         ),
         Target(
+            "fit_table",
+            lambda kw: C.fit_table(**kw),
+            lambda: {"values": [0.2, 0.9, 0.9], "right": [False, True, True]},
+            {
+                "values": Arg(("values", "probabilities"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+                "right": Arg(("right", "one entry per frame"), rights),
+            },
+        ),
+        Target(
             "confidence_of",
             lambda kw: C.confidence_of(**kw),
             lambda: {"table": ((0.5, 0.2), (0.9, 0.6)), "probability": 0.7},

@@ -200,9 +200,15 @@ def _run(config: TrackerConfig):  # type: ignore[no-untyped-def]
 def test_the_tracker_reports_its_probability_and_the_tables_confidence() -> None:
     loc = ((0.5, 0.6), (0.999, 0.97))
     amb = ((0.0, 0.01), (1.0, 0.4))
+    hyp = ((0.0, 0.05), (1.0, 0.5))
     _, plain = _run(TrackerConfig(search_interval_s=1.0))
     _, mapped = _run(
-        TrackerConfig(search_interval_s=1.0, confidence_localized=loc, confidence_ambiguous=amb)
+        TrackerConfig(
+            search_interval_s=1.0,
+            confidence_localized=loc,
+            confidence_ambiguous=amb,
+            confidence_hypothesis=hyp,
+        )
     )
     states = {e.state for e in plain.estimates}
     assert TrackState.LOCALIZED in states
@@ -216,6 +222,9 @@ def test_the_tracker_reports_its_probability_and_the_tables_confidence() -> None
         assert a.probability is not None and 0.0 <= a.probability <= 1.0
         table = loc if b.state is TrackState.LOCALIZED else amb
         assert b.confidence == confidence_of(table, a.probability)
+        for ha, hb in zip(a.hypotheses, b.hypotheses, strict=True):
+            assert ha.weight == hb.weight and ha.confidence is None
+            assert hb.confidence == confidence_of(hyp, hb.weight)
         d = b.as_dict()
         assert d["probability"] == a.probability and d["confidence"] == b.confidence
     # A localized frame's probability is what the state was decided on (at least the
@@ -249,7 +258,11 @@ def test_the_mrclam_preset_carries_tables_and_the_generic_one_does_not() -> None
     _, _, mrclam = preset("mrclam")
     _, _, generic = preset("generic")
     assert mrclam.confidence_localized is not None and mrclam.confidence_ambiguous is not None
+    assert mrclam.confidence_hypothesis is not None
     assert generic.confidence_localized is None and generic.confidence_ambiguous is None
+    assert generic.confidence_hypothesis is None
+    # A hypothesis of weight 0.98 is right less than half the time (the table: 0.44).
+    assert 0.3 < confidence_of(mrclam.confidence_hypothesis, 0.98) < 0.6  # type: ignore[operator]
     # A localized frame is right far more often than an ambiguous one at the same
     # probability (measured: benchmarks/results_track_confidence.md).
     loc = confidence_of(mrclam.confidence_localized, 0.99)
@@ -285,14 +298,21 @@ def test_fit_confidence_on_two_runs_writes_tables_that_track_reports(tmp_path, c
     assert "localized:" in text and "own probability" in text
     assert "fitted on the other runs" in text  # two runs: a held-out figure
     tables = json.loads(out.read_text())
-    assert set(tables) == {"confidence_localized", "confidence_ambiguous"}
+    assert set(tables) == {
+        "confidence_localized",
+        "confidence_ambiguous",
+        "confidence_hypothesis",
+    }
     assert tables["confidence_localized"] is not None
+    assert "every hypothesis's weight" in text and "each run's hypotheses" in text
     # The tables are settings of omniloc track: its JSON lines then carry a confidence.
     assert main(["track", *common, *runs[:6], "--config", str(out), "--json"]) == 0
     lines = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
     posed = [x for x in lines if x["state"] != "lost"]
     assert posed and all(x["confidence"] is not None for x in posed)
     assert all(0.0 <= x["probability"] <= 1.0 for x in posed)
+    hyps = [h for x in posed for h in x["hypotheses"]]
+    assert hyps and all(0.0 <= h["confidence"] <= 1.0 for h in hyps)
     # The summary's last line says the last frame's confidence (not with the generic
     # preset's none).
     assert main(["-q", "track", *common, *runs[:6], "--config", str(out)]) == 0
@@ -356,6 +376,8 @@ def test_on_a_recording_the_confidence_is_calibrated_where_the_probability_is_no
     assert tot["confidence_frames"] == tot["probability_frames"] > 500
     assert tot["probability_ece"] > 0.2  # (measured 0.265)
     assert tot["confidence_ece"] < 0.1
+    # Every hypothesis (measured: weights 0.078, confidences 0.015 over 5,888).
+    assert tot["hypothesis_confidence_ece"] < 0.5 * tot["hypothesis_weight_ece"]
     # Every localized frame's confidence is what the table says of its probability.
     for e in res.estimates:
         if e.state is TrackState.LOCALIZED:
@@ -436,6 +458,7 @@ def test_a_new_tolerance_drops_the_tables_measured_at_the_old_one(caplog) -> Non
     with caplog.at_level(logging.WARNING, logger="omniloc.track.presets"):
         _, _, wider = with_settings(sensor, motion, config, {"tolerance_m": 0.5})
     assert wider.confidence_localized is None and wider.confidence_ambiguous is None
+    assert wider.confidence_hypothesis is None
     assert "tolerance_m changed" in caplog.text
     # Given with it, a table stays; the same tolerance, or another setting, keeps them.
     _, _, given = with_settings(
@@ -445,3 +468,43 @@ def test_a_new_tolerance_drops_the_tables_measured_at_the_old_one(caplog) -> Non
     for same in ({"tolerance_m": config.tolerance_m}, {"min_age_s": 10.0}):
         _, _, kept = with_settings(sensor, motion, config, same)
         assert kept.confidence_localized == config.confidence_localized
+
+
+def test_a_table_of_any_values_and_the_hypotheses_table() -> None:
+    from omniloc.track.confidence import fit_table
+
+    rng = np.random.default_rng(3)
+    w = rng.uniform(0, 1, 5000)
+    right = rng.uniform(0, 1, w.size) < 0.5 * w  # weights twice as sure as they should be
+    table = fit_table(w, right)
+    assert confidence_of(table, 0.8) == pytest.approx(0.4, abs=0.05)
+    fit = fit_confidence(["ambiguous"], [0.5], [True], hypothesis_weights=w, hypothesis_right=right)
+    assert fit.hypothesis == table and fit.frames["hypothesis"] == w.size
+    assert fit.settings()["confidence_hypothesis"] == table
+    assert "confidence_hypothesis" not in fit_confidence(["ambiguous"], [0.5], [True]).settings()
+    with pytest.raises(InputError, match="give both"):
+        fit_confidence(["ambiguous"], [0.5], [True], hypothesis_weights=w)
+    with pytest.raises(InputError, match="at least one"):
+        fit_table([], [])
+    with pytest.raises(InputError, match=r"\[0, 1\]"):
+        fit_table([1.5], [True])
+    from omniloc.track import Hypothesis
+
+    with pytest.raises(InputError, match="confidence"):
+        Hypothesis(Pose(0, 0, 0), np.eye(3), 0.5, 1.5)
+
+
+def test_the_evaluation_scores_every_hypothesis() -> None:
+    run, res = _run(TrackerConfig(search_interval_s=1.0, confidence_hypothesis=((0.0, 0.35),)))
+    stream = whole_run("sim", GRID, run.odometry, run.frames, run.truth)
+    score = score_run(stream, res.estimates)
+    scored, _ = frames_within_tolerance(stream, res.estimates)
+    n = sum(len(e.hypotheses) for e, sc in zip(res.estimates, scored, strict=True) if sc)
+    assert n > 0
+    assert sum(b[0] for b in score.hypothesis_weight_bins) == n
+    assert sum(b[0] for b in score.hypothesis_confidence_bins) == n
+    # Every confidence is 0.35: all in the fourth tenth.
+    assert score.hypothesis_confidence_bins[3][0] == n
+    tot = TrackingResult("sim", [score]).totals()
+    assert tot["hypothesis_weight_frames"] == n
+    assert "every reported hypothesis" in tracking_summary(TrackingResult("sim", [score]))

@@ -1213,6 +1213,8 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
 
 
 def _cmd_fit_confidence(args: argparse.Namespace) -> int:
+    from dataclasses import replace
+
     from .evaluate.common import calibration
     from .evaluate.tracking import errors_against
     from .io import write_text
@@ -1226,7 +1228,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         track,
         with_settings,
     )
-    from .track.confidence import held_out_confidence
+    from .track.confidence import confidence_of, fit_table, held_out_confidence
 
     n = len(args.odometry)
     if not n == len(args.frames) == len(args.groundtruth):
@@ -1241,6 +1243,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         # decision, and the fit reads the model's own probability.)
         "confidence_localized": None,
         "confidence_ambiguous": None,
+        "confidence_hypothesis": None,
     }
     sensor, motion, config = with_settings(sensor, motion, config, settings)
     lm = LandmarkMap.load(args.map)
@@ -1252,23 +1255,40 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
     probs: list[float] = []
     right: list[bool] = []
     group: list[int] = []
+    h_weight: list[float] = []
+    h_right: list[bool] = []
+    h_group: list[int] = []
+    tol_hdg = float(np.rad2deg(config.tolerance_heading))
     for k, (odo, frames, truth) in enumerate(runs):
         if not frames:
             raise InputError(f"{args.frames[k]}: no frames")
         est = track(lm, odo, frames, sensor=sensor, motion=motion, config=config).estimates
-        ok, d_pos, _ = errors_against(
-            truth, est, config.tolerance_m, float(np.rad2deg(config.tolerance_heading))
-        )
+        ok, d_pos, _ = errors_against(truth, est, config.tolerance_m, tol_hdg)
         for e, r, d in zip(est, ok, d_pos, strict=True):
             if e.probability is None or not np.isfinite(d):
                 continue  # (lost, or no truth at that time)
+            h_ok, _, _ = errors_against(
+                truth,
+                [replace(e, pose=h.pose) for h in e.hypotheses],
+                config.tolerance_m,
+                tol_hdg,
+            )
+            h_weight += [min(float(h.weight), 1.0) for h in e.hypotheses]
+            h_right += [bool(x) for x in h_ok]
+            h_group += [k] * len(e.hypotheses)
             states.append(e.state.value)
             probs.append(e.probability)
             right.append(bool(r))
             group.append(k)
     if not states:
         raise InputError("no frame with a pose and a ground truth: nothing to fit on")
-    fit = fit_confidence(states, probs, right)
+    fit = fit_confidence(
+        states,
+        probs,
+        right,
+        hypothesis_weights=h_weight if h_weight else None,
+        hypothesis_right=h_right if h_weight else None,
+    )
     tol = (
         f"within {config.tolerance_m:g} m and {np.rad2deg(config.tolerance_heading):g} deg of "
         "the truth"
@@ -1282,6 +1302,11 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         f"the tracker's own probability against the truth: expected calibration error "
         f"{calibration(probs, right).ece:.3f} over {len(probs)} frames"
     )
+    if h_weight:
+        print(
+            f"every hypothesis's weight against the truth: expected calibration error "
+            f"{calibration(h_weight, h_right).ece:.3f} over {len(h_weight)} hypotheses"
+        )
     if n > 1:
         held = held_out_confidence(states, probs, right, group)
         use = np.isfinite(held)
@@ -1290,6 +1315,20 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             f"{calibration(held[use].tolist(), np.asarray(right)[use].tolist()).ece:.3f} over "
             f"{int(use.sum())} frames (what to expect on a run not fitted on)"
         )
+        if h_weight:
+            hw, hr, hg = np.asarray(h_weight), np.asarray(h_right), np.asarray(h_group)
+            h_held = np.full(hw.size, np.nan)
+            for k in set(h_group):
+                mine = hg == k
+                if (~mine).any():
+                    table = fit_table(hw[~mine], hr[~mine])
+                    h_held[mine] = [confidence_of(table, float(w)) for w in hw[mine]]
+            use = np.isfinite(h_held)
+            print(
+                f"  and each run's hypotheses: expected calibration error "
+                f"{calibration(h_held[use].tolist(), hr[use].tolist()).ece:.3f} over "
+                f"{int(use.sum())} hypotheses"
+            )
     else:
         print(
             "one run: the tables are fitted on the frames they would be checked on; give "

@@ -24,7 +24,9 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
   tolerance, in tenths of [0, 1]; its expected calibration error (``best_weight_ece``) says
   how far those weights are from the frequencies (0: calibrated). The same for the
   estimates' own ``probability`` that their pose is within tolerance (``probability_ece``)
-  and their ``confidence`` (``confidence_ece``), over the frames that carry one.
+  and their ``confidence`` (``confidence_ece``), over the frames that carry one; and for
+  every reported hypothesis, its weight and its confidence against whether the truth is
+  within tolerance of it (``hypothesis_weight_ece``, ``hypothesis_confidence_ece``).
 * *RMSE*: position and heading errors over the ``localized`` frames.
 * *covariance consistency*: over the ``localized`` frames with a covariance, whether the
   truth lies inside the reported covariance's 50 % and 99 % regions of the pose (its
@@ -107,6 +109,10 @@ RngLike = np.random.Generator | int | None
 
 #: Ground truth whose samples are further apart than this (s) is not trusted for scoring.
 MAX_GAP_S = 0.5
+
+#: The calibration bins of :class:`RunScore` beyond the strongest weight's (each
+#: ``<name>_bins``; the totals' ``<name>_frames`` and ``<name>_ece``).
+_OWN_BINS = ("probability", "confidence", "hypothesis_weight", "hypothesis_confidence")
 
 #: Bins of the strongest hypothesis's weight (tenths of [0, 1]) for its calibration.
 WEIGHT_BINS = 10
@@ -371,6 +377,10 @@ class RunScore:
     #: their pose is within tolerance (the frames that carry one).
     probability_bins: tuple[tuple[int, float, int], ...] = ()
     confidence_bins: tuple[tuple[int, float, int], ...] = ()
+    #: The same for every reported hypothesis: its weight, and its confidence, against
+    #: whether the truth is within tolerance of its pose.
+    hypothesis_weight_bins: tuple[tuple[int, float, int], ...] = ()
+    hypothesis_confidence_bins: tuple[tuple[int, float, int], ...] = ()
     #: Localized frames with a covariance, and of them those whose truth lies inside the
     #: covariance's 50 % and 99 % regions (see the module's definitions).
     cov_frames: int = 0
@@ -403,7 +413,7 @@ class RunScore:
         }
         row["best_weight_frames"] = sum(int(b[0]) for b in self.weight_bins)
         row["best_weight_ece"] = weight_ece(self.weight_bins)
-        for name in ("probability", "confidence"):
+        for name in _OWN_BINS:
             bins = getattr(self, f"{name}_bins")
             row[f"{name}_frames"] = sum(int(b[0]) for b in bins)
             row[f"{name}_ece"] = weight_ece(bins)
@@ -477,6 +487,7 @@ def score_run(
         name: _value_bins([getattr(e, name) for e in estimates], scored, right)
         for name in ("probability", "confidence")
     }
+    own.update(_hypothesis_bins(estimates, truth, scored, pos_tol_m, heading_tol_deg))
     nees = _nees(estimates, est, truth, sel)
     ends = [float(stream.odometry.t[-1])] + ([t[-1]] if t.size else [])
     return RunScore(
@@ -499,6 +510,8 @@ def score_run(
         weight_bins=weight_bins,
         probability_bins=own["probability"],
         confidence_bins=own["confidence"],
+        hypothesis_weight_bins=own["hypothesis_weight"],
+        hypothesis_confidence_bins=own["hypothesis_confidence"],
         cov_frames=int(nees.size),
         cov_inside_50=int((nees <= CHI2_3DOF_50).sum()),
         cov_inside_99=int((nees <= CHI2_3DOF_99).sum()),
@@ -557,7 +570,9 @@ def frames_within_tolerance(
 
 
 def _value_bins(
-    values: Sequence[float | None], scored: NDArray[np.bool_], right: NDArray[np.bool_]
+    values: Sequence[float | None],
+    scored: Sequence[bool] | NDArray[np.bool_],
+    right: NDArray[np.bool_],
 ) -> tuple[tuple[int, float, int], ...]:
     """Per tenth of [0, 1]: the scored frames that carry a value, its sum, and those right."""
     v: list[float] = []
@@ -571,6 +586,35 @@ def _value_bins(
         return ()
     n, total, hit = confidence_bins(v, ok, WEIGHT_BINS)
     return tuple((int(a), float(c), int(r)) for a, c, r in zip(n, total, hit, strict=True))
+
+
+def _hypothesis_bins(
+    estimates: Sequence[TrackEstimate],
+    truth: FloatArray,
+    scored: NDArray[np.bool_],
+    pos_tol_m: float,
+    heading_tol_deg: float,
+) -> dict[str, tuple[tuple[int, float, int], ...]]:
+    """Every reported hypothesis of the scored frames: its weight and its confidence
+    against whether the truth is within tolerance of its pose (per tenth of [0, 1])."""
+    weights: list[float | None] = []
+    confidences: list[float | None] = []
+    right: list[bool] = []
+    for k, e in enumerate(estimates):
+        if not scored[k]:
+            continue
+        for h in e.hypotheses:
+            d_pos = math.hypot(h.pose.x - truth[k, 0], h.pose.y - truth[k, 1])
+            d_hdg = abs(math.degrees(float(wrap(h.pose.theta - truth[k, 2]))))
+            weights.append(float(h.weight))
+            confidences.append(h.confidence)
+            right.append(d_pos <= pos_tol_m and d_hdg <= heading_tol_deg)
+    every = np.ones(len(right), dtype=bool)
+    ok = np.asarray(right, dtype=bool)
+    return {
+        "hypothesis_weight": _value_bins(weights, every, ok),
+        "hypothesis_confidence": _value_bins(confidences, every, ok),
+    }
 
 
 def _nees(
@@ -756,7 +800,7 @@ class TrackingResult:
             ]
 
         bins = pooled_bins("weight_bins")
-        own = {name: pooled_bins(f"{name}_bins") for name in ("probability", "confidence")}
+        own = {name: pooled_bins(f"{name}_bins") for name in _OWN_BINS}
         return {
             "runs": float(len(rs)),
             "frames_scored": float(scored),
@@ -1103,6 +1147,17 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
             f"the localizer's own probability that its pose is within tolerance against the "
             f"truth ({int(tot['probability_frames'])} frames): expected calibration error "
             f"{_fmt(tot['probability_ece'], '.3f')}{conf}"
+        )
+    if tot.get("hypothesis_weight_frames"):
+        hconf = (
+            f", of their confidence {_fmt(tot['hypothesis_confidence_ece'], '.3f')}"
+            if tot.get("hypothesis_confidence_frames")
+            else ""
+        )
+        lines.append(
+            f"every reported hypothesis against the truth "
+            f"({int(tot['hypothesis_weight_frames'])}): expected calibration error of their "
+            f"weights {_fmt(tot['hypothesis_weight_ece'], '.3f')}{hconf}"
         )
     if tot["cov_frames"]:
         lines.append(

@@ -16,7 +16,13 @@ confidence)`` (``TrackerConfig.confidence_localized`` and ``confidence_ambiguous
 linear between knots and flat beyond them, and the tracker then reports
 :attr:`~omniloc.track.TrackEstimate.confidence` beside its own probability.
 
-:func:`fit_confidence` fits the tables from frames scored against a ground truth;
+The same holds for each reported hypothesis's weight: a third table
+(``TrackerConfig.confidence_hypothesis``) maps it to the share of hypotheses of that weight
+whose pose was within tolerance, and each :class:`~omniloc.track.Hypothesis` carries that
+``confidence``.
+
+:func:`fit_confidence` fits the tables from frames scored against a ground truth
+(:func:`fit_table` one table from any values and outcomes);
 :func:`confidence_of` applies one; :func:`held_out_confidence` gives each frame the
 confidence of tables fitted without its own run (what to expect on a run not fitted on).
 A map is a measurement of one robot, camera and map: check it on runs it was not fitted on
@@ -43,6 +49,7 @@ __all__ = [
     "confidence_of",
     "confidence_table",
     "fit_confidence",
+    "fit_table",
     "held_out_confidence",
 ]
 
@@ -135,20 +142,27 @@ class ConfidenceFit:
     localized, ambiguous : tuple of (probability, confidence), or None
         The knots of each state's table (None: no frame in that state).
     frames : dict of str to int
-        Frames each table was fitted on, by state.
+        Frames each table was fitted on, by state (and ``"hypothesis"``: hypotheses).
     right : dict of str to int
         Of them, those within tolerance.
+    hypothesis : tuple of (weight, confidence), or None
+        The hypotheses' table (None: not fitted).
     """
 
     localized: Knots | None
     ambiguous: Knots | None
     frames: dict[str, int]
     right: dict[str, int]
+    hypothesis: Knots | None = None
 
     def settings(self) -> dict[str, Knots | None]:
         """The tables as tracker settings (``with_settings``, ``--config``):
-        ``confidence_localized`` and ``confidence_ambiguous``."""
-        return {"confidence_localized": self.localized, "confidence_ambiguous": self.ambiguous}
+        ``confidence_localized``, ``confidence_ambiguous`` and, when fitted,
+        ``confidence_hypothesis``."""
+        out = {"confidence_localized": self.localized, "confidence_ambiguous": self.ambiguous}
+        if self.hypothesis is not None:
+            out["confidence_hypothesis"] = self.hypothesis
+        return out
 
     def __call__(self, state: TrackState | str, probability: float) -> float | None:
         """The confidence of a frame in ``state`` with the model's ``probability``."""
@@ -218,8 +232,36 @@ def _frames(
     return kind, p, ok
 
 
+def fit_table(values: ArrayLike, right: ArrayLike) -> Knots:
+    """One table: knots ``(value, confidence)`` fitted on values in [0, 1] (a model's
+    probabilities, or hypotheses' weights) and whether each case was right (isotonic
+    regression, half a case right and half wrong added to each block).
+
+    Raises
+    ------
+    InputError
+        Values outside [0, 1], lengths that differ, outcomes that are not booleans, or no
+        case at all.
+
+    Examples
+    --------
+    >>> fit_table([0.2, 0.9, 0.9], [False, True, True])
+    ((0.2, 0.25), (0.9, 0.8333333333333334))
+    """
+    n = int(np.size(values)) if values is not None else 0
+    if n == 0:
+        raise InputError("values: fit_table needs at least one value and its outcome")
+    _, v, ok = _frames(["ambiguous"] * n, values, right)
+    return _isotonic_knots(v, ok)
+
+
 def fit_confidence(
-    states: Sequence[TrackState | str], probabilities: ArrayLike, right: ArrayLike
+    states: Sequence[TrackState | str],
+    probabilities: ArrayLike,
+    right: ArrayLike,
+    *,
+    hypothesis_weights: ArrayLike | None = None,
+    hypothesis_right: ArrayLike | None = None,
 ) -> ConfidenceFit:
     """Fit confidence tables on frames scored against a ground truth.
 
@@ -232,6 +274,9 @@ def fit_confidence(
     right : array_like of bool, shape (n,)
         Whether each frame's pose was within the tolerance of the truth (the tracker's
         ``tolerance_m`` and ``tolerance_heading``: the confidence is a probability of that).
+    hypothesis_weights, hypothesis_right : array_like, optional
+        Every reported hypothesis's weight, and whether its pose was within tolerance:
+        the hypotheses' table (:func:`fit_table`), given together.
 
     Returns
     -------
@@ -258,7 +303,15 @@ def fit_confidence(
         frames[s.value] = int(sel.sum())
         rights[s.value] = int(ok[sel].sum())
         tables[s.value] = _isotonic_knots(p[sel], ok[sel]) if sel.any() else None
-    return ConfidenceFit(tables["localized"], tables["ambiguous"], frames, rights)
+    hyp: Knots | None = None
+    if (hypothesis_weights is None) != (hypothesis_right is None):
+        raise InputError("hypothesis_weights and hypothesis_right go together: give both")
+    if hypothesis_weights is not None and hypothesis_right is not None:
+        hyp = fit_table(hypothesis_weights, hypothesis_right)
+        hr = np.asarray(hypothesis_right).astype(bool)
+        frames["hypothesis"] = int(hr.size)
+        rights["hypothesis"] = int(hr.sum())
+    return ConfidenceFit(tables["localized"], tables["ambiguous"], frames, rights, hyp)
 
 
 def held_out_confidence(

@@ -58,11 +58,20 @@ class Hypothesis:
         camera's errors and detections are correlated, it is overconfident (the strongest
         hypothesis at 0.9 or more is right in 58 % of the frames; docs/tracking.md), and
         every tracking evaluation reports its calibration (``best_weight_ece``).
+    confidence : float or None
+        The probability, as recordings measured it, that the robot is within the
+        localizer's tolerance of ``pose``: the weight mapped by the configuration's
+        ``confidence_hypothesis`` table (:mod:`omniloc.track.confidence`). None without one.
     """
 
     pose: Pose
     covariance: FloatArray = field(repr=False, compare=False)
     weight: float = 1.0
+    confidence: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.confidence is not None and not 0.0 <= float(self.confidence) <= 1.0:
+            raise InputError(f"confidence must be in [0, 1] or None, got {self.confidence!r}")
 
 
 @dataclass(frozen=True)
@@ -131,7 +140,7 @@ class TrackEstimate:
         """Plain-JSON dictionary: ``t``, ``state``, ``reason``, ``kidnapped`` and, unless
         lost, ``x``, ``y``, ``theta``, ``covariance`` (3x3 nested lists), ``probability``
         and ``confidence`` (null when not given) and ``hypotheses`` (each ``x``, ``y``,
-        ``theta``, ``weight``, ``covariance``)."""
+        ``theta``, ``weight``, ``confidence``, ``covariance``)."""
         out: dict[str, object] = {
             "t": float(self.t),
             "state": self.state.value,
@@ -151,6 +160,7 @@ class TrackEstimate:
                     "y": h.pose.y,
                     "theta": h.pose.theta,
                     "weight": float(h.weight),
+                    "confidence": None if h.confidence is None else float(h.confidence),
                     "covariance": np.asarray(h.covariance, float).tolist(),
                 }
                 for h in self.hypotheses

@@ -380,6 +380,11 @@ class TrackerConfig:
         are dropped and the tracker relocalizes.
     max_reported : int
         At most this many hypotheses in an estimate.
+    confidence_hypothesis : tuple of (float, float), or None
+        Knots ``(weight, confidence)`` that map each reported hypothesis's weight to the
+        share of hypotheses of that weight that a recording found within tolerance of the
+        truth: each :class:`~omniloc.track.Hypothesis` then carries its ``confidence``
+        (None, the default: not reported).
     confidence_localized, confidence_ambiguous : tuple of (float, float), or None
         Confidence tables (:mod:`omniloc.track.confidence`): knots ``(probability,
         confidence)`` that map the tracker's own probability of a ``localized`` (an
@@ -455,12 +460,13 @@ class TrackerConfig:
     max_reported: int = 10
     confidence_localized: tuple[tuple[float, float], ...] | None = None
     confidence_ambiguous: tuple[tuple[float, float], ...] | None = None
+    confidence_hypothesis: tuple[tuple[float, float], ...] | None = None
     seed: int = 0
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name in ("confidence_localized", "confidence_ambiguous"):
+            if f.name in ("confidence_localized", "confidence_ambiguous", "confidence_hypothesis"):
                 object.__setattr__(self, f.name, confidence_table(f.name, v))
                 continue
             if f.name == "seed":
@@ -1679,11 +1685,14 @@ class Tracker:
             return TrackEstimate(t, TrackState.LOST, reason=reason, kidnapped=kidnapped)
         order = np.argsort(-self._logw, kind="stable")[: self.config.max_reported]
         rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
+        table_h = self.config.confidence_hypothesis
+        weights = np.minimum(np.exp(self._logw[order]), 1.0).tolist()
         hyps = tuple(
             Hypothesis(
                 Pose(*rows[j]),
                 self._P[k] * self.config.covariance_inflation,
-                float(np.exp(self._logw[k])),
+                weights[j],
+                None if table_h is None else confidence_of(table_h, weights[j]),
             )
             for j, k in enumerate(order)
         )
