@@ -86,7 +86,7 @@ from ..io import finite_number, shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from .confidence import confidence_of, confidence_table
+from .confidence import confidence_table
 from .data import _float_array
 from .elsewhere import Elsewhere
 from .likelihood import FrameModel, Objects, frame_update_clutter, log_ratios_clutter
@@ -628,6 +628,18 @@ def _logsumexp(a: FloatArray) -> float:
     )
 
 
+def _confidences(
+    table: tuple[FloatArray, FloatArray] | None, values: FloatArray
+) -> list[float | None]:
+    """What a confidence table (its knots as two arrays) gives each of ``values``: what
+    :func:`~omniloc.track.confidence.confidence_of` gives one at a time (None without a
+    table, or for a NaN)."""
+    if table is None:
+        return [None] * values.size
+    out = np.clip(np.interp(values, table[0], table[1]), 0.0, 1.0).tolist()
+    return [None if math.isnan(v) else c for v, c in zip(values.tolist(), out, strict=True)]
+
+
 def within_tolerance(cov: FloatArray, tol_m: float, tol_heading: float) -> float:
     """A lower bound on the probability that a Gaussian pose error of covariance ``cov`` is
     within ``tol_m`` in position and ``tol_heading`` in heading: the position along its
@@ -773,6 +785,12 @@ class Tracker:
         # The best place's estimate as the last decision made it (index, mean, covariance).
         #: (best hypothesis, its place's pose, covariance and probability within tolerance)
         self._best_place: tuple[int, FloatArray, FloatArray, float] | None = None
+        # The confidence tables as arrays of knots, made once (each is read every frame).
+        self._tables = {
+            name: None if t is None else (np.array([k[0] for k in t]), np.array([k[1] for k in t]))
+            for name in ("confidence_localized", "confidence_ambiguous", "confidence_hypothesis")
+            for t in (getattr(self.config, name),)
+        }
         # The first frame since the last localized one that was not localized (None while
         # localized): kidnap_watch_s runs from there.
         self._unvouched_t: float | None = None
@@ -1685,14 +1703,15 @@ class Tracker:
             return TrackEstimate(t, TrackState.LOST, reason=reason, kidnapped=kidnapped)
         order = np.argsort(-self._logw, kind="stable")[: self.config.max_reported]
         rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
-        table_h = self.config.confidence_hypothesis
-        weights = np.minimum(np.exp(self._logw[order]), 1.0).tolist()
+        w = np.minimum(np.exp(self._logw[order]), 1.0)
+        weights = w.tolist()
+        h_conf = _confidences(self._tables["confidence_hypothesis"], w)
         hyps = tuple(
             Hypothesis(
                 Pose(*rows[j]),
                 self._P[k] * self.config.covariance_inflation,
                 weights[j],
-                None if table_h is None else confidence_of(table_h, weights[j]),
+                h_conf[j],
             )
             for j, k in enumerate(order)
         )
@@ -1708,7 +1727,9 @@ class Tracker:
         # The model's probability that the pose is within tolerance (what _decide reads),
         # and what the configuration's table says such frames turned out to be.
         p = min(max(prob, 0.0), 1.0) if math.isfinite(prob) else None
-        table = c.confidence_localized if state is TrackState.LOCALIZED else c.confidence_ambiguous
+        table = self._tables[
+            "confidence_localized" if state is TrackState.LOCALIZED else "confidence_ambiguous"
+        ]
         return TrackEstimate(
             t,
             state,
@@ -1718,5 +1739,5 @@ class Tracker:
             reason=reason,
             kidnapped=kidnapped,
             probability=p,
-            confidence=None if p is None else confidence_of(table, p),
+            confidence=None if p is None else _confidences(table, np.array([p]))[0],
         )
