@@ -176,10 +176,15 @@ def test_bad_frames_for_a_fit_are_refused(
 
 
 def test_an_estimate_refuses_a_probability_or_confidence_outside_0_1() -> None:
+    from omniloc.track import Hypothesis
+
     for name in ("probability", "confidence"):
-        for bad in (1.5, -0.1, math.nan):
+        for bad in (1.5, -0.1, math.nan, "0.5", True, [0.5]):
             with pytest.raises(InputError, match=name):
                 TrackEstimate(0.0, TrackState.LOST, **{name: bad})
+            with pytest.raises(InputError, match="confidence"):
+                Hypothesis(Pose(0, 0, 0), np.eye(3), 0.5, bad)  # type: ignore[arg-type]
+    assert TrackEstimate(0.0, TrackState.LOST, probability=np.float32(0.5)).probability == 0.5
 
 
 # ---- the tracker ----------------------------------------------------------------------------

@@ -41,6 +41,15 @@ class TrackState(str, enum.Enum):
     LOCALIZED = "localized"
 
 
+def _check_share(name: str, value: object) -> None:
+    """``value`` None or a real number in [0, 1], or an InputError naming ``name``."""
+    if value is None:
+        return
+    ok = isinstance(value, (int, float, np.number)) and not isinstance(value, bool)
+    if not (ok and 0.0 <= float(value) <= 1.0):  # type: ignore[arg-type]
+        raise InputError(f"{name} must be a number in [0, 1] or None, got {value!r}")
+
+
 @dataclass(frozen=True)
 class Hypothesis:
     """One competing pose: its estimate, covariance and posterior weight.
@@ -70,8 +79,7 @@ class Hypothesis:
     confidence: float | None = None
 
     def __post_init__(self) -> None:
-        if self.confidence is not None and not 0.0 <= float(self.confidence) <= 1.0:
-            raise InputError(f"confidence must be in [0, 1] or None, got {self.confidence!r}")
+        _check_share("confidence", self.confidence)
 
 
 @dataclass(frozen=True)
@@ -124,9 +132,7 @@ class TrackEstimate:
         if not math.isfinite(float(self.t)):
             raise InputError(f"t must be finite, got {self.t!r}")
         for name in ("probability", "confidence"):
-            v = getattr(self, name)
-            if v is not None and not 0.0 <= float(v) <= 1.0:
-                raise InputError(f"{name} must be in [0, 1] or None, got {v!r}")
+            _check_share(name, getattr(self, name))
         object.__setattr__(self, "state", TrackState(self.state))
         if self.state is not TrackState.LOST and self.pose is None:
             raise InputError(f"a {self.state.value} estimate needs a pose")
