@@ -28,7 +28,6 @@ Writes ``results_track_confidence.json`` and ``.md`` beside this file.
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 from pathlib import Path
 
@@ -39,19 +38,18 @@ sys.path.insert(0, str(HERE.parent / "src"))
 sys.path.insert(0, str(HERE))
 
 from _results import run_meta, write_results  # noqa: E402
-from omniloc.angles import wrap  # noqa: E402
 from omniloc.evaluate.common import calibration  # noqa: E402
 from omniloc.evaluate.tracking import (  # noqa: E402
     evaluate_tracking,
     frames_within_tolerance,
+    hypothesis_outcomes,
     mrclam_streams,
     tracker_factory,
 )
 from omniloc.track.confidence import (  # noqa: E402
-    confidence_of,
     fit_confidence,
-    fit_table,
     held_out_confidence,
+    held_out_table,
 )
 
 NO_TABLES = {
@@ -73,17 +71,11 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
         _, estimates = evaluate_tracking(streams, make, name=f"seed {seed}", progress=False)
         for k, (s, est) in enumerate(zip(streams, estimates, strict=True)):
             scored, ok = frames_within_tolerance(s, est)
-            t = np.array([e.t for e in est])
-            truth, _ = s.truth_at(t)
-            for e, sc, true in zip(est, scored, truth, strict=True):
-                if not sc:
-                    continue
-                for h in e.hypotheses:
-                    d_hdg = abs(float(wrap(h.pose.theta - true[2])))
-                    near = math.hypot(h.pose.x - true[0], h.pose.y - true[1]) <= 0.3
-                    h_robot.append(k + 1)
-                    h_weight.append(min(float(h.weight), 1.0))
-                    h_right.append(near and d_hdg <= math.radians(5.0))
+            truth, _ = s.truth_at(np.array([e.t for e in est]))
+            hyps = hypothesis_outcomes(est, truth, scored)
+            h_robot += [k + 1] * hyps.right.size
+            h_weight += hyps.weights.tolist()
+            h_right += hyps.right.tolist()
             for e, sc, r in zip(est, scored, ok, strict=True):
                 if not sc or e.probability is None:
                     continue
@@ -157,11 +149,7 @@ def main(argv: list[str] | None = None) -> int:
             f"(localized {entry['localized']['ece']:.3f}, ambiguous "
             f"{entry['ambiguous']['ece']:.3f})"
         )
-    h_held = np.full(f["h_weight"].size, np.nan)
-    for r in range(1, 6):
-        mine = f["h_robot"] == r
-        table = fit_table(f["h_weight"][~mine], f["h_right"][~mine])
-        h_held[mine] = [confidence_of(table, float(w)) for w in f["h_weight"][mine]]
+    h_held = held_out_table(f["h_weight"], f["h_right"], f["h_robot"])
     for label, values in (
         ("hypotheses' weights", f["h_weight"]),
         ("hypotheses, held out", h_held),

@@ -2117,6 +2117,20 @@ def _confidence_targets() -> list[Target]:
             },
         ),
         Target(
+            "held_out_table",
+            lambda kw: C.held_out_table(**kw),
+            lambda: {
+                "values": [0.2, 0.9, 0.9, 0.4],
+                "right": [False, True, True, True],
+                "groups": [0, 0, 1, 1],
+            },
+            {
+                "values": Arg(("values", "probabilities"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+                "groups": Arg(("groups", "two runs"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+            },
+            check=lambda kw, v: None,  # (NaN: no case in the other runs)
+        ),
+        Target(
             "confidence_of",
             lambda kw: C.confidence_of(**kw),
             lambda: {"table": ((0.5, 0.2), (0.9, 0.6)), "probability": 0.7},

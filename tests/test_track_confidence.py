@@ -513,3 +513,19 @@ def test_the_evaluation_scores_every_hypothesis() -> None:
     tot = TrackingResult("sim", [score]).totals()
     assert tot["hypothesis_weight_frames"] == n
     assert "every reported hypothesis" in tracking_summary(TrackingResult("sim", [score]))
+
+
+def test_a_table_held_out_by_run() -> None:
+    from omniloc.track.confidence import fit_table, held_out_table
+
+    w = [0.2, 0.9, 0.9, 0.2, 0.9, 0.5]
+    right = [False, True, True, False, False, True]
+    runs = ["a", "a", "a", "b", "b", "c"]
+    out = held_out_table(w, right, runs)
+    # Run b's cases read the table fitted on runs a and c alone.
+    other = fit_table([0.2, 0.9, 0.9, 0.5], [False, True, True, True])
+    assert out[3] == confidence_of(other, 0.2) and out[4] == confidence_of(other, 0.9)
+    with pytest.raises(InputError, match="at least two runs"):
+        held_out_table(w, right, ["a"] * 6)
+    with pytest.raises(InputError, match="one run label per frame"):
+        held_out_table(w, right, ["a", "b"])

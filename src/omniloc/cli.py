@@ -1213,10 +1213,8 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
 
 
 def _cmd_fit_confidence(args: argparse.Namespace) -> int:
-    from dataclasses import replace
-
     from .evaluate.common import calibration
-    from .evaluate.tracking import errors_against
+    from .evaluate.tracking import errors_against, hypothesis_outcomes
     from .io import write_text
     from .maps import LandmarkMap
     from .track import (
@@ -1228,7 +1226,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         track,
         with_settings,
     )
-    from .track.confidence import confidence_of, fit_table, held_out_confidence
+    from .track.confidence import held_out_confidence, held_out_table
 
     n = len(args.odometry)
     if not n == len(args.frames) == len(args.groundtruth):
@@ -1264,18 +1262,16 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             raise InputError(f"{args.frames[k]}: no frames")
         est = track(lm, odo, frames, sensor=sensor, motion=motion, config=config).estimates
         ok, d_pos, _ = errors_against(truth, est, config.tolerance_m, tol_hdg)
+        true, _ = truth.at(np.array([e.t for e in est]))
+        hyps = hypothesis_outcomes(
+            est, true, np.asarray(np.isfinite(true).all(axis=1)), config.tolerance_m, tol_hdg
+        )
+        h_weight += hyps.weights.tolist()
+        h_right += hyps.right.tolist()
+        h_group += [k] * hyps.right.size
         for e, r, d in zip(est, ok, d_pos, strict=True):
             if e.probability is None or not np.isfinite(d):
                 continue  # (lost, or no truth at that time)
-            h_ok, _, _ = errors_against(
-                truth,
-                [replace(e, pose=h.pose) for h in e.hypotheses],
-                config.tolerance_m,
-                tol_hdg,
-            )
-            h_weight += [min(float(h.weight), 1.0) for h in e.hypotheses]
-            h_right += [bool(x) for x in h_ok]
-            h_group += [k] * len(e.hypotheses)
             states.append(e.state.value)
             probs.append(e.probability)
             right.append(bool(r))
@@ -1315,19 +1311,13 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             f"{calibration(held[use].tolist(), np.asarray(right)[use].tolist()).ece:.3f} over "
             f"{int(use.sum())} frames (what to expect on a run not fitted on)"
         )
-        if h_weight:
-            hw, hr, hg = np.asarray(h_weight), np.asarray(h_right), np.asarray(h_group)
-            h_held = np.full(hw.size, np.nan)
-            for k in set(h_group):
-                mine = hg == k
-                if (~mine).any():
-                    table = fit_table(hw[~mine], hr[~mine])
-                    h_held[mine] = [confidence_of(table, float(w)) for w in hw[mine]]
+        if h_weight and len(set(h_group)) > 1:
+            h_held = held_out_table(h_weight, h_right, h_group)
             use = np.isfinite(h_held)
             print(
                 f"  and each run's hypotheses: expected calibration error "
-                f"{calibration(h_held[use].tolist(), hr[use].tolist()).ece:.3f} over "
-                f"{int(use.sum())} hypotheses"
+                f"{calibration(h_held[use].tolist(), np.asarray(h_right)[use].tolist()).ece:.3f}"
+                f" over {int(use.sum())} hypotheses"
             )
     else:
         print(

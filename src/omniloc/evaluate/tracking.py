@@ -88,6 +88,7 @@ __all__ = [
     "evaluate_mrclam_tracking",
     "evaluate_tracking",
     "frames_within_tolerance",
+    "hypothesis_outcomes",
     "mrclam_bound",
     "run_stream",
     "score_run",
@@ -597,7 +598,38 @@ def _hypothesis_bins(
 ) -> dict[str, tuple[tuple[int, float, int], ...]]:
     """Every reported hypothesis of the scored frames: its weight and its confidence
     against whether the truth is within tolerance of its pose (per tenth of [0, 1])."""
-    weights: list[float | None] = []
+    out = hypothesis_outcomes(estimates, truth, scored, pos_tol_m, heading_tol_deg)
+    every = np.ones(out.right.size, dtype=bool)
+    return {
+        "hypothesis_weight": _value_bins(out.weights.tolist(), every, out.right),
+        "hypothesis_confidence": _value_bins(out.confidences, every, out.right),
+    }
+
+
+@dataclass(frozen=True)
+class HypothesisOutcomes:
+    """Every reported hypothesis of the scored frames (:func:`hypothesis_outcomes`), in
+    order: its frame's index, weight (at most 1), confidence (None where not reported) and
+    whether the truth was within tolerance of its pose."""
+
+    frame: NDArray[np.int64]
+    weights: FloatArray
+    confidences: list[float | None]
+    right: NDArray[np.bool_]
+
+
+def hypothesis_outcomes(
+    estimates: Sequence[TrackEstimate],
+    truth: FloatArray,
+    scored: Sequence[bool] | NDArray[np.bool_],
+    pos_tol_m: float = 0.3,
+    heading_tol_deg: float = 5.0,
+) -> HypothesisOutcomes:
+    """Every reported hypothesis of the frames that are ``scored``, against ``truth`` (N, 3)
+    at the frames' times: what the evaluation scores and
+    :func:`~omniloc.track.fit_confidence`'s hypotheses' table is fitted on."""
+    frame: list[int] = []
+    weights: list[float] = []
     confidences: list[float | None] = []
     right: list[bool] = []
     for k, e in enumerate(estimates):
@@ -606,15 +638,16 @@ def _hypothesis_bins(
         for h in e.hypotheses:
             d_pos = math.hypot(h.pose.x - truth[k, 0], h.pose.y - truth[k, 1])
             d_hdg = abs(math.degrees(float(wrap(h.pose.theta - truth[k, 2]))))
-            weights.append(float(h.weight))
+            frame.append(k)
+            weights.append(min(float(h.weight), 1.0))
             confidences.append(h.confidence)
             right.append(d_pos <= pos_tol_m and d_hdg <= heading_tol_deg)
-    every = np.ones(len(right), dtype=bool)
-    ok = np.asarray(right, dtype=bool)
-    return {
-        "hypothesis_weight": _value_bins(weights, every, ok),
-        "hypothesis_confidence": _value_bins(confidences, every, ok),
-    }
+    return HypothesisOutcomes(
+        np.asarray(frame, dtype=np.int64),
+        np.asarray(weights, dtype=np.float64),
+        confidences,
+        np.asarray(right, dtype=bool),
+    )
 
 
 def _nees(

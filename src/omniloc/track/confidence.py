@@ -51,6 +51,7 @@ __all__ = [
     "fit_confidence",
     "fit_table",
     "held_out_confidence",
+    "held_out_table",
 ]
 
 #: At most this many knots in a table (a fit merges neighbouring blocks beyond it).
@@ -126,11 +127,25 @@ def confidence_of(table: Knots | None, probability: float) -> float | None:
         x = float(probability)
     except (OverflowError, TypeError) as exc:
         raise InputError(f"probability must be a number, got {shorten(probability)}") from exc
-    if table is None or math.isnan(x):
-        return None
-    p = [k[0] for k in table]
-    c = [k[1] for k in table]
-    return float(min(max(np.interp(x, p, c), 0.0), 1.0))
+    return _interpolate(None if table is None else knot_arrays(table), np.array([x]))[0]
+
+
+def knot_arrays(table: Knots) -> tuple[np.ndarray, np.ndarray]:
+    """A table's knots as two arrays (probabilities, confidences), for reading many values
+    (:class:`~omniloc.track.Tracker` makes them once)."""
+    return np.array([k[0] for k in table]), np.array([k[1] for k in table])
+
+
+def _interpolate(
+    arrays: tuple[np.ndarray, np.ndarray] | None, values: np.ndarray
+) -> list[float | None]:
+    """What a table (its :func:`knot_arrays`) gives each of ``values``: linear between
+    knots, flat beyond them, within [0, 1]; None without a table or for a NaN. The one
+    reading of a table: :func:`confidence_of` and the tracker both call it."""
+    if arrays is None:
+        return [None] * values.size
+    out = np.clip(np.interp(values, arrays[0], arrays[1]), 0.0, 1.0).tolist()
+    return [None if math.isnan(v) else c for v, c in zip(values.tolist(), out, strict=True)]
 
 
 @dataclass(frozen=True)
@@ -342,17 +357,7 @@ def held_out_confidence(
         Fewer than two groups, or ``groups`` of another length.
     """
     st, p, ok = _frames(states, probabilities, right)
-    if groups is None or isinstance(groups, (str, bytes, dict)):
-        raise InputError(f"groups must hold one run label per frame, got {shorten(groups)}")
-    g = np.asarray(groups)
-    if g.ndim != 1 or g.size != st.size:
-        raise InputError(
-            f"groups must hold one run label per frame (1-D), got shape {g.shape} for "
-            f"{st.size} frames"
-        )
-    labels = list(dict.fromkeys(g.tolist()))
-    if len(labels) < 2:
-        raise InputError("groups: held_out_confidence needs frames of at least two runs")
+    g, labels = _groups(groups, st.size)
     out = np.full(st.size, np.nan)
     for label in labels:
         mine = g == label
@@ -363,4 +368,45 @@ def held_out_confidence(
         for i in np.flatnonzero(mine & (st != TrackState.LOST.value)).tolist():
             c = fit(st[i], float(p[i]))
             out[i] = np.nan if c is None else c
+    return out
+
+
+def _groups(groups: Any, n: int) -> tuple[np.ndarray, list[Any]]:
+    """Run labels checked: one per case (1-D), at least two runs; and the runs in order."""
+    if groups is None or isinstance(groups, (str, bytes, dict)):
+        raise InputError(f"groups must hold one run label per frame, got {shorten(groups)}")
+    g = np.asarray(groups)
+    if g.ndim != 1 or g.size != n:
+        raise InputError(
+            f"groups must hold one run label per frame (1-D), got shape {g.shape} for {n} frames"
+        )
+    labels = list(dict.fromkeys(g.tolist()))
+    if len(labels) < 2:
+        raise InputError("groups: a held-out fit needs frames of at least two runs")
+    return g, labels
+
+
+def held_out_table(values: ArrayLike, right: ArrayLike, groups: ArrayLike) -> np.ndarray:
+    """Each case's confidence from a table (:func:`fit_table`) fitted on the cases of the
+    other groups (runs, robots): e.g. every hypothesis's weight, held out by run.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        NaN where the other groups hold no case.
+
+    Raises
+    ------
+    InputError
+        As :func:`fit_table`, and fewer than two groups or ``groups`` of another length.
+    """
+    n = int(np.size(values)) if values is not None else 0
+    _, v, ok = _frames(["ambiguous"] * n, values, right)
+    g, labels = _groups(groups, v.size)
+    out = np.full(v.size, np.nan)
+    for label in labels:
+        mine = g == label
+        if (~mine).any():
+            arrays = knot_arrays(_isotonic_knots(v[~mine], ok[~mine]))
+            out[mine] = [np.nan if c is None else c for c in _interpolate(arrays, v[mine])]
     return out

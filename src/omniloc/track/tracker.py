@@ -86,7 +86,7 @@ from ..io import finite_number, shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from .confidence import confidence_table
+from .confidence import _interpolate, confidence_table, knot_arrays
 from .data import _float_array
 from .elsewhere import Elsewhere
 from .likelihood import FrameModel, Objects, frame_update_clutter, log_ratios_clutter
@@ -628,18 +628,6 @@ def _logsumexp(a: FloatArray) -> float:
     )
 
 
-def _confidences(
-    table: tuple[FloatArray, FloatArray] | None, values: FloatArray
-) -> list[float | None]:
-    """What a confidence table (its knots as two arrays) gives each of ``values``: what
-    :func:`~omniloc.track.confidence.confidence_of` gives one at a time (None without a
-    table, or for a NaN)."""
-    if table is None:
-        return [None] * values.size
-    out = np.clip(np.interp(values, table[0], table[1]), 0.0, 1.0).tolist()
-    return [None if math.isnan(v) else c for v, c in zip(values.tolist(), out, strict=True)]
-
-
 def within_tolerance(cov: FloatArray, tol_m: float, tol_heading: float) -> float:
     """A lower bound on the probability that a Gaussian pose error of covariance ``cov`` is
     within ``tol_m`` in position and ``tol_heading`` in heading: the position along its
@@ -787,7 +775,7 @@ class Tracker:
         self._best_place: tuple[int, FloatArray, FloatArray, float] | None = None
         # The confidence tables as arrays of knots, made once (each is read every frame).
         self._tables = {
-            name: None if t is None else (np.array([k[0] for k in t]), np.array([k[1] for k in t]))
+            name: None if t is None else knot_arrays(t)
             for name in ("confidence_localized", "confidence_ambiguous", "confidence_hypothesis")
             for t in (getattr(self.config, name),)
         }
@@ -1705,7 +1693,7 @@ class Tracker:
         rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
         w = np.minimum(np.exp(self._logw[order]), 1.0)
         weights = w.tolist()
-        h_conf = _confidences(self._tables["confidence_hypothesis"], w)
+        h_conf = _interpolate(self._tables["confidence_hypothesis"], w)
         hyps = tuple(
             Hypothesis(
                 Pose(*rows[j]),
@@ -1739,5 +1727,5 @@ class Tracker:
             reason=reason,
             kidnapped=kidnapped,
             probability=p,
-            confidence=None if p is None else _confidences(table, np.array([p]))[0],
+            confidence=None if p is None else _interpolate(table, np.array([p]))[0],
         )
