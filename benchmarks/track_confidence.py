@@ -13,7 +13,9 @@ the Vicon track: within 0.3 m and 5 degrees, or not (``frames_within_tolerance``
 * *held out*: for each robot, confidence tables are fitted (``fit_confidence``) on the
   other four robots' frames and applied to its own; the five robots' held-out confidences
   together are compared with what happened (expected calibration error over tenths of
-  [0, 1], and per state).
+  [0, 1], and per state). The ambiguous frames within ``RECENT_S`` seconds of a localized
+  one have a table of their own (``since_localized``); *held out, one table per state* is
+  the same without it (the tables before 2026-12-05 08:00), for comparison.
 * *the model's probability*: the tracker's own ``probability``, compared the same way.
 * *every hypothesis*: each reported hypothesis's weight, and its held-out confidence (the
   hypotheses' table fitted on the other robots, ``fit_table``), against whether the truth
@@ -47,6 +49,7 @@ from omniloc.evaluate.tracking import (  # noqa: E402
     tracker_factory,
 )
 from omniloc.track.confidence import (  # noqa: E402
+    RECENT_S,
     fit_confidence,
     held_out_confidence,
     held_out_table,
@@ -55,6 +58,7 @@ from omniloc.track.confidence import (  # noqa: E402
 NO_TABLES = {
     "confidence_localized": None,
     "confidence_ambiguous": None,
+    "confidence_recent": None,
     "confidence_hypothesis": None,
 }
 BINS = 10
@@ -64,7 +68,7 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
     """Every scored frame with a pose of every robot's whole run, per seed: robot, seed,
     state, the tracker's probability, and whether the pose was within tolerance."""
     streams = mrclam_streams(path)
-    robot, seed_of, state, prob, right = [], [], [], [], []
+    robot, seed_of, state, prob, right, since = [], [], [], [], [], []
     h_robot, h_weight, h_right = [], [], []
     for seed in seeds:
         make = tracker_factory("mrclam", {**NO_TABLES, "seed": seed})
@@ -84,6 +88,7 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
                 state.append(e.state.value)
                 prob.append(e.probability)
                 right.append(bool(r))
+                since.append(np.nan if e.since_localized is None else e.since_localized)
         print(f"seed {seed}: {len(prob)} frames with a pose so far", flush=True)
     return {
         "robot": np.asarray(robot),
@@ -91,6 +96,7 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
         "state": np.asarray(state),
         "probability": np.asarray(prob, dtype=np.float64),
         "right": np.asarray(right, dtype=bool),
+        "since": np.asarray(since, dtype=np.float64),
         "h_robot": np.asarray(h_robot),
         "h_weight": np.asarray(h_weight, dtype=np.float64),
         "h_right": np.asarray(h_right, dtype=bool),
@@ -136,18 +142,28 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=HERE / "results_track_confidence")
     args = ap.parse_args(argv)
     f = frames_of(args.path, args.seeds)
-    held = held_out_confidence(f["state"], f["probability"], f["right"], f["robot"])
+    held = held_out_confidence(
+        f["state"], f["probability"], f["right"], f["robot"], since_localized=f["since"]
+    )
+    held_by_state = held_out_confidence(f["state"], f["probability"], f["right"], f["robot"])
+    recent = (f["state"] == "ambiguous") & (f["since"] <= RECENT_S)
     out: dict[str, object] = {}
-    for label, values in (("model probability", f["probability"]), ("held out", held)):
+    for label, values in (
+        ("model probability", f["probability"]),
+        ("held out", held),
+        ("held out, one table per state", held_by_state),
+    ):
         entry = {"all": reliability(values, f["right"])}
         for state in ("localized", "ambiguous"):
             sel = f["state"] == state
             entry[state] = reliability(values[sel], f["right"][sel])
+        entry["recent"] = reliability(values[recent], f["right"][recent])
         out[label] = entry
         print(
             f"{label}: ECE {entry['all']['ece']:.3f} over {entry['all']['frames']} frames "
             f"(localized {entry['localized']['ece']:.3f}, ambiguous "
-            f"{entry['ambiguous']['ece']:.3f})"
+            f"{entry['ambiguous']['ece']:.3f}, of which within {RECENT_S:g} s of a localized "
+            f"frame {entry['recent']['ece']:.3f} over {entry['recent']['frames']})"
         )
     h_held = held_out_table(f["h_weight"], f["h_right"], f["h_robot"])
     for label, values in (
@@ -164,6 +180,7 @@ def main(argv: list[str] | None = None) -> int:
         f["state"],
         f["probability"],
         f["right"],
+        since_localized=f["since"],
         hypothesis_weights=f["h_weight"],
         hypothesis_right=f["h_right"],
     )
@@ -186,17 +203,21 @@ def main(argv: list[str] | None = None) -> int:
         f"{meta['date']}, {meta['machine']}; `{meta['command']}`; elsewhere's seeds "
         f"{', '.join(map(str, args.seeds))}. Frames with a pose of the five whole runs, the "
         "`mrclam` preset; right: within 0.3 m and 5 deg of the Vicon track. *Held out*: each "
-        "robot's frames mapped by the tables fitted on the four others.",
+        "robot's frames mapped by the tables fitted on the four others. *Recent*: the "
+        f"ambiguous frames within {RECENT_S:g} s of a localized one (a table of their own; "
+        "*one table per state*: without it).",
         "",
-        "| | frames | ECE, all | ECE, localized | ECE, ambiguous | from 0.1 up: frames, ECE |",
-        "|---|---|---|---|---|---|",
+        "| | frames | ECE, all | ECE, localized | ECE, ambiguous | of which recent | from 0.1 "
+        "up: frames, ECE |",
+        "|---|---|---|---|---|---|---|",
     ]
     for label, entry in out.items():
         e = entry  # type: ignore[assignment]
         per_state = (
-            f"{e['localized']['ece']:.3f} | {e['ambiguous']['ece']:.3f}"  # type: ignore[index]
+            f"{e['localized']['ece']:.3f} | {e['ambiguous']['ece']:.3f} | "  # type: ignore[index]
+            f"{e['recent']['ece']:.3f} ({e['recent']['frames']:,})"  # type: ignore[index]
             if "localized" in e
-            else "- | -"
+            else "- | - | -"
         )
         a = e["all"]  # type: ignore[index]
         lines.append(

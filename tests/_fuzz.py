@@ -1702,7 +1702,7 @@ def _tracker_targets() -> list[Target]:
     for f in dataclasses.fields(TrackerConfig):
         if f.name == "region":
             pool = regions
-        elif f.name.startswith("confidence_"):
+        elif f.name.startswith("confidence_") and f.name != "confidence_recent_s":
             pool = tables
         elif f.name in _INTS:
             pool = COUNTS
@@ -2089,11 +2089,15 @@ def _confidence_targets() -> list[Target]:
         "states": Arg(("states",), states),
         "probabilities": Arg(("probabilities", "frame"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
         "right": Arg(("right",), rights),
+        "since_localized": Arg(("since_localized",), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+        "recent_s": Arg(("recent_s",), NUMBERS),
     }
     base = lambda: {  # noqa: E731
         "states": ["localized", "ambiguous", "lost", "ambiguous"],
         "probabilities": [0.99, 0.4, float("nan"), 0.7],
         "right": [True, False, False, True],
+        "since_localized": [0.0, 3.0, None, 40.0],
+        "recent_s": 20.0,
     }
     return [
         Target("fit_confidence", lambda kw: C.fit_confidence(**kw), base, frames),

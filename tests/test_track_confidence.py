@@ -185,6 +185,10 @@ def test_an_estimate_refuses_a_probability_or_confidence_outside_0_1() -> None:
             with pytest.raises(InputError, match="confidence"):
                 Hypothesis(Pose(0, 0, 0), np.eye(3), 0.5, bad)  # type: ignore[arg-type]
     assert TrackEstimate(0.0, TrackState.LOST, probability=np.float32(0.5)).probability == 0.5
+    for bad in (-1.0, math.inf, math.nan, "3", True, [1.0], 10**400):
+        with pytest.raises(InputError, match="since_localized"):
+            TrackEstimate(0.0, TrackState.LOST, since_localized=bad)  # type: ignore[arg-type]
+    assert TrackEstimate(0.0, TrackState.LOST, since_localized=np.float32(2.5)).since_localized
 
 
 # ---- the tracker ----------------------------------------------------------------------------
@@ -273,6 +277,12 @@ def test_the_mrclam_preset_carries_tables_and_the_generic_one_does_not() -> None
     loc = confidence_of(mrclam.confidence_localized, 0.99)
     amb = confidence_of(mrclam.confidence_ambiguous, 0.99)
     assert loc is not None and amb is not None and loc > amb
+    # ... and an ambiguous frame soon after a localized one more often than another.
+    assert mrclam.confidence_recent is not None and generic.confidence_recent is None
+    for p in (0.5, 0.9, 0.99):
+        soon = confidence_of(mrclam.confidence_recent, p)
+        other = confidence_of(mrclam.confidence_ambiguous, p)
+        assert soon is not None and other is not None and soon > other + 0.2
     assert replace(mrclam, confidence_localized=None).confidence_localized is None
 
 
@@ -301,13 +311,17 @@ def test_fit_confidence_on_two_runs_writes_tables_that_track_reports(tmp_path, c
     assert main(["fit-confidence", *common, *runs, "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "localized:" in text and "own probability" in text
+    assert "ambiguous within 20 s of a localized frame:" in text
     assert "fitted on the other runs" in text  # two runs: a held-out figure
     tables = json.loads(out.read_text())
     assert set(tables) == {
         "confidence_localized",
         "confidence_ambiguous",
+        "confidence_recent",
+        "confidence_recent_s",
         "confidence_hypothesis",
     }
+    assert tables["confidence_recent_s"] == 20.0
     assert tables["confidence_localized"] is not None
     assert "every hypothesis's weight" in text and "each run's hypotheses" in text
     # The tables are settings of omniloc track: its JSON lines then carry a confidence.
@@ -362,8 +376,9 @@ def test_on_a_recording_the_confidence_is_calibrated_where_the_probability_is_no
     shared_data,  # type: ignore[no-untyped-def]
 ) -> None:
     # MRCLAM robot 1's whole run with the preset (its tables fitted on all five robots:
-    # in sample; benchmarks/track_confidence.py measures them held out by robot, 0.035 over
-    # 43,432 frames; one run's 800 frames in ten bins are noisier: measured 0.064).
+    # in sample; benchmarks/track_confidence.py measures them held out by robot, 0.025 over
+    # 43,432 frames; one run's 800 frames in ten bins are noisier: measured 0.079, and 0.064
+    # with one table for every ambiguous frame).
     from omniloc.evaluate.tracking import mrclam_streams
 
     (stream,) = mrclam_streams(shared_data / "mrclam-ds6", robots=(1,))
@@ -383,10 +398,17 @@ def test_on_a_recording_the_confidence_is_calibrated_where_the_probability_is_no
     assert tot["confidence_ece"] < 0.1
     # Every hypothesis (measured: weights 0.078, confidences 0.015 over 5,888).
     assert tot["hypothesis_confidence_ece"] < 0.5 * tot["hypothesis_weight_ece"]
-    # Every localized frame's confidence is what the table says of its probability.
+    # Every frame's confidence is what its table says of its probability.
+    recent = 0
     for e in res.estimates:
         if e.state is TrackState.LOCALIZED:
             assert e.confidence == confidence_of(config.confidence_localized, e.probability)
+        elif e.state is TrackState.AMBIGUOUS:
+            soon = e.since_localized is not None and e.since_localized <= config.confidence_recent_s
+            recent += soon
+            table = config.confidence_recent if soon else config.confidence_ambiguous
+            assert e.confidence == confidence_of(table, e.probability)
+    assert recent > 0
 
 
 @pytest.mark.parametrize(
@@ -529,3 +551,121 @@ def test_a_table_held_out_by_run() -> None:
         held_out_table(w, right, ["a"] * 6)
     with pytest.raises(InputError, match="one run label per frame"):
         held_out_table(w, right, ["a", "b"])
+
+
+# ---- ambiguous frames soon after a localized one ----------------------------------------------
+
+
+def test_a_fit_gives_the_frames_soon_after_a_localized_one_a_table_of_their_own() -> None:
+    # At the same probability, the ambiguous frames within recent_s of a localized frame
+    # are right, the others are not: one table each.
+    n = 200
+    p = np.full(n, 0.6)
+    since = [2.0] * 100 + [None] * 50 + [45.0] * 50
+    right = [True] * 100 + [False] * 100
+    fit = fit_confidence(["ambiguous"] * n, p, right, since_localized=since, recent_s=20.0)
+    assert fit.frames == {"localized": 0, "recent": 100, "ambiguous": 100}
+    assert fit.right == {"localized": 0, "recent": 100, "ambiguous": 0}
+    assert fit("ambiguous", 0.6, since_localized=2.0) > 0.99
+    assert fit("ambiguous", 0.6, since_localized=20.0) > 0.99  # (the span is inclusive)
+    assert fit("ambiguous", 0.6, since_localized=20.5) < 0.01
+    assert fit("ambiguous", 0.6) < 0.01  # never localized
+    assert fit("localized", 0.6, since_localized=0.0) is None  # no localized frame fitted
+    assert fit.settings()["confidence_recent"] == fit.recent
+    assert fit.settings()["confidence_recent_s"] == 20.0
+    # Without the times, one table for every ambiguous frame, as before.
+    plain = fit_confidence(["ambiguous"] * n, p, right)
+    assert plain.recent is None and plain.recent_s is None
+    assert "confidence_recent" not in plain.settings()
+    assert plain("ambiguous", 0.6, since_localized=2.0) == pytest.approx(100.5 / 201)
+
+
+def test_held_out_reads_the_recent_table_of_the_other_runs() -> None:
+    from omniloc.track.confidence import held_out_confidence
+
+    states = ["ambiguous"] * 8
+    p = [0.5] * 8
+    since = [1.0, None, 1.0, None, 1.0, None, 1.0, None]
+    right = [True, False, True, False, True, False, False, True]
+    runs = ["a", "a", "b", "b", "c", "c", "d", "d"]
+    out = held_out_confidence(states, p, right, runs, since_localized=since, recent_s=5.0)
+    # Run d's recent frame reads the other runs' recent table: three recent frames, all
+    # right (3.5 / 4), its other frame their other table (0.5 / 4).
+    assert out[6] == pytest.approx(3.5 / 4) and out[7] == pytest.approx(0.5 / 4)
+    # Without the times, one table: the other runs' six frames, three right.
+    one = held_out_confidence(states, p, right, runs)
+    assert one[6] == pytest.approx(3.5 / 7) == one[7]
+
+
+@pytest.mark.parametrize(
+    ("since", "recent_s", "message"),
+    [
+        ([1.0], 20.0, "one entry per frame"),
+        ([1.0, -2.0], 20.0, "frame 1"),
+        ([math.inf, 1.0], 20.0, "frame 0"),
+        (["soon", 1.0], 20.0, "since_localized"),
+        ([1.0, 2.0], -1.0, "recent_s"),
+        ([1.0, 2.0], math.nan, "recent_s"),
+        ([1.0, 2.0], "20", "recent_s"),
+        ([1.0, 2.0], True, "recent_s"),
+        ([1.0, 2.0], 10**400, "recent_s"),
+    ],
+)
+def test_bad_times_since_localized_are_refused_by_name(
+    since: list[object], recent_s: object, message: str
+) -> None:
+    with pytest.raises(InputError, match=message):
+        fit_confidence(
+            ["ambiguous", "ambiguous"],
+            [0.5, 0.5],
+            [True, False],
+            since_localized=since,  # type: ignore[arg-type]
+            recent_s=recent_s,  # type: ignore[arg-type]
+        )
+
+
+def test_the_tracker_reads_the_recent_table_within_its_span() -> None:
+    loc = ((0.5, 0.6), (0.999, 0.97))
+    amb = ((0.0, 0.01), (1.0, 0.02))
+    recent = ((0.0, 0.5), (1.0, 0.9))
+    from test_track_tracker import CONFIG, GRID, MOTION, SENSOR, _scenario
+
+    run, _ = _scenario()
+    for span in (1.0, 1e6):
+        config = replace(
+            CONFIG,
+            confidence_localized=loc,
+            confidence_ambiguous=amb,
+            confidence_recent=recent,
+            confidence_recent_s=span,
+        )
+        res = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=config)
+        read = {"recent": 0, "ambiguous": 0}
+        for e in res.estimates:
+            if e.state is not TrackState.AMBIGUOUS:
+                continue
+            assert e.probability is not None
+            soon = e.since_localized is not None and e.since_localized <= span
+            table = recent if soon else amb
+            assert e.confidence == confidence_of(table, e.probability)
+            read["recent" if soon else "ambiguous"] += 1
+        # (Both tables are read: ambiguous frames before the first localized one and after
+        # the kidnapping's flag, and some soon after a localized one.)
+        assert read["recent"] > 0 and read["ambiguous"] > 0, read
+
+
+def test_a_new_span_drops_the_recent_table_fitted_for_the_old_one(caplog) -> None:  # type: ignore[no-untyped-def]
+    import logging
+
+    sensor, motion, config = preset("mrclam")
+    assert config.confidence_recent is not None
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.presets"):
+        _, _, other = with_settings(sensor, motion, config, {"confidence_recent_s": 5.0})
+    assert other.confidence_recent is None and "confidence_recent_s changed" in caplog.text
+    assert other.confidence_ambiguous == config.confidence_ambiguous
+    _, _, given = with_settings(
+        sensor, motion, config, {"confidence_recent_s": 5.0, "confidence_recent": ((0.5, 0.5),)}
+    )
+    assert given.confidence_recent == ((0.5, 0.5),)
+    _, _, wider = with_settings(sensor, motion, config, {"tolerance_heading": 0.1})
+    assert wider.confidence_recent is None

@@ -123,6 +123,46 @@ def test_notices_the_kidnapping_and_recovers() -> None:
     assert back.any() and t[back][0] < jump + 10.0
 
 
+def test_since_localized_counts_from_the_last_localized_frame_and_a_flag_ends_it() -> None:
+    _, res = _scenario()
+    last: float | None = None
+    seen_after = seen_reset = False
+    for e in res.estimates:
+        if e.kidnapped:
+            last = None
+            seen_reset = True
+        if e.localized:
+            last = e.t
+        expected = None if last is None else e.t - last
+        if expected is None:
+            assert e.since_localized is None, e
+        else:
+            assert e.since_localized == pytest.approx(expected, abs=1e-9), e
+            seen_after |= expected > 0.0
+        assert e.as_dict()["since_localized"] == e.since_localized
+    # (The scenario has frames after a localized one that are not, and a flag.)
+    assert seen_after and seen_reset
+
+
+def test_an_odometry_gap_ends_since_localized() -> None:
+    run, _ = _scenario()
+    o = run.odometry
+    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    k = 0
+    for f in run.frames:
+        if f.t >= 20.0:
+            break
+        k1 = int(np.searchsorted(o.t, f.t, side="right"))
+        if k1 > k:
+            tr.odometry(o.t[k:k1], o.v[k:k1], o.w[k:k1])
+            k = k1
+        est = tr.frame(f.t, f.bearings)
+    assert est.localized and est.since_localized == 0.0
+    tr.odometry([est.t + 100.0], [0.0], [0.0])
+    after = tr.frame(est.t + 100.1, np.array([1.0]))
+    assert "odometry gap" in after.reason and after.since_localized is None
+
+
 class _Doubting(Tracker):
     """A tracker that calls every frame from ``doubt_from`` to the jump ``ambiguous`` (its
     hypotheses and their masses untouched): a place it stopped vouching for before the

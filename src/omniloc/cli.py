@@ -1241,9 +1241,11 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         # decision, and the fit reads the model's own probability.)
         "confidence_localized": None,
         "confidence_ambiguous": None,
+        "confidence_recent": None,
         "confidence_hypothesis": None,
     }
     sensor, motion, config = with_settings(sensor, motion, config, settings)
+    span = config.confidence_recent_s
     lm = LandmarkMap.load(args.map)
     runs = [
         (load_odometry(o), load_frames(f, degrees=args.degrees), load_groundtruth(g))
@@ -1252,6 +1254,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
     states: list[str] = []
     probs: list[float] = []
     right: list[bool] = []
+    since: list[float] = []
     group: list[int] = []
     h_weight: list[float] = []
     h_right: list[bool] = []
@@ -1275,6 +1278,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             states.append(e.state.value)
             probs.append(e.probability)
             right.append(bool(r))
+            since.append(np.nan if e.since_localized is None else e.since_localized)
             group.append(k)
     if not states:
         raise InputError("no frame with a pose and a ground truth: nothing to fit on")
@@ -1282,6 +1286,8 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         states,
         probs,
         right,
+        since_localized=since,
+        recent_s=span,
         hypothesis_weights=h_weight if h_weight else None,
         hypothesis_right=h_right if h_weight else None,
     )
@@ -1289,10 +1295,14 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         f"within {config.tolerance_m:g} m and {np.rad2deg(config.tolerance_heading):g} deg of "
         "the truth"
     )
-    for state in ("localized", "ambiguous"):
+    for name, what in (
+        ("localized", "localized"),
+        ("recent", f"ambiguous within {span:g} s of a localized frame"),
+        ("ambiguous", "ambiguous, other"),
+    ):
         print(
-            f"{state}: {fit.frames[state]} frames, {fit.right[state]} of them {tol}; table of "
-            f"{len(getattr(fit, state) or ())} knots"
+            f"{what}: {fit.frames[name]} frames, {fit.right[name]} of them {tol}; table of "
+            f"{len(getattr(fit, name) or ())} knots"
         )
     print(
         f"the tracker's own probability against the truth: expected calibration error "
@@ -1304,7 +1314,9 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             f"{calibration(h_weight, h_right).ece:.3f} over {len(h_weight)} hypotheses"
         )
     if n > 1:
-        held = held_out_confidence(states, probs, right, group)
+        held = held_out_confidence(
+            states, probs, right, group, since_localized=since, recent_s=span
+        )
         use = np.isfinite(held)
         print(
             f"tables fitted on the other runs, each run's frames: expected calibration error "

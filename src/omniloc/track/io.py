@@ -8,8 +8,8 @@ Only the frames whose state is in ``states`` are written (by default ``localized
 poses the tracker vouches for).
 
 JSON lines: one object per frame, :meth:`~omniloc.track.TrackEstimate.as_dict` (``t``,
-``state``, ``reason``, ``kidnapped`` and, unless lost, ``x``, ``y``, ``theta``,
-``covariance`` and ``hypotheses``).
+``state``, ``reason``, ``kidnapped``, ``since_localized`` and, unless lost, ``x``, ``y``,
+``theta``, ``covariance``, ``probability``, ``confidence`` and ``hypotheses``).
 
 Recordings: :func:`write_odometry`, :func:`write_frames` and :func:`write_groundtruth` write
 what :func:`~omniloc.track.load_odometry`, :func:`~omniloc.track.load_frames` and

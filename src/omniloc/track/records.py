@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..errors import InputError
+from ..io import shorten
 from ..pose import Pose
 
 __all__ = ["Hypothesis", "TrackEstimate", "TrackState"]
@@ -114,8 +115,14 @@ class TrackEstimate:
         The same probability as measured on recordings with a ground truth: ``probability``
         mapped, per state, by the calibration the localizer was given
         (:class:`~omniloc.track.TrackerConfig`'s ``confidence_localized`` and
-        ``confidence_ambiguous``, fitted by :func:`~omniloc.track.fit_confidence`). None
-        without one, or when lost.
+        ``confidence_ambiguous``, fitted by :func:`~omniloc.track.fit_confidence`; an
+        ambiguous frame soon after a localized one by ``confidence_recent``). None without
+        one, or when lost.
+    since_localized : float or None
+        Seconds since the localizer's last ``localized`` frame (0 when this one is). None
+        when it has not been localized since it started, or since it last flagged a
+        kidnapping or lost its motion to an odometry gap -- or from a localizer that does
+        not say.
     """
 
     t: float
@@ -127,12 +134,22 @@ class TrackEstimate:
     kidnapped: bool = False
     probability: float | None = None
     confidence: float | None = None
+    since_localized: float | None = None
 
     def __post_init__(self) -> None:
         if not math.isfinite(float(self.t)):
             raise InputError(f"t must be finite, got {self.t!r}")
         for name in ("probability", "confidence"):
             _check_share(name, getattr(self, name))
+        s = self.since_localized
+        if s is not None:
+            ok = isinstance(s, (int, float, np.integer, np.floating)) and not isinstance(s, bool)
+            try:
+                seconds = float(s) if ok else math.nan
+            except OverflowError:
+                seconds = math.inf
+            if not (math.isfinite(seconds) and seconds >= 0.0):
+                raise InputError(f"since_localized must be seconds >= 0 or None, got {shorten(s)}")
         object.__setattr__(self, "state", TrackState(self.state))
         if self.state is not TrackState.LOST and self.pose is None:
             raise InputError(f"a {self.state.value} estimate needs a pose")
@@ -143,15 +160,18 @@ class TrackEstimate:
         return self.state is TrackState.LOCALIZED
 
     def as_dict(self) -> dict[str, object]:
-        """Plain-JSON dictionary: ``t``, ``state``, ``reason``, ``kidnapped`` and, unless
-        lost, ``x``, ``y``, ``theta``, ``covariance`` (3x3 nested lists), ``probability``
-        and ``confidence`` (null when not given) and ``hypotheses`` (each ``x``, ``y``,
-        ``theta``, ``weight``, ``confidence``, ``covariance``)."""
+        """Plain-JSON dictionary: ``t``, ``state``, ``reason``, ``kidnapped``,
+        ``since_localized`` (null when not given) and, unless lost, ``x``, ``y``,
+        ``theta``, ``covariance`` (3x3 nested lists), ``probability`` and ``confidence``
+        (null when not given) and ``hypotheses`` (each ``x``, ``y``, ``theta``, ``weight``,
+        ``confidence``, ``covariance``)."""
+        since = self.since_localized
         out: dict[str, object] = {
             "t": float(self.t),
             "state": self.state.value,
             "reason": self.reason,
             "kidnapped": bool(self.kidnapped),
+            "since_localized": None if since is None else float(since),
         }
         if self.pose is not None:
             out.update(x=self.pose.x, y=self.pose.y, theta=self.pose.theta)

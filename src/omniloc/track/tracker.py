@@ -86,7 +86,7 @@ from ..io import finite_number, shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from .confidence import _interpolate, confidence_table, knot_arrays
+from .confidence import RECENT_S, _interpolate, confidence_table, knot_arrays
 from .data import _float_array
 from .elsewhere import Elsewhere
 from .likelihood import FrameModel, Objects, frame_update_clutter, log_ratios_clutter
@@ -133,6 +133,13 @@ _HALF_TURN_ANGLES = (
 )
 _SHARES = {"fit_explained", "core_share", "miss_weight", "kidnap_fit"}
 _BOOLS = {"core_update", "temper_update", "nonempty_frames"}
+#: The confidence tables (:mod:`omniloc.track.confidence`).
+_CONFIDENCE_TABLES = (
+    "confidence_localized",
+    "confidence_ambiguous",
+    "confidence_recent",
+    "confidence_hypothesis",
+)
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
 VALUE_MAX = 1e6
@@ -394,6 +401,15 @@ class TrackerConfig:
         reported, only the model's ``probability``. A table holds for the tolerances, and
         the rest of the configuration, it was fitted with: after a change, fit it again
         (:func:`~omniloc.track.with_settings` drops tables a new tolerance leaves behind).
+    confidence_recent : tuple of (float, float), or None
+        The table of the ``ambiguous`` frames at most ``confidence_recent_s`` seconds after
+        a ``localized`` one (:attr:`~omniloc.track.TrackEstimate.since_localized`): such a
+        frame is right more often than one of a tracker that has not been localized yet,
+        at the same probability (docs/tracking-notebook.md, "A confidence for the frames
+        after a localized one"). None (default): ``confidence_ambiguous`` reads them too.
+    confidence_recent_s : float
+        That span, seconds (the one the table was fitted with: :func:`~omniloc.track.
+        fit_confidence`'s ``recent_s``).
     seed : int
         Seed of elsewhere's particles (their uniform start, motion noise, resampling and
         injection): a run is the same for the same seed; other seeds show how much of a
@@ -461,12 +477,14 @@ class TrackerConfig:
     confidence_localized: tuple[tuple[float, float], ...] | None = None
     confidence_ambiguous: tuple[tuple[float, float], ...] | None = None
     confidence_hypothesis: tuple[tuple[float, float], ...] | None = None
+    confidence_recent: tuple[tuple[float, float], ...] | None = None
+    confidence_recent_s: float = RECENT_S
     seed: int = 0
 
     def __post_init__(self) -> None:
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name in ("confidence_localized", "confidence_ambiguous", "confidence_hypothesis"):
+            if f.name in _CONFIDENCE_TABLES:
                 object.__setattr__(self, f.name, confidence_table(f.name, v))
                 continue
             if f.name == "seed":
@@ -776,9 +794,12 @@ class Tracker:
         # The confidence tables as arrays of knots, made once (each is read every frame).
         self._tables = {
             name: None if t is None else knot_arrays(t)
-            for name in ("confidence_localized", "confidence_ambiguous", "confidence_hypothesis")
+            for name in _CONFIDENCE_TABLES
             for t in (getattr(self.config, name),)
         }
+        # The time of the last localized frame (None: none since the start, the last flag
+        # of a kidnapping or the last odometry gap): what since_localized reports.
+        self._localized_t: float | None = None
         # The first frame since the last localized one that was not localized (None while
         # localized): kidnap_watch_s runs from there.
         self._unvouched_t: float | None = None
@@ -1005,6 +1026,7 @@ class Tracker:
 
     def _drop_all(self) -> None:
         self._keep(np.zeros(0, dtype=np.int64))
+        self._localized_t = None
         self._mem_b = np.zeros(0)
         self._mem_w = np.zeros((0, 0))
         self._mem_t = -math.inf
@@ -1547,6 +1569,10 @@ class Tracker:
             self._localized_run = 0
             if self._unvouched_t is None:
                 self._unvouched_t = tf
+        if kidnapped:
+            self._localized_t = None
+        if state is TrackState.LOCALIZED:
+            self._localized_t = tf
         est = self._estimate(tf, state, reason, kidnapped, best)
         if self._localized_id is None:
             self._watch = None
@@ -1687,8 +1713,11 @@ class Tracker:
     def _estimate(
         self, t: float, state: TrackState, reason: str, kidnapped: bool, best: int | None
     ) -> TrackEstimate:
+        since = None if self._localized_t is None else max(t - self._localized_t, 0.0)
         if best is None or self.n_hypotheses == 0:
-            return TrackEstimate(t, TrackState.LOST, reason=reason, kidnapped=kidnapped)
+            return TrackEstimate(
+                t, TrackState.LOST, reason=reason, kidnapped=kidnapped, since_localized=since
+            )
         order = np.argsort(-self._logw, kind="stable")[: self.config.max_reported]
         rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
         w = np.minimum(np.exp(self._logw[order]), 1.0)
@@ -1706,18 +1735,28 @@ class Tracker:
         c = self.config
         cached, self._best_place = self._best_place, None
         if state is TrackState.LOST:
-            return TrackEstimate(t, state, reason=reason, kidnapped=kidnapped)
+            return TrackEstimate(
+                t, state, reason=reason, kidnapped=kidnapped, since_localized=since
+            )
         if cached is not None and cached[0] == best:
             _, mu, P, prob = cached
         else:
             mu, P, mass = self._place_estimate(best)
             prob = mass * within_tolerance(P, c.tolerance_m, c.tolerance_heading)
         # The model's probability that the pose is within tolerance (what _decide reads),
-        # and what the configuration's table says such frames turned out to be.
+        # and what the configuration's table says such frames turned out to be (an ambiguous
+        # frame soon after a localized one: the recent table, when there is one).
         p = min(max(prob, 0.0), 1.0) if math.isfinite(prob) else None
-        table = self._tables[
-            "confidence_localized" if state is TrackState.LOCALIZED else "confidence_ambiguous"
-        ]
+        if state is TrackState.LOCALIZED:
+            table = self._tables["confidence_localized"]
+        elif (
+            self._tables["confidence_recent"] is not None
+            and since is not None
+            and since <= c.confidence_recent_s
+        ):
+            table = self._tables["confidence_recent"]
+        else:
+            table = self._tables["confidence_ambiguous"]
         return TrackEstimate(
             t,
             state,
@@ -1728,4 +1767,5 @@ class Tracker:
             kidnapped=kidnapped,
             probability=p,
             confidence=None if p is None else _interpolate(table, np.array([p]))[0],
+            since_localized=since,
         )
