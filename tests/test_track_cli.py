@@ -395,3 +395,27 @@ def test_track_on_mrclam_with_its_ground_truth_says_what_the_data_allow(
     out = capsys.readouterr().out
     assert "against the ground truth" in out or "frames over" in out
     assert "what the data allow" not in out
+
+
+def test_the_last_line_says_when_the_tracker_was_last_localized() -> None:
+    from omniloc import Pose
+    from omniloc.cli import _last_frame_line
+    from omniloc.track import TrackEstimate, TrackState
+
+    pose = Pose(1.0, 2.0, 0.5)
+    amb = TrackEstimate(
+        9.0, TrackState.AMBIGUOUS, pose, reason="two places", confidence=0.25, since_localized=3.25
+    )
+    assert _last_frame_line(amb) == (
+        "last frame: ambiguous: x = 1.000 m, y = 2.000 m, theta = 28.65 deg, last localized "
+        "3.2 s before, confidence 0.2500 (two places)"
+    )
+    lost = TrackEstimate(9.0, TrackState.LOST, reason="nothing fits", since_localized=12.0)
+    assert _last_frame_line(lost) == (
+        "last frame: lost: no pose, last localized 12.0 s before (nothing fits)"
+    )
+    never = TrackEstimate(9.0, TrackState.LOST, reason="waking up")
+    assert _last_frame_line(never) == "last frame: lost: no pose (waking up)"
+    # Localized now: no "last localized".
+    loc = TrackEstimate(9.0, TrackState.LOCALIZED, pose, reason="r", since_localized=0.0)
+    assert "last localized" not in _last_frame_line(loc)

@@ -1022,15 +1022,22 @@ def _cmd_track(args: argparse.Namespace) -> int:
         said = _what_the_data_allow(lm, odo, frames, truth, sensor, motion, config, est[0].t)
         if said:
             print(said)
-    last = est[-1]
+    print(_last_frame_line(est[-1]))
+    return 0
+
+
+def _last_frame_line(last: Any) -> str:
+    """The summary's last line: the last estimate's state, pose, when it was last localized
+    (if it is not now) and confidence, and its reason."""
     where = "no pose"
     if last.pose is not None:
         p = last.pose
         where = f"x = {p.x:.3f} m, y = {p.y:.3f} m, theta = {np.rad2deg(p.theta):.2f} deg"
-        if last.confidence is not None:
-            where += f", confidence {last.confidence:.4f}"
-    print(f"last frame: {last.state.value}: {where} ({last.reason})")
-    return 0
+    if not last.localized and last.since_localized is not None:
+        where += f", last localized {last.since_localized:.1f} s before"
+    if last.confidence is not None:
+        where += f", confidence {last.confidence:.4f}"
+    return f"last frame: {last.state.value}: {where} ({last.reason})"
 
 
 def _frames_for_track(args: argparse.Namespace, lm: Any, with_truth: bool) -> list[Any]:
