@@ -571,6 +571,9 @@ def test_a_fit_gives_the_frames_soon_after_a_localized_one_a_table_of_their_own(
     assert fit("ambiguous", 0.6, since_localized=20.5) < 0.01
     assert fit("ambiguous", 0.6) < 0.01  # never localized
     assert fit("localized", 0.6, since_localized=0.0) is None  # no localized frame fitted
+    assert fit("ambiguous", 0.6, since_localized=math.nan) < 0.01  # (NaN: never)
+    with pytest.raises(InputError, match="since_localized"):
+        fit("ambiguous", 0.6, since_localized="soon")  # type: ignore[arg-type]
     assert fit.settings()["confidence_recent"] == fit.recent
     assert fit.settings()["confidence_recent_s"] == 20.0
     # Without the times, one table for every ambiguous frame, as before.

@@ -221,6 +221,12 @@ class ConfidenceFit:
         ``since_localized`` seconds after the last localized frame (None: none since the
         tracker started or was flagged kidnapped)."""
         s = TrackState(state)
+        if since_localized is not None:
+            real = (int, float, np.integer, np.floating)
+            if isinstance(since_localized, bool) or not isinstance(since_localized, real):
+                raise InputError(
+                    f"since_localized must be None or seconds, got {shorten(since_localized)}"
+                )
         if s is TrackState.LOST:
             return None
         return confidence_of(self._table(s, since_localized), probability)
