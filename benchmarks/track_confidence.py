@@ -18,8 +18,10 @@ the Vicon track: within 0.3 m and 5 degrees, or not (``frames_within_tolerance``
   the same without it (the tables before 2026-12-05 08:00), for comparison.
 * *the model's probability*: the tracker's own ``probability``, compared the same way.
 * *every hypothesis*: each reported hypothesis's weight, and its held-out confidence (the
-  hypotheses' table fitted on the other robots, ``fit_table``), against whether the truth
-  is within tolerance of its pose.
+  hypotheses' tables fitted on the other robots, ``held_out_table``: one for the frames
+  within ``RECENT_S`` of a localized one, localized frames included, one for the others;
+  *one table*: without that split, as before 2026-12-05 08:40), against whether the
+  truth is within tolerance of its pose.
 * *the preset's tables*: fitted on all five robots (and every seed given), printed as the
   ``mrclam`` preset holds them -- those are in-sample on these runs; the held-out figures
   are what to expect of them on a run they were not fitted on.
@@ -60,6 +62,7 @@ NO_TABLES = {
     "confidence_ambiguous": None,
     "confidence_recent": None,
     "confidence_hypothesis": None,
+    "confidence_hypothesis_recent": None,
 }
 BINS = 10
 
@@ -69,7 +72,7 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
     state, the tracker's probability, and whether the pose was within tolerance."""
     streams = mrclam_streams(path)
     robot, seed_of, state, prob, right, since = [], [], [], [], [], []
-    h_robot, h_weight, h_right = [], [], []
+    h_robot, h_weight, h_right, h_since = [], [], [], []
     for seed in seeds:
         make = tracker_factory("mrclam", {**NO_TABLES, "seed": seed})
         _, estimates = evaluate_tracking(streams, make, name=f"seed {seed}", progress=False)
@@ -80,6 +83,10 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
             h_robot += [k + 1] * hyps.right.size
             h_weight += hyps.weights.tolist()
             h_right += hyps.right.tolist()
+            h_since += [
+                np.nan if est[i].since_localized is None else est[i].since_localized
+                for i in hyps.frame.tolist()
+            ]
             for e, sc, r in zip(est, scored, ok, strict=True):
                 if not sc or e.probability is None:
                     continue
@@ -100,6 +107,7 @@ def frames_of(path: Path, seeds: list[int]) -> dict[str, np.ndarray]:
         "h_robot": np.asarray(h_robot),
         "h_weight": np.asarray(h_weight, dtype=np.float64),
         "h_right": np.asarray(h_right, dtype=bool),
+        "h_since": np.asarray(h_since, dtype=np.float64),
     }
 
 
@@ -165,10 +173,14 @@ def main(argv: list[str] | None = None) -> int:
             f"{entry['ambiguous']['ece']:.3f}, of which within {RECENT_S:g} s of a localized "
             f"frame {entry['recent']['ece']:.3f} over {entry['recent']['frames']})"
         )
-    h_held = held_out_table(f["h_weight"], f["h_right"], f["h_robot"])
+    h_held = held_out_table(
+        f["h_weight"], f["h_right"], f["h_robot"], contexts=f["h_since"] <= RECENT_S
+    )
+    h_held_one = held_out_table(f["h_weight"], f["h_right"], f["h_robot"])
     for label, values in (
         ("hypotheses' weights", f["h_weight"]),
         ("hypotheses, held out", h_held),
+        ("hypotheses, held out, one table", h_held_one),
     ):
         out[label] = {"all": reliability(values, f["h_right"])}
         a = out[label]["all"]  # type: ignore[index]
@@ -183,6 +195,7 @@ def main(argv: list[str] | None = None) -> int:
         since_localized=f["since"],
         hypothesis_weights=f["h_weight"],
         hypothesis_right=f["h_right"],
+        hypothesis_since_localized=f["h_since"],
     )
     print("tables fitted on every robot (the preset's):")
     for name, table in full.settings().items():

@@ -2100,7 +2100,25 @@ def _confidence_targets() -> list[Target]:
         "recent_s": 20.0,
     }
     return [
-        Target("fit_confidence", lambda kw: C.fit_confidence(**kw), base, frames),
+        Target(
+            "fit_confidence",
+            lambda kw: C.fit_confidence(**kw),
+            lambda: {
+                **base(),
+                "hypothesis_weights": [0.9, 0.2],
+                "hypothesis_right": [True, False],
+                "hypothesis_since_localized": [0.0, 50.0],
+            },
+            {
+                **frames,
+                "hypothesis_weights": Arg(
+                    ("hypothesis_weights",), merged(ARRAYS_OF_NUMBERS, NUMBERS)
+                ),
+                "hypothesis_since_localized": Arg(
+                    ("hypothesis_since_localized",), merged(ARRAYS_OF_NUMBERS, NUMBERS)
+                ),
+            },
+        ),
         Target(
             "held_out_confidence",
             lambda kw: C.held_out_confidence(**kw),
@@ -2131,6 +2149,7 @@ def _confidence_targets() -> list[Target]:
             {
                 "values": Arg(("values", "probabilities"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
                 "groups": Arg(("groups", "two runs"), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
+                "contexts": Arg(("contexts",), merged(ARRAYS_OF_NUMBERS, NUMBERS)),
             },
             check=lambda kw, v: None,  # (NaN: no case in the other runs)
         ),

@@ -270,8 +270,11 @@ def test_the_mrclam_preset_carries_tables_and_the_generic_one_does_not() -> None
     assert mrclam.confidence_hypothesis is not None
     assert generic.confidence_localized is None and generic.confidence_ambiguous is None
     assert generic.confidence_hypothesis is None
-    # A hypothesis of weight 0.98 is right less than half the time (the table: 0.44).
-    assert 0.3 < confidence_of(mrclam.confidence_hypothesis, 0.98) < 0.6  # type: ignore[operator]
+    # A hypothesis of weight 0.98 of a tracker still searching is right less than half the
+    # time (the table: 0.30); soon after a localized frame, most of the time (0.91).
+    assert 0.2 < confidence_of(mrclam.confidence_hypothesis, 0.98) < 0.5  # type: ignore[operator]
+    assert confidence_of(mrclam.confidence_hypothesis_recent, 0.98) > 0.8  # type: ignore[operator]
+    assert generic.confidence_hypothesis_recent is None
     # A localized frame is right far more often than an ambiguous one at the same
     # probability (measured: benchmarks/results_track_confidence.md).
     loc = confidence_of(mrclam.confidence_localized, 0.99)
@@ -320,6 +323,7 @@ def test_fit_confidence_on_two_runs_writes_tables_that_track_reports(tmp_path, c
         "confidence_recent",
         "confidence_recent_s",
         "confidence_hypothesis",
+        "confidence_hypothesis_recent",
     }
     assert tables["confidence_recent_s"] == 20.0
     assert tables["confidence_localized"] is not None
@@ -603,9 +607,9 @@ def test_held_out_reads_the_recent_table_of_the_other_runs() -> None:
 @pytest.mark.parametrize(
     ("since", "recent_s", "message"),
     [
-        ([1.0], 20.0, "one entry per frame"),
-        ([1.0, -2.0], 20.0, "frame 1"),
-        ([math.inf, 1.0], 20.0, "frame 0"),
+        ([1.0], 20.0, "one entry per case"),
+        ([1.0, -2.0], 20.0, "entry 1"),
+        ([math.inf, 1.0], 20.0, "entry 0"),
         (["soon", 1.0], 20.0, "since_localized"),
         ([1.0, 2.0], -1.0, "recent_s"),
         ([1.0, 2.0], math.nan, "recent_s"),
@@ -631,6 +635,8 @@ def test_the_tracker_reads_the_recent_table_within_its_span() -> None:
     loc = ((0.5, 0.6), (0.999, 0.97))
     amb = ((0.0, 0.01), (1.0, 0.02))
     recent = ((0.0, 0.5), (1.0, 0.9))
+    hyp = ((0.0, 0.0), (1.0, 0.1))
+    hyp_recent = ((0.0, 0.3), (1.0, 0.95))
     from test_track_tracker import CONFIG, GRID, MOTION, SENSOR, _scenario
 
     run, _ = _scenario()
@@ -641,14 +647,19 @@ def test_the_tracker_reads_the_recent_table_within_its_span() -> None:
             confidence_ambiguous=amb,
             confidence_recent=recent,
             confidence_recent_s=span,
+            confidence_hypothesis=hyp,
+            confidence_hypothesis_recent=hyp_recent,
         )
         res = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=config)
         read = {"recent": 0, "ambiguous": 0}
         for e in res.estimates:
+            soon = e.since_localized is not None and e.since_localized <= span
+            # Every hypothesis, localized frames' too, by the table of its frame's time.
+            for h in e.hypotheses:
+                assert h.confidence == confidence_of(hyp_recent if soon else hyp, h.weight)
             if e.state is not TrackState.AMBIGUOUS:
                 continue
             assert e.probability is not None
-            soon = e.since_localized is not None and e.since_localized <= span
             table = recent if soon else amb
             assert e.confidence == confidence_of(table, e.probability)
             read["recent" if soon else "ambiguous"] += 1
@@ -662,6 +673,7 @@ def test_a_new_span_drops_the_recent_table_fitted_for_the_old_one(caplog) -> Non
 
     sensor, motion, config = preset("mrclam")
     assert config.confidence_recent is not None
+    assert config.confidence_hypothesis_recent is not None
     with caplog.at_level(logging.WARNING, logger="omniloc.track.presets"):
         _, _, other = with_settings(sensor, motion, config, {"confidence_recent_s": 5.0})
     assert other.confidence_recent is None and "confidence_recent_s changed" in caplog.text
@@ -670,5 +682,53 @@ def test_a_new_span_drops_the_recent_table_fitted_for_the_old_one(caplog) -> Non
         sensor, motion, config, {"confidence_recent_s": 5.0, "confidence_recent": ((0.5, 0.5),)}
     )
     assert given.confidence_recent == ((0.5, 0.5),)
+    assert other.confidence_hypothesis_recent is None
+    assert other.confidence_hypothesis == config.confidence_hypothesis
     _, _, wider = with_settings(sensor, motion, config, {"tolerance_heading": 0.1})
-    assert wider.confidence_recent is None
+    assert wider.confidence_recent is None and wider.confidence_hypothesis_recent is None
+
+
+def test_the_hypotheses_of_frames_soon_after_a_localized_one_have_a_table_of_their_own() -> None:
+    from omniloc.track.confidence import held_out_table
+
+    w = [0.9] * 6
+    right = [True, True, True, False, False, False]
+    since = [0.0, 5.0, 20.0, None, 30.0, math.nan]
+    fit = fit_confidence(
+        ["localized"],
+        [0.99],
+        [True],
+        hypothesis_weights=w,
+        hypothesis_right=right,
+        hypothesis_since_localized=since,
+    )
+    assert fit.frames["hypothesis_recent"] == 3 and fit.right["hypothesis_recent"] == 3
+    assert fit.frames["hypothesis"] == 3 and fit.right["hypothesis"] == 0
+    assert confidence_of(fit.hypothesis_recent, 0.9) == pytest.approx(3.5 / 4)
+    assert confidence_of(fit.hypothesis, 0.9) == pytest.approx(0.5 / 4)
+    assert fit.settings()["confidence_hypothesis_recent"] == fit.hypothesis_recent
+    assert fit.settings()["confidence_recent_s"] == 20.0
+    # Without the times: one table, as before.
+    one = fit_confidence(
+        ["localized"], [0.99], [True], hypothesis_weights=w, hypothesis_right=right
+    )
+    assert one.hypothesis_recent is None and "confidence_hypothesis_recent" not in one.settings()
+    assert confidence_of(one.hypothesis, 0.9) == pytest.approx(3.5 / 7)
+    for bad, message in (
+        ({"hypothesis_since_localized": [1.0]}, "hypothesis_since_localized"),
+        ({"hypothesis_since_localized": [-1.0] * 6}, "hypothesis_since_localized"),
+        ({"hypothesis_right": [True] * 5}, "hypothesis_weights and hypothesis_right"),
+    ):
+        kw = {"hypothesis_weights": w, "hypothesis_right": right, **bad}
+        with pytest.raises(InputError, match=message):
+            fit_confidence(["localized"], [0.99], [True], **kw)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="needs hypothesis_weights"):
+        fit_confidence(["localized"], [0.99], [True], hypothesis_since_localized=[1.0])
+    # Held out by run, a table per context.
+    runs = ["a", "b", "a", "b", "a", "b"]
+    soon = [True, True, True, False, False, False]
+    out = held_out_table(w, right, runs, contexts=soon)
+    # Run a's recent case 0 reads run b's recent cases (one, right): 1.5 / 2.
+    assert out[0] == pytest.approx(1.5 / 2) and out[4] == pytest.approx(0.5 / 3)
+    with pytest.raises(InputError, match="contexts"):
+        held_out_table(w, right, runs, contexts=[True])

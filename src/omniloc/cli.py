@@ -1219,6 +1219,11 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
     return 0
 
 
+def _since_or_nan(estimate: Any) -> float:
+    """An estimate's ``since_localized``, NaN for None (never localized)."""
+    return np.nan if estimate.since_localized is None else float(estimate.since_localized)
+
+
 def _cmd_fit_confidence(args: argparse.Namespace) -> int:
     from .evaluate.common import calibration
     from .evaluate.tracking import errors_against, hypothesis_outcomes
@@ -1266,6 +1271,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
     h_weight: list[float] = []
     h_right: list[bool] = []
     h_group: list[int] = []
+    h_since: list[float] = []
     tol_hdg = float(np.rad2deg(config.tolerance_heading))
     for k, (odo, frames, truth) in enumerate(runs):
         if not frames:
@@ -1279,13 +1285,14 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         h_weight += hyps.weights.tolist()
         h_right += hyps.right.tolist()
         h_group += [k] * hyps.right.size
+        h_since += [_since_or_nan(est[i]) for i in hyps.frame.tolist()]
         for e, r, d in zip(est, ok, d_pos, strict=True):
             if e.probability is None or not np.isfinite(d):
                 continue  # (lost, or no truth at that time)
             states.append(e.state.value)
             probs.append(e.probability)
             right.append(bool(r))
-            since.append(np.nan if e.since_localized is None else e.since_localized)
+            since.append(_since_or_nan(e))
             group.append(k)
     if not states:
         raise InputError("no frame with a pose and a ground truth: nothing to fit on")
@@ -1297,6 +1304,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         recent_s=span,
         hypothesis_weights=h_weight if h_weight else None,
         hypothesis_right=h_right if h_weight else None,
+        hypothesis_since_localized=h_since if h_weight else None,
     )
     tol = (
         f"within {config.tolerance_m:g} m and {np.rad2deg(config.tolerance_heading):g} deg of "
@@ -1318,7 +1326,9 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
     if h_weight:
         print(
             f"every hypothesis's weight against the truth: expected calibration error "
-            f"{calibration(h_weight, h_right).ece:.3f} over {len(h_weight)} hypotheses"
+            f"{calibration(h_weight, h_right).ece:.3f} over {len(h_weight)} hypotheses "
+            f"({fit.frames['hypothesis_recent']} of them in frames within {span:g} s of a "
+            "localized one: a table of their own)"
         )
     if n > 1:
         held = held_out_confidence(
@@ -1331,7 +1341,9 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             f"{int(use.sum())} frames (what to expect on a run not fitted on)"
         )
         if h_weight and len(set(h_group)) > 1:
-            h_held = held_out_table(h_weight, h_right, h_group)
+            h_held = held_out_table(
+                h_weight, h_right, h_group, contexts=np.asarray(h_since) <= span
+            )
             use = np.isfinite(h_held)
             print(
                 f"  and each run's hypotheses: expected calibration error "

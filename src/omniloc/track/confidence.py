@@ -189,6 +189,10 @@ class ConfidenceFit:
         one (None: not fitted -- no ``since_localized`` given -- or no such frame).
     recent_s : float or None
         Its span, seconds (None when ``since_localized`` was not given).
+    hypothesis_recent : tuple of (weight, confidence), or None
+        The table of the hypotheses of the frames at most ``recent_s`` seconds after a
+        localized one (localized frames included; then ``hypothesis`` is fitted on the
+        others). None: not fitted (no ``hypothesis_since_localized``) or no such hypothesis.
     """
 
     localized: Knots | None
@@ -198,11 +202,13 @@ class ConfidenceFit:
     hypothesis: Knots | None = None
     recent: Knots | None = None
     recent_s: float | None = None
+    hypothesis_recent: Knots | None = None
 
     def settings(self) -> dict[str, Any]:
         """The tables as tracker settings (``with_settings``, ``--config``):
         ``confidence_localized``, ``confidence_ambiguous`` and, when fitted,
-        ``confidence_recent`` with ``confidence_recent_s`` and ``confidence_hypothesis``."""
+        ``confidence_recent`` with ``confidence_recent_s``, ``confidence_hypothesis`` and
+        ``confidence_hypothesis_recent``."""
         out: dict[str, Any] = {
             "confidence_localized": self.localized,
             "confidence_ambiguous": self.ambiguous,
@@ -212,6 +218,9 @@ class ConfidenceFit:
             out["confidence_recent_s"] = self.recent_s
         if self.hypothesis is not None:
             out["confidence_hypothesis"] = self.hypothesis
+        if self.hypothesis_recent is not None:
+            out["confidence_hypothesis_recent"] = self.hypothesis_recent
+            out.setdefault("confidence_recent_s", self.recent_s)
         return out
 
     def __call__(
@@ -322,15 +331,8 @@ def fit_table(values: ArrayLike, right: ArrayLike) -> Knots:
     return _isotonic_knots(v, ok)
 
 
-def _contexts(
-    kind: np.ndarray, since_localized: Any, recent_s: Any, n: int
-) -> tuple[np.ndarray, float | None, np.ndarray | None]:
-    """Each frame's table (:data:`CONTEXTS`; ``"lost"`` for a lost frame): its state, and
-    for an ambiguous frame ``"recent"`` when it came at most ``recent_s`` seconds after a
-    localized one; the span; and the times since localized checked (NaN: never). Without
-    ``since_localized``, no frame is ``recent`` (and the span and times are None)."""
-    if since_localized is None:
-        return kind.copy(), None, None
+def _span(recent_s: Any) -> float:
+    """``recent_s`` checked: finite seconds >= 0."""
     real = (int, float, np.integer, np.floating)
     if isinstance(recent_s, bool) or not isinstance(recent_s, real):
         raise InputError(f"recent_s must be a number of seconds, got {shorten(recent_s)}")
@@ -340,18 +342,37 @@ def _contexts(
         raise InputError(f"recent_s must be a number of seconds, got {shorten(recent_s)}") from exc
     if not (math.isfinite(span) and span >= 0.0):
         raise InputError(f"recent_s must be finite and >= 0 seconds, got {shorten(recent_s)}")
-    since = real_array(since_localized, "since_localized", InputError)
+    return span
+
+
+def _since(values: Any, n: int, name: str) -> np.ndarray:
+    """Times since localized checked: one per case (1-D), seconds >= 0 or NaN (never)."""
+    since = real_array(values, name, InputError)
     if since.ndim != 1 or since.size != n:
         raise InputError(
-            f"since_localized must hold one entry per frame (1-D; None or NaN: never "
-            f"localized), got shape {since.shape} for {n} frames"
+            f"{name} must hold one entry per case (1-D; None or NaN: never localized), got "
+            f"shape {since.shape} for {n}"
         )
     if (since < 0.0).any() or np.isposinf(since).any():
         i = int(np.flatnonzero((since < 0.0) | np.isposinf(since))[0])
         raise InputError(
-            f"since_localized must be seconds >= 0 (None or NaN: never localized): frame {i} "
-            f"has {since[i]!r}"
+            f"{name} must be seconds >= 0 (None or NaN: never localized): entry {i} has "
+            f"{since[i]!r}"
         )
+    return since
+
+
+def _contexts(
+    kind: np.ndarray, since_localized: Any, recent_s: Any, n: int
+) -> tuple[np.ndarray, float | None, np.ndarray | None]:
+    """Each frame's table (:data:`CONTEXTS`; ``"lost"`` for a lost frame): its state, and
+    for an ambiguous frame ``"recent"`` when it came at most ``recent_s`` seconds after a
+    localized one; the span; and the times since localized checked (NaN: never). Without
+    ``since_localized``, no frame is ``recent`` (and the span and times are None)."""
+    if since_localized is None:
+        return kind.copy(), None, None
+    span = _span(recent_s)
+    since = _since(since_localized, n, "since_localized")
     ctx = kind.copy()
     with np.errstate(invalid="ignore"):
         ctx[(kind == TrackState.AMBIGUOUS.value) & (since <= span)] = "recent"
@@ -367,6 +388,7 @@ def fit_confidence(
     recent_s: float = RECENT_S,
     hypothesis_weights: ArrayLike | None = None,
     hypothesis_right: ArrayLike | None = None,
+    hypothesis_since_localized: ArrayLike | None = None,
 ) -> ConfidenceFit:
     """Fit confidence tables on frames scored against a ground truth.
 
@@ -389,6 +411,10 @@ def fit_confidence(
     hypothesis_weights, hypothesis_right : array_like, optional
         Every reported hypothesis's weight, and whether its pose was within tolerance:
         the hypotheses' table (:func:`fit_table`), given together.
+    hypothesis_since_localized : array_like of float, optional
+        Each hypothesis's frame's ``since_localized``: with it, the hypotheses of the frames
+        at most ``recent_s`` seconds after a localized one (localized frames included) get
+        a table of their own (``hypothesis_recent``).
 
     Returns
     -------
@@ -425,13 +451,31 @@ def fit_confidence(
         rights[name] = int(ok[sel].sum())
         tables[name] = _isotonic_knots(p[sel], ok[sel]) if sel.any() else None
     hyp: Knots | None = None
+    hyp_recent: Knots | None = None
     if (hypothesis_weights is None) != (hypothesis_right is None):
         raise InputError("hypothesis_weights and hypothesis_right go together: give both")
+    if hypothesis_since_localized is not None and hypothesis_weights is None:
+        raise InputError("hypothesis_since_localized needs hypothesis_weights and _right")
     if hypothesis_weights is not None and hypothesis_right is not None:
-        hyp = fit_table(hypothesis_weights, hypothesis_right)
-        hr = np.asarray(hypothesis_right).astype(bool)
-        frames["hypothesis"] = int(hr.size)
-        rights["hypothesis"] = int(hr.sum())
+        n = int(np.size(hypothesis_weights))
+        if n == 0:
+            raise InputError("hypothesis_weights: no hypothesis to fit on")
+        try:
+            _, hw, hr = _frames(["ambiguous"] * n, hypothesis_weights, hypothesis_right)
+        except InputError as exc:
+            raise InputError(f"hypothesis_weights and hypothesis_right: {exc}") from exc
+        soon = np.zeros(n, dtype=bool)
+        if hypothesis_since_localized is not None:
+            span = _span(recent_s) if span is None else span
+            hs = _since(hypothesis_since_localized, n, "hypothesis_since_localized")
+            with np.errstate(invalid="ignore"):
+                soon = hs <= span
+            frames["hypothesis_recent"] = int(soon.sum())
+            rights["hypothesis_recent"] = int(hr[soon].sum())
+            hyp_recent = _isotonic_knots(hw[soon], hr[soon]) if soon.any() else None
+        frames["hypothesis"] = int((~soon).sum())
+        rights["hypothesis"] = int(hr[~soon].sum())
+        hyp = _isotonic_knots(hw[~soon], hr[~soon]) if (~soon).any() else None
     return ConfidenceFit(
         tables["localized"],
         tables["ambiguous"],
@@ -440,6 +484,7 @@ def fit_confidence(
         hyp,
         tables.get("recent"),
         span,
+        hyp_recent,
     )
 
 
@@ -510,27 +555,47 @@ def _groups(groups: Any, n: int) -> tuple[np.ndarray, list[Any]]:
     return g, labels
 
 
-def held_out_table(values: ArrayLike, right: ArrayLike, groups: ArrayLike) -> np.ndarray:
+def held_out_table(
+    values: ArrayLike, right: ArrayLike, groups: ArrayLike, *, contexts: ArrayLike | None = None
+) -> np.ndarray:
     """Each case's confidence from a table (:func:`fit_table`) fitted on the cases of the
     other groups (runs, robots): e.g. every hypothesis's weight, held out by run.
+
+    ``contexts`` (one label per case, optional): one table per label, each case read by its
+    own label's (e.g. whether its frame came soon after a localized one).
 
     Returns
     -------
     ndarray, shape (n,)
-        NaN where the other groups hold no case.
+        NaN where the other groups hold no case (of its context).
 
     Raises
     ------
     InputError
-        As :func:`fit_table`, and fewer than two groups or ``groups`` of another length.
+        As :func:`fit_table`, and fewer than two groups, or ``groups`` or ``contexts`` of
+        another length.
     """
     n = int(np.size(values)) if values is not None else 0
     _, v, ok = _frames(["ambiguous"] * n, values, right)
     g, labels = _groups(groups, v.size)
+    if contexts is None:
+        ctx = np.zeros(v.size, dtype=np.int64)
+    else:
+        if isinstance(contexts, (str, bytes, dict)):
+            raise InputError(f"contexts must hold one label per case, got {shorten(contexts)}")
+        ctx = np.asarray(contexts)
+        if ctx.ndim != 1 or ctx.size != v.size:
+            raise InputError(
+                f"contexts must hold one label per case (1-D), got shape {ctx.shape} for "
+                f"{v.size} cases"
+            )
     out = np.full(v.size, np.nan)
     for label in labels:
         mine = g == label
-        if (~mine).any():
-            arrays = knot_arrays(_isotonic_knots(v[~mine], ok[~mine]))
-            out[mine] = [np.nan if c is None else c for c in _interpolate(arrays, v[mine])]
+        for c in dict.fromkeys(ctx[mine].tolist()):
+            fit_on = ~mine & (ctx == c)
+            if fit_on.any():
+                read = mine & (ctx == c)
+                arrays = knot_arrays(_isotonic_knots(v[fit_on], ok[fit_on]))
+                out[read] = [np.nan if x is None else x for x in _interpolate(arrays, v[read])]
     return out

@@ -139,6 +139,7 @@ _CONFIDENCE_TABLES = (
     "confidence_ambiguous",
     "confidence_recent",
     "confidence_hypothesis",
+    "confidence_hypothesis_recent",
 )
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
@@ -410,6 +411,10 @@ class TrackerConfig:
     confidence_recent_s : float
         That span, seconds (the one the table was fitted with: :func:`~omniloc.track.
         fit_confidence`'s ``recent_s``).
+    confidence_hypothesis_recent : tuple of (float, float), or None
+        The hypotheses' table for the frames at most ``confidence_recent_s`` seconds after a
+        localized one, localized frames included (None, the default:
+        ``confidence_hypothesis`` reads them too).
     seed : int
         Seed of elsewhere's particles (their uniform start, motion noise, resampling and
         injection): a run is the same for the same seed; other seeds show how much of a
@@ -479,6 +484,7 @@ class TrackerConfig:
     confidence_hypothesis: tuple[tuple[float, float], ...] | None = None
     confidence_recent: tuple[tuple[float, float], ...] | None = None
     confidence_recent_s: float = RECENT_S
+    confidence_hypothesis_recent: tuple[tuple[float, float], ...] | None = None
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -1722,7 +1728,11 @@ class Tracker:
         rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
         w = np.minimum(np.exp(self._logw[order]), 1.0)
         weights = w.tolist()
-        h_conf = _interpolate(self._tables["confidence_hypothesis"], w)
+        soon = since is not None and since <= self.config.confidence_recent_s
+        h_table = self._tables["confidence_hypothesis"]
+        if soon and self._tables["confidence_hypothesis_recent"] is not None:
+            h_table = self._tables["confidence_hypothesis_recent"]
+        h_conf = _interpolate(h_table, w)
         hyps = tuple(
             Hypothesis(
                 Pose(*rows[j]),
@@ -1749,11 +1759,7 @@ class Tracker:
         p = min(max(prob, 0.0), 1.0) if math.isfinite(prob) else None
         if state is TrackState.LOCALIZED:
             table = self._tables["confidence_localized"]
-        elif (
-            self._tables["confidence_recent"] is not None
-            and since is not None
-            and since <= c.confidence_recent_s
-        ):
+        elif soon and self._tables["confidence_recent"] is not None:
             table = self._tables["confidence_recent"]
         else:
             table = self._tables["confidence_ambiguous"]
