@@ -71,7 +71,8 @@ class Hypothesis:
     confidence : float or None
         The probability, as recordings measured it, that the robot is within the
         localizer's tolerance of ``pose``: the weight mapped by the configuration's
-        ``confidence_hypothesis`` table (:mod:`omniloc.track.confidence`). None without one.
+        ``confidence_hypothesis`` table (``confidence_hypothesis_recent`` in a frame soon
+        after a localized one; :mod:`omniloc.track.confidence`). None without one.
     """
 
     pose: Pose
