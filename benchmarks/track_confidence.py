@@ -55,6 +55,7 @@ from omniloc.track.confidence import (  # noqa: E402
     fit_confidence,
     held_out_confidence,
     held_out_table,
+    is_recent,
 )
 
 NO_TABLES = {
@@ -154,7 +155,7 @@ def main(argv: list[str] | None = None) -> int:
         f["state"], f["probability"], f["right"], f["robot"], since_localized=f["since"]
     )
     held_by_state = held_out_confidence(f["state"], f["probability"], f["right"], f["robot"])
-    recent = (f["state"] == "ambiguous") & (f["since"] <= RECENT_S)
+    recent = (f["state"] == "ambiguous") & is_recent(f["since"], RECENT_S)
     out: dict[str, object] = {}
     for label, values in (
         ("model probability", f["probability"]),
@@ -174,7 +175,7 @@ def main(argv: list[str] | None = None) -> int:
             f"frame {entry['recent']['ece']:.3f} over {entry['recent']['frames']})"
         )
     h_held = held_out_table(
-        f["h_weight"], f["h_right"], f["h_robot"], contexts=f["h_since"] <= RECENT_S
+        f["h_weight"], f["h_right"], f["h_robot"], contexts=is_recent(f["h_since"], RECENT_S)
     )
     h_held_one = held_out_table(f["h_weight"], f["h_right"], f["h_robot"])
     for label, values in (

@@ -147,10 +147,33 @@ def test_a_fit_keeps_the_states_apart() -> None:
     fit = fit_confidence(states, np.concatenate([p[:100], p[:100]]), right)
     assert fit("localized", 0.7) > 0.99
     assert fit("ambiguous", 0.7) < 0.01
+    # Every table is a setting, None where the fit has none (no recent_s: no span fitted).
     assert fit.settings() == {
         "confidence_localized": fit.localized,
         "confidence_ambiguous": fit.ambiguous,
+        "confidence_recent": None,
+        "confidence_hypothesis": None,
+        "confidence_hypothesis_recent": None,
     }
+
+
+def test_a_fit_applied_over_a_preset_leaves_none_of_the_presets_tables_behind() -> None:
+    # A fit without the times since localized has no recent tables: applied over the mrclam
+    # preset, the recent frames must read the fit's own ambiguous table, not the preset's
+    # recent one (two fits' tables read side by side).
+    fit = fit_confidence(["ambiguous", "localized"], [0.5, 0.99], [False, True])
+    sensor, motion, config = preset("mrclam")
+    assert config.confidence_recent is not None
+    _, _, mine = with_settings(sensor, motion, config, fit.settings())
+    for name in (
+        "confidence_localized",
+        "confidence_ambiguous",
+        "confidence_recent",
+        "confidence_hypothesis",
+        "confidence_hypothesis_recent",
+    ):
+        assert getattr(mine, name) == getattr(fit, name.removeprefix("confidence_")), name
+    assert mine.confidence_recent is None and mine.confidence_hypothesis_recent is None
 
 
 @pytest.mark.parametrize(
@@ -512,7 +535,7 @@ def test_a_table_of_any_values_and_the_hypotheses_table() -> None:
     fit = fit_confidence(["ambiguous"], [0.5], [True], hypothesis_weights=w, hypothesis_right=right)
     assert fit.hypothesis == table and fit.frames["hypothesis"] == w.size
     assert fit.settings()["confidence_hypothesis"] == table
-    assert "confidence_hypothesis" not in fit_confidence(["ambiguous"], [0.5], [True]).settings()
+    assert fit_confidence(["ambiguous"], [0.5], [True]).settings()["confidence_hypothesis"] is None
     with pytest.raises(InputError, match="give both"):
         fit_confidence(["ambiguous"], [0.5], [True], hypothesis_weights=w)
     with pytest.raises(InputError, match="at least one"):
@@ -583,7 +606,8 @@ def test_a_fit_gives_the_frames_soon_after_a_localized_one_a_table_of_their_own(
     # Without the times, one table for every ambiguous frame, as before.
     plain = fit_confidence(["ambiguous"] * n, p, right)
     assert plain.recent is None and plain.recent_s is None
-    assert "confidence_recent" not in plain.settings()
+    assert plain.settings()["confidence_recent"] is None
+    assert "confidence_recent_s" not in plain.settings()
     assert plain("ambiguous", 0.6, since_localized=2.0) == pytest.approx(100.5 / 201)
 
 
@@ -712,7 +736,7 @@ def test_the_hypotheses_of_frames_soon_after_a_localized_one_have_a_table_of_the
     one = fit_confidence(
         ["localized"], [0.99], [True], hypothesis_weights=w, hypothesis_right=right
     )
-    assert one.hypothesis_recent is None and "confidence_hypothesis_recent" not in one.settings()
+    assert one.hypothesis_recent is None and one.settings()["confidence_hypothesis_recent"] is None
     assert confidence_of(one.hypothesis, 0.9) == pytest.approx(3.5 / 7)
     for bad, message in (
         ({"hypothesis_since_localized": [1.0]}, "hypothesis_since_localized"),
@@ -732,3 +756,12 @@ def test_the_hypotheses_of_frames_soon_after_a_localized_one_have_a_table_of_the
     assert out[0] == pytest.approx(1.5 / 2) and out[4] == pytest.approx(0.5 / 3)
     with pytest.raises(InputError, match="contexts"):
         held_out_table(w, right, runs, contexts=[True])
+
+
+def test_is_recent_is_the_one_rule_for_scalars_and_arrays() -> None:
+    from omniloc.track.confidence import is_recent
+
+    assert is_recent(20.0, 20.0) is True and is_recent(20.5, 20.0) is False
+    assert is_recent(None, 20.0) is False and is_recent(math.nan, 20.0) is False
+    assert is_recent(np.float64(3.0), 20.0) is True
+    assert is_recent([0.0, 25.0, math.nan, None], 20.0).tolist() == [True, False, False, False]

@@ -1238,7 +1238,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         track,
         with_settings,
     )
-    from .track.confidence import held_out_confidence, held_out_table
+    from .track.confidence import held_out_confidence, held_out_table, is_recent
 
     n = len(args.odometry)
     if not n == len(args.frames) == len(args.groundtruth):
@@ -1341,9 +1341,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             f"{int(use.sum())} frames (what to expect on a run not fitted on)"
         )
         if h_weight and len(set(h_group)) > 1:
-            h_held = held_out_table(
-                h_weight, h_right, h_group, contexts=np.asarray(h_since) <= span
-            )
+            h_held = held_out_table(h_weight, h_right, h_group, contexts=is_recent(h_since, span))
             use = np.isfinite(h_held)
             print(
                 f"  and each run's hypotheses: expected calibration error "

@@ -63,6 +63,7 @@ __all__ = [
     "fit_table",
     "held_out_confidence",
     "held_out_table",
+    "is_recent",
 ]
 
 #: At most this many knots in a table (a fit merges neighbouring blocks beyond it).
@@ -205,22 +206,20 @@ class ConfidenceFit:
     hypothesis_recent: Knots | None = None
 
     def settings(self) -> dict[str, Any]:
-        """The tables as tracker settings (``with_settings``, ``--config``):
-        ``confidence_localized``, ``confidence_ambiguous`` and, when fitted,
-        ``confidence_recent`` with ``confidence_recent_s``, ``confidence_hypothesis`` and
-        ``confidence_hypothesis_recent``."""
+        """The tables as tracker settings (``with_settings``, ``--config``): every table
+        (``confidence_localized``, ``confidence_ambiguous``, ``confidence_recent``,
+        ``confidence_hypothesis``, ``confidence_hypothesis_recent``; None where this fit
+        has none, so that applied over a preset's tables it leaves none of them behind to
+        be read beside its own), and ``confidence_recent_s`` when a span was fitted."""
         out: dict[str, Any] = {
             "confidence_localized": self.localized,
             "confidence_ambiguous": self.ambiguous,
+            "confidence_recent": self.recent,
+            "confidence_hypothesis": self.hypothesis,
+            "confidence_hypothesis_recent": self.hypothesis_recent,
         }
         if self.recent_s is not None:
-            out["confidence_recent"] = self.recent
             out["confidence_recent_s"] = self.recent_s
-        if self.hypothesis is not None:
-            out["confidence_hypothesis"] = self.hypothesis
-        if self.hypothesis_recent is not None:
-            out["confidence_hypothesis_recent"] = self.hypothesis_recent
-            out.setdefault("confidence_recent_s", self.recent_s)
         return out
 
     def __call__(
@@ -244,7 +243,7 @@ class ConfidenceFit:
         if state is TrackState.LOCALIZED:
             return self.localized
         if self.recent is not None and self.recent_s is not None:
-            if since_localized is not None and since_localized <= self.recent_s:
+            if is_recent(since_localized, self.recent_s):
                 return self.recent
         return self.ambiguous
 
@@ -331,6 +330,20 @@ def fit_table(values: ArrayLike, right: ArrayLike) -> Knots:
     return _isotonic_knots(v, ok)
 
 
+def is_recent(since_localized: ArrayLike | None, recent_s: float) -> Any:
+    """Whether a frame came at most ``recent_s`` seconds after a localized one (its
+    ``since_localized``; None or NaN: never localized since the start or the last flag):
+    the one rule for which frames the recent tables read. A bool for a number or None, a
+    bool array for an array."""
+    if since_localized is None:
+        return False
+    if isinstance(since_localized, float):  # (the tracker's, every frame: NaN is False)
+        return bool(since_localized <= recent_s)
+    with np.errstate(invalid="ignore"):
+        out = np.asarray(since_localized, dtype=np.float64) <= recent_s
+    return bool(out) if out.ndim == 0 else out
+
+
 def _span(recent_s: Any) -> float:
     """``recent_s`` checked: finite seconds >= 0."""
     real = (int, float, np.integer, np.floating)
@@ -374,8 +387,7 @@ def _contexts(
     span = _span(recent_s)
     since = _since(since_localized, n, "since_localized")
     ctx = kind.copy()
-    with np.errstate(invalid="ignore"):
-        ctx[(kind == TrackState.AMBIGUOUS.value) & (since <= span)] = "recent"
+    ctx[(kind == TrackState.AMBIGUOUS.value) & is_recent(since, span)] = "recent"
     return ctx, span, since
 
 
@@ -468,8 +480,7 @@ def fit_confidence(
         if hypothesis_since_localized is not None:
             span = _span(recent_s) if span is None else span
             hs = _since(hypothesis_since_localized, n, "hypothesis_since_localized")
-            with np.errstate(invalid="ignore"):
-                soon = hs <= span
+            soon = is_recent(hs, span)
             frames["hypothesis_recent"] = int(soon.sum())
             rights["hypothesis_recent"] = int(hr[soon].sum())
             hyp_recent = _isotonic_knots(hw[soon], hr[soon]) if soon.any() else None

@@ -86,7 +86,7 @@ from ..io import finite_number, shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from .confidence import RECENT_S, _interpolate, confidence_table, knot_arrays
+from .confidence import RECENT_S, _interpolate, confidence_table, is_recent, knot_arrays
 from .data import _float_array
 from .elsewhere import Elsewhere
 from .likelihood import FrameModel, Objects, frame_update_clutter, log_ratios_clutter
@@ -1728,7 +1728,7 @@ class Tracker:
         rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
         w = np.minimum(np.exp(self._logw[order]), 1.0)
         weights = w.tolist()
-        soon = since is not None and since <= self.config.confidence_recent_s
+        soon = is_recent(since, self.config.confidence_recent_s)
         h_table = self._tables["confidence_hypothesis"]
         if soon and self._tables["confidence_hypothesis_recent"] is not None:
             h_table = self._tables["confidence_hypothesis_recent"]
