@@ -1659,7 +1659,7 @@ def _tracker_targets() -> list[Target]:
     import dataclasses
 
     from omniloc.track import MotionModel, Tracker, TrackerConfig
-    from omniloc.track.tracker import _INTS, _PROBABILITIES, _SHARES
+    from omniloc.track.config import _INTS, _PROBABILITIES, _SHARES
 
     def run(config: dict[str, Any] | None = None, motion: dict[str, Any] | None = None) -> Any:
         tr = Tracker(
