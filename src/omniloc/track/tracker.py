@@ -883,7 +883,6 @@ class Tracker:
         delta, Q, gap = self._motion_to(tf)
         self._t = tf
         reason_gap = ""
-        kidnapped = False
         if gap > c.max_odometry_gap_s and not self._after_gap:
             self._after_gap = True
             reason_gap = f"odometry gap of {gap:.1f} s: motion unknown, relocalizing"
@@ -993,80 +992,8 @@ class Tracker:
             state, reason, best = self._decide(tf)
         if reason_gap:
             reason = reason_gap + "; " + reason
-        # Kidnapping: the place we were localized at lost its mass (watched until kidnap_watch_s
-        # after the estimates stopped calling it localized; a loss that began within the watch
-        # is followed to its end) and did not win it back within kidnap_confirm_s.
-        if (
-            self._localized_id is not None
-            and self._unvouched_t is not None
-            and self._below_t is None
-            and tf - self._unvouched_t > c.kidnap_watch_s
-        ):
-            self._localized_id = None
-        if self._localized_id is not None:
-            share = self._watched_share()
-            if share >= c.kidnap_share:
-                self._below_t = None
-            else:
-                w_explained = self._watch_explained(b, model) if c.kidnap_fit > 0 else None
-                if self._below_t is None:
-                    self._below_t = tf
-                    self._watch_m, self._watch_n, self._watch_mix = 0.0, 0, 0.0
-                if w_explained is not None:
-                    self._watch_m += w_explained
-                    self._watch_n += int(b.size)
-                    self._watch_mix += mix
-                below = tf - self._below_t
-                since = f" (under {100 * c.kidnap_share:g} % for {below:.1f} s)" if below else ""
-                # Still explained: as many of the bearings since the loss as kidnap_fit asks
-                # (none seen yet counts as explained: nothing speaks against the place).
-                fits = w_explained is not None and (self._watch_m >= c.kidnap_fit * self._watch_n)
-                # ... or nothing explains them better: bearings that the tracker's belief
-                # now (its hypotheses and elsewhere, weighed by the frames) does not take for
-                # landmarks more often than the old place does (by KIDNAP_MARGIN) are
-                # clutter, not the evidence of another place.
-                clutter = (
-                    w_explained is not None
-                    and not fits
-                    and self._watch_mix < self._watch_m + KIDNAP_MARGIN
-                )
-                # (Localized now is localized at another place: this one holds under half.)
-                if state is TrackState.LOCALIZED or (
-                    below >= c.kidnap_confirm_s and not fits and not clutter
-                ):
-                    kidnapped = True
-                    self._localized_id = None
-                    self._below_t = None
-                    fit = ""
-                    if w_explained is not None and self._watch_n:
-                        fit = (
-                            f", and explains {self._watch_m:.0f} of the {self._watch_n} "
-                            f"bearings since (the places it holds now: {self._watch_mix:.0f})"
-                        )
-                    reason = (
-                        f"the place it was localized at now holds {100 * share:.1f} % of the "
-                        f"mass{since}{fit}: kidnapped or lost; " + reason
-                    )
-                elif below >= c.kidnap_confirm_s:
-                    # The loss lasts, yet the place explains the bearings, or nothing else
-                    # does: not a kidnapping (yet). Watched until kidnap_watch_s after the
-                    # loss began.
-                    ended = below > c.kidnap_watch_s
-                    why = (
-                        f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since, "
-                        f"and the places it holds now explain no more "
-                        f"({self._watch_mix:.0f}): clutter"
-                        if clutter
-                        else f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since"
-                    )
-                    reason = (
-                        f"the place it was localized at holds {100 * share:.1f} % of the "
-                        f"mass{since} but {why}: not taken for a kidnapping"
-                        f"{' (no longer watched)' if ended else ''}; " + reason
-                    )
-                    if ended:
-                        self._localized_id = None
-                        self._below_t = None
+        kidnapped, note = self._watch_kidnapping(tf, state, b, model, mix)
+        reason = note + reason
         if state is TrackState.LOCALIZED and best is not None:
             self._localized_id = int(self._ids[best])
             # A kept frame does not vouch for the place anew: the watch runs from the first
@@ -1091,6 +1018,90 @@ class Tracker:
             P = est.covariance if est.covariance is not None else np.zeros((3, 3))
             self._watch = (est.pose.as_array()[None], np.asarray(P)[None])
         return est
+
+    def _watch_kidnapping(
+        self, tf: float, state: TrackState, b: FloatArray, model: FrameModel, mix: float
+    ) -> tuple[bool, str]:
+        """The kidnapping watch after frame ``tf`` (bearings ``b``, weighed by ``model``),
+        whose decision is ``state``; ``mix`` is how many of the bearings the tracker's belief
+        explains now. Returns whether the frame is flagged ``kidnapped`` and what the reason
+        says of the watch first ("" when nothing)."""
+        c = self.config
+        kidnapped, note = False, ""
+        # Kidnapping: the place we were localized at lost its mass (watched until kidnap_watch_s
+        # after the estimates stopped calling it localized; a loss that began within the watch
+        # is followed to its end) and did not win it back within kidnap_confirm_s.
+        if (
+            self._localized_id is not None
+            and self._unvouched_t is not None
+            and self._below_t is None
+            and tf - self._unvouched_t > c.kidnap_watch_s
+        ):
+            self._localized_id = None
+        if self._localized_id is None:
+            return False, ""
+        share = self._watched_share()
+        if share >= c.kidnap_share:
+            self._below_t = None
+            return False, ""
+        w_explained = self._watch_explained(b, model) if c.kidnap_fit > 0 else None
+        if self._below_t is None:
+            self._below_t = tf
+            self._watch_m, self._watch_n, self._watch_mix = 0.0, 0, 0.0
+        if w_explained is not None:
+            self._watch_m += w_explained
+            self._watch_n += int(b.size)
+            self._watch_mix += mix
+        below = tf - self._below_t
+        since = f" (under {100 * c.kidnap_share:g} % for {below:.1f} s)" if below else ""
+        # Still explained: as many of the bearings since the loss as kidnap_fit asks
+        # (none seen yet counts as explained: nothing speaks against the place).
+        fits = w_explained is not None and (self._watch_m >= c.kidnap_fit * self._watch_n)
+        # ... or nothing explains them better: bearings that the tracker's belief
+        # now (its hypotheses and elsewhere, weighed by the frames) does not take for
+        # landmarks more often than the old place does (by KIDNAP_MARGIN) are
+        # clutter, not the evidence of another place.
+        clutter = (
+            w_explained is not None and not fits and self._watch_mix < self._watch_m + KIDNAP_MARGIN
+        )
+        # (Localized now is localized at another place: this one holds under half.)
+        if state is TrackState.LOCALIZED or (
+            below >= c.kidnap_confirm_s and not fits and not clutter
+        ):
+            kidnapped = True
+            self._localized_id = None
+            self._below_t = None
+            fit = ""
+            if w_explained is not None and self._watch_n:
+                fit = (
+                    f", and explains {self._watch_m:.0f} of the {self._watch_n} "
+                    f"bearings since (the places it holds now: {self._watch_mix:.0f})"
+                )
+            note = (
+                f"the place it was localized at now holds {100 * share:.1f} % of the "
+                f"mass{since}{fit}: kidnapped or lost; "
+            )
+        elif below >= c.kidnap_confirm_s:
+            # The loss lasts, yet the place explains the bearings, or nothing else
+            # does: not a kidnapping (yet). Watched until kidnap_watch_s after the
+            # loss began.
+            ended = below > c.kidnap_watch_s
+            why = (
+                f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since, "
+                f"and the places it holds now explain no more "
+                f"({self._watch_mix:.0f}): clutter"
+                if clutter
+                else f"explains {self._watch_m:.0f} of the {self._watch_n} bearings since"
+            )
+            note = (
+                f"the place it was localized at holds {100 * share:.1f} % of the "
+                f"mass{since} but {why}: not taken for a kidnapping"
+                f"{' (no longer watched)' if ended else ''}; "
+            )
+            if ended:
+                self._localized_id = None
+                self._below_t = None
+        return kidnapped, note
 
     def _watch_explained(self, b: FloatArray, model: FrameModel) -> float | None:
         """How many of the bearings ``b`` the watched place, moved by the odometry alone
