@@ -158,6 +158,24 @@ def test_neighbour_lists_match_brute_force() -> None:
     assert neighbour_lists(lm, 12.0).idx is idx  # built once per radius
 
 
+def test_neighbour_lists_keep_ties_duplicates_and_loners() -> None:
+    # A grid 2 m apart at a radius of exactly 2 m (every tie kept: the k-d tree's "at most
+    # r"), two landmarks off the grid 0.5 m apart, one far from all.
+    g = np.array([(x, y) for x in range(0, 9, 2) for y in range(0, 7, 2)], dtype=float)
+    pts = np.vstack([g, [[3.0, 3.0], [3.0, 3.5], [500.0, 500.0]]])
+    lm = LandmarkMap(pts)
+    ptr, idx, xy = neighbour_lists(lm, 2.0)
+    d2 = ((pts[:, None, :] - pts[None, :, :]) ** 2).sum(axis=2)
+    assert ptr.tolist()[-1] == idx.size
+    for i in range(lm.n):
+        want = np.flatnonzero((d2[i] <= 4.0) & (np.arange(lm.n) != i))
+        assert idx[ptr[i] : ptr[i + 1]].tolist() == want.tolist()
+        assert np.array_equal(xy[ptr[i] : ptr[i + 1]], pts[want])
+    assert ptr[lm.n] == ptr[lm.n - 1]  # the loner has none
+    assert lm.n - 2 in idx[ptr[lm.n - 3] : ptr[lm.n - 2]].tolist()
+    assert sum(d2[i, j] == 4.0 for i in range(g.shape[0]) for j in range(g.shape[0])) > 0
+
+
 # ---- agreement with the tree -----------------------------------------------------------------
 
 

@@ -73,13 +73,16 @@ def neighbour_lists(lm: LandmarkMap, radius: float) -> NeighbourLists:
     if found is not None:
         return found
     pairs = lm.kdtree.query_pairs(key, output_type="ndarray").astype(np.int64)
-    src = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    dst = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    # Each pair both ways, as one number src * N + dst: sorted, they run by source, then by
+    # neighbour (a fifth of the time of a lexsort of the two columns on dense maps).
+    n = np.int64(lm.n)
+    both = np.concatenate([pairs[:, 0] * n + pairs[:, 1], pairs[:, 1] * n + pairs[:, 0]])
     del pairs
-    order = np.lexsort((dst, src))
+    both.sort()
     ptr = np.zeros(lm.n + 1, dtype=np.int64)
-    np.cumsum(np.bincount(src, minlength=lm.n), out=ptr[1:])
-    idx = dst[order]
+    np.cumsum(np.bincount(both // n, minlength=lm.n), out=ptr[1:])
+    idx = both % n
+    del both
     lists = NeighbourLists(ptr, idx, np.ascontiguousarray(lm.xy[idx]))
     with _lock:
         if len(per_map) >= KEEP:
