@@ -1293,6 +1293,17 @@ ODOMETRY_FILES: Pool = (
     ("missing w", file_with("odo.csv", "t,v\n1,0\n")),
     ("t 1e999", file_with("odo.csv", "t,v,w\n1e999,0,0\n")),
     ("no rows", file_with("odo.csv", "t,v,w\n")),
+    ("poses: equal times", file_with("odo.csv", "t,x,y,theta\n0,0,0,0\n0,1,0,0\n")),
+    ("poses: theta nan", file_with("odo.csv", "t,x,y,theta\n0,0,0,nan\n")),
+    ("poses: no rows", file_with("odo.csv", "t,x,y,theta\n")),
+    ("poses and velocities", file_with("odo.csv", "t,x,y,theta,v,w\n0,0,0,0,0,0\n")),
+    ("tum: 7 numbers", file_with("odo.tum", "0 0 0 0 0 0 1\n")),
+    ("tum: then 9", file_with("odo.tum", "0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1 5\n")),
+    ("tum: zero quaternion", file_with("odo.tum", "0 0 0 0 0 0 0 0\n")),
+    ("tum: upside down", file_with("odo.tum", "0 0 0 0 1 0 0 0\n")),
+    ("tum: inf", file_with("odo.tum", "0 0 0 0 0 0 0 1\n1 inf 0 0 0 0 0 1\n")),
+    ("tum: decreasing", file_with("odo.tum", "1 0 0 0 0 0 0 1\n0 0 0 0 0 0 0 1\n")),
+    ("tum: a half turn", file_with("odo.tum", "0 0 0 0 0 0 0 1\n0 0 0 0 0 0 1 0\n")),
 )
 GROUNDTRUTH_FILES: Pool = (
     *TEXT_FILES,
@@ -1410,6 +1421,13 @@ def _track_targets() -> list[Target]:
             lambda: {"t": [0.0, 1.0], "v": [0.0, 0.1], "w": [0.0, 0.0]},
             {k: Arg((f"odometry {k}", "odometry"), arrays) for k in ("t", "v", "w")},
             check=lambda kw, v: None,
+        ),
+        Target(
+            "Odometry.from_poses",
+            lambda kw: Odometry.from_poses(**kw),
+            lambda: {"t": [0.0, 1.0], "x": [0.0, 0.1], "y": [0.0, 0.0], "theta": [0.0, 0.1]},
+            {k: Arg(("odometry poses", "odometry"), arrays) for k in ("t", "x", "y", "theta")},
+            check=lambda kw, v: [_finite(a, "odometry") for a in (v.t, v.v, v.w)],
         ),
         Target(
             "GroundTruth",

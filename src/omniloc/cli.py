@@ -34,6 +34,12 @@ log = logging.getLogger("omniloc")
 #: Human output lists at most this many solutions.
 MAX_PRINTED = 20
 
+#: What --odometry reads (omniloc.track.load_odometry).
+ODOMETRY_HELP = (
+    "odometry: CSV t,v,w (velocities), or a pose track in the odometry's frame: CSV "
+    "t,x,y,theta or a TUM file (t x y z qx qy qz qw, e.g. evo_traj's of a bag's /odom)"
+)
+
 
 class _Parser(argparse.ArgumentParser):
     """argparse that reports a usage error as one line and exit status 1."""
@@ -274,8 +280,8 @@ def _build_parser() -> argparse.ArgumentParser:
         required=True,
         type=Path,
         action="append",
-        help="odometry CSV: t,v,w; repeat it with --groundtruth to fit several runs of one "
-        "robot together",
+        help=f"{ODOMETRY_HELP}; repeat it with --groundtruth to fit several runs of one robot "
+        "together",
     )
     f.add_argument(
         "--groundtruth",
@@ -343,7 +349,7 @@ def _add_fit_confidence_parser(sub: Any) -> None:
     )
     fc.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
     for name, what in (
-        ("--odometry", "odometry CSV: t,v,w"),
+        ("--odometry", ODOMETRY_HELP),
         ("--frames", "frames: CSV t,bearing or MRCLAM robotR_frames.csv"),
         ("--groundtruth", "true track t,x,y,theta"),
     ):
@@ -422,7 +428,7 @@ def _add_track_parser(sub: Any) -> None:
 
     t = sub.add_parser("track", help="localize over time from odometry and frames of bearings")
     t.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
-    t.add_argument("--odometry", required=True, type=Path, help="odometry CSV: t,v,w")
+    t.add_argument("--odometry", required=True, type=Path, help=ODOMETRY_HELP)
     t.add_argument(
         "--frames",
         required=True,

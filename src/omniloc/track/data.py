@@ -6,7 +6,11 @@ the file and the line):
 odometry
     ``t,v,w``: time (s), forward velocity (m/s), turn rate (rad/s). Each row holds until the
     next (as recorded by MRCLAM's robots). Times must not decrease; of rows with equal times
-    (a logger's duplicates) the last one holds.
+    (a logger's duplicates) the last one holds. Or a pose track in the odometry's own frame,
+    as ROS's ``nav_msgs/Odometry`` holds it: ``t,x,y,theta`` (metres, radians), or a TUM
+    file (``t x y z qx qy qz qw``, what ``evo_traj ... --save_as_tum`` writes of a bag's
+    odometry); each interval becomes the forward velocity and turn rate that carry one pose
+    to the next (:meth:`Odometry.from_poses`).
 frames
     Either the generic ``t,bearing`` (one row per bearing, radians, or degrees with
     ``degrees=True`` or a ``bearing_deg`` column; rows with equal ``t`` form one frame; a row
@@ -26,7 +30,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from ..angles import wrap
 from ..errors import InputError
@@ -40,6 +44,8 @@ from ..io import (
     split_csv_line,
 )
 from ..pose import Pose
+from .motion import between as motion_between
+from .motion import twist_of
 
 log = logging.getLogger(__name__)
 
@@ -126,6 +132,81 @@ class Odometry:
 
     def __len__(self) -> int:
         return int(self.t.size)
+
+    @classmethod
+    def from_poses(cls, t: ArrayLike, x: ArrayLike, y: ArrayLike, theta: ArrayLike) -> Odometry:
+        """Odometry from a pose track: the odometry's own estimate of the pose (m, m, rad) at
+        times ``t``, in its own frame (ROS's ``nav_msgs/Odometry``; only the motion between
+        poses is read, never where the frame is).
+
+        Each interval becomes the constant forward velocity and turn rate that carry one
+        pose to the next (the SE(2) logarithm of the motion between them, divided by the
+        interval); after the last pose the robot is taken to stand still. A sideways part
+        of the motion, which a wheeled robot does not have, is dropped, with a warning in
+        the log when it adds up to more than 1 % of the path (and 5 cm). The poses must be
+        close enough in time that the robot turns less than a half turn between two.
+
+        Parameters
+        ----------
+        t : array_like, shape (n,)
+            Times, seconds, not decreasing (rows at one time must hold one pose).
+        x, y, theta : array_like, shape (n,)
+
+        Raises
+        ------
+        InputError
+            Values that are not finite numbers, arrays of different lengths, no rows, times
+            that decrease, or two different poses at one time.
+
+        Examples
+        --------
+        A quarter circle of radius 1 m driven in 2 s, then a stop:
+
+        >>> import math
+        >>> odo = Odometry.from_poses([0, 2], [0, 1], [0, 1], [0, math.pi / 2])
+        >>> [round(float(v), 4) for v in odo.v], [round(float(w), 4) for w in odo.w]
+        ([0.7854, 0.0], [0.7854, 0.0])
+        """
+        tt = _float_array("odometry poses t", t, scalar=True)
+        cols = [
+            _float_array(f"odometry poses {n}", a, scalar=True)
+            for n, a in (("x", x), ("y", y), ("theta", theta))
+        ]
+        if not all(c.size == tt.size for c in cols):
+            raise InputError(
+                "odometry poses t, x, y and theta must have one value per row: got "
+                + ", ".join(str(a.size) for a in (tt, *cols))
+            )
+        if tt.size == 0:
+            raise InputError("odometry poses have no rows")
+        _check_times("odometry poses", tt, strict=False)
+        poses = np.stack(cols, axis=1)
+        same = tt[1:] == tt[:-1]
+        if same.any():
+            d = motion_between(poses[:-1], poses[1:])
+            moved = np.flatnonzero(same & np.any(d != 0.0, axis=1))
+            if moved.size:
+                k = int(moved[0])
+                raise InputError(
+                    f"odometry poses rows {k} and {k + 1} are at one time (t={float(tt[k])!r}) but "
+                    "differ: the robot cannot move in no time"
+                )
+            keep = np.concatenate([[True], ~same])
+            tt, poses = tt[keep], poses[keep]
+        if tt.size == 1:
+            return cls(tt, np.zeros(1), np.zeros(1))
+        dt = np.diff(tt)
+        tw = twist_of(motion_between(poses[:-1], poses[1:]), 1.0) / dt[:, None]
+        sideways = float(np.abs(tw[:, 1]) @ dt)
+        path = float(np.hypot(tw[:, 0], tw[:, 1]) @ dt)
+        if sideways > max(0.01 * path, 0.05):
+            log.warning(
+                "odometry poses move sideways by %.2f m over a path of %.2f m: the tracker "
+                "takes the robot to drive forward and turn, and drops it",
+                sideways,
+                path,
+            )
+        return cls(tt, np.append(tw[:, 0], 0.0), np.append(tw[:, 2], 0.0))
 
     def between(self, t0: float, t1: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The constant-velocity pieces that cover ``[t0, t1]``: durations (s), v and w.
@@ -289,8 +370,31 @@ ODOMETRY_W_WARN = 2.0 * math.pi
 ODOMETRY_V_WARN = 10.0
 
 
+#: Largest tilt (roll and pitch together, rad) of a TUM file's poses read as odometry: the
+#: heading of poses that lean a little (a 3-D odometry on a floor that is not quite level)
+#: is the robot's; beyond it the trajectory is not a planar robot's.
+ODOMETRY_MAX_TILT = math.radians(10.0)
+
+
+def _is_tum(path: PathLike) -> bool:
+    """Whether ``path`` reads as a TUM trajectory: its first line that is not blank or a
+    comment is 8 numbers separated by blanks."""
+    lines = content_lines(read_text(path, InputError))
+    if not lines:
+        return False
+    parts = lines[0][1].split()
+    if len(parts) != 8 or "," in lines[0][1]:
+        return False
+    try:
+        [float(p) for p in parts]
+    except ValueError:
+        return False
+    return True
+
+
 def load_odometry(path: PathLike) -> Odometry:
-    """Read an odometry file (``t,v,w``; see the module's documentation).
+    """Read an odometry file: velocities (``t,v,w``) or a pose track (``t,x,y,theta``, or a
+    TUM file); see the module's documentation and :meth:`Odometry.from_poses`.
 
     A turn rate above :data:`ODOMETRY_W_WARN` (a turn a second) or a speed above
     :data:`ODOMETRY_V_WARN` (10 m/s) is logged as a warning naming the line: the file is
@@ -302,7 +406,42 @@ def load_odometry(path: PathLike) -> Odometry:
         Unreadable file, missing columns, a value that is not a finite number, times that do
         not increase (file and line named).
     """
+    if _is_tum(path):
+        from .io import read_tum  # (io reads this module's records)
+
+        try:
+            a = read_tum(path, max_tilt=ODOMETRY_MAX_TILT)
+            _check_times(str(path), a[:, 0], strict=False)
+            return Odometry.from_poses(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
+        except InputError as exc:
+            raise InputError(
+                f"{exc}; the odometry was read as a TUM file (t x y z qx qy qz qw)"
+            ) from exc
     src, header, rows = _table(path, "odometry")
+    if not {"v", "w"} <= set(header) and {"x", "y", "theta"} <= set(header):
+        t, x, y, theta = _columns(src, header, rows, ("t", "x", "y", "theta"))
+        if t.size == 0:
+            raise InputError(f"{src}: no odometry rows")
+        lines = [n for n, _ in rows]
+        _check_times(src, t, strict=False, lines=lines)
+        moved = (t[1:] == t[:-1]) & (
+            (x[1:] != x[:-1]) | (y[1:] != y[:-1]) | (np.asarray(wrap(theta[1:] - theta[:-1])) != 0)
+        )
+        if moved.any():
+            k = int(np.flatnonzero(moved)[0])
+            raise InputError(
+                f"{src}:{lines[k + 1]}: a pose at the time of the line before (t={float(t[k])!r}) "
+                "that differs from it: the robot cannot move in no time"
+            )
+        try:
+            return Odometry.from_poses(t, x, y, theta)
+        except InputError as exc:
+            raise InputError(f"{src}: {exc}") from exc
+    if not {"t", "v", "w"} <= set(header):
+        raise InputError(
+            f"{src}:1: an odometry file has the columns t,v,w (velocities) or t,x,y,theta (a "
+            f"pose track), or is a TUM file; the header is {shorten(','.join(header))}"
+        )
     t, v, w = _columns(src, header, rows, ("t", "v", "w"))
     if t.size == 0:
         raise InputError(f"{src}: no odometry rows")

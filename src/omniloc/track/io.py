@@ -116,13 +116,22 @@ def write_tum_truth(path: PathLike, truth: GroundTruth, times: ArrayLike) -> int
     return len(lines)
 
 
-def read_tum(path: PathLike) -> NDArray[np.float64]:
+def read_tum(path: PathLike, *, max_tilt: float = 0.0) -> NDArray[np.float64]:
     """Read a planar TUM trajectory: an array (n, 4) of ``t, x, y, theta``.
+
+    Parameters
+    ----------
+    path : str or Path
+    max_tilt : float
+        Largest tilt (roll and pitch together, rad) taken: a pose that leans at most this
+        much is read for its heading (yaw). 0 (the default): only poses that turn about the
+        vertical alone (``qx`` and ``qy`` within 1e-6).
 
     Raises
     ------
     InputError
-        An unreadable file, a line without 8 numbers (file and line named).
+        An unreadable file, a line without 8 finite numbers, a pose that leans more than
+        ``max_tilt``, a quaternion of length 0 (file and line named).
     """
     from ..io import read_text
 
@@ -135,9 +144,27 @@ def read_tum(path: PathLike) -> NDArray[np.float64]:
         if len(parts) != 8:
             raise InputError(f"{path}:{n}: a TUM line has 8 numbers, got {len(parts)}")
         try:
-            t, x, y, _z, qx, qy, qz, qw = (float(p) for p in parts)
+            values = [float(p) for p in parts]
         except ValueError as exc:
             raise InputError(f"{path}:{n}: not a number: {exc}") from exc
+        if not all(map(math.isfinite, values)):
+            raise InputError(f"{path}:{n}: a value that is not a finite number: {s}")
+        t, x, y, _z, qx, qy, qz, qw = values
+        if max_tilt > 0.0:
+            q = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
+            if not q > 0.0:
+                raise InputError(f"{path}:{n}: the quaternion has length 0: not a rotation")
+            qx, qy, qz, qw = qx / q, qy / q, qz / q, qw / q
+            tilt = math.acos(min(max(1.0 - 2.0 * (qx * qx + qy * qy), -1.0), 1.0))
+            if tilt > max_tilt:
+                raise InputError(
+                    f"{path}:{n}: the pose leans {math.degrees(tilt):.1f} deg from upright "
+                    f"(roll and pitch), more than {math.degrees(max_tilt):.1f}: not a planar "
+                    "trajectory"
+                )
+            yaw = math.atan2(2.0 * (qw * qz + qx * qy), 1.0 - 2.0 * (qy * qy + qz * qz))
+            rows.append((t, x, y, yaw))
+            continue
         if abs(qx) > 1e-6 or abs(qy) > 1e-6:
             raise InputError(f"{path}:{n}: not a planar pose (rotation about x or y)")
         rows.append((t, x, y, 2.0 * math.atan2(qz, qw)))

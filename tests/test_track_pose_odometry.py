@@ -1,0 +1,200 @@
+"""Odometry given as a pose track (ROS's ``nav_msgs/Odometry``, a TUM file from evo):
+``Odometry.from_poses`` and ``load_odometry`` on ``t,x,y,theta`` CSV and TUM files."""
+
+from __future__ import annotations
+
+import logging
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from omniloc.cli import main
+from omniloc.errors import InputError
+from omniloc.track import MotionModel, Odometry, load_odometry, track
+from omniloc.track.motion import compose, integrate
+from omniloc.track.simulate import example_run
+
+MODEL = MotionModel()
+
+
+def _poses_of(odo: Odometry, start: tuple[float, float, float]) -> np.ndarray:
+    """The poses that velocity odometry reaches at its own row times, from ``start``."""
+    out = [np.asarray(start, dtype=float)]
+    for k in range(len(odo) - 1):
+        d, _ = integrate([odo.t[k + 1] - odo.t[k]], [odo.v[k]], [odo.w[k]], MODEL)
+        out.append(compose(out[-1], d))
+    return np.array(out)
+
+
+def _tum_lines(t: np.ndarray, poses: np.ndarray, tilt: float = 0.0) -> str:
+    """A TUM file of ``poses`` (heading about z, then leaning by ``tilt`` about x)."""
+    lines = ["# timestamp tx ty tz qx qy qz qw"]
+    for ti, (x, y, th) in zip(t, poses, strict=True):
+        # q = q_yaw * q_roll: the robot turned by th, then leaned by tilt about its x axis.
+        cz, sz, cr, sr = math.cos(th / 2), math.sin(th / 2), math.cos(tilt / 2), math.sin(tilt / 2)
+        qw, qx, qy, qz = cz * cr, cz * sr, sz * sr, sz * cr
+        lines.append(f"{ti:.9f} {x:.12f} {y:.12f} 0 {qx:.12f} {qy:.12f} {qz:.12f} {qw:.12f}")
+    return "\n".join(lines) + "\n"
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.floats(0.01, 1.0),
+            st.floats(-2.0, 2.0, allow_nan=False),
+            st.floats(-3.0, 3.0, allow_nan=False),
+        ),
+        min_size=1,
+        max_size=12,
+    ),
+    st.tuples(st.floats(-50, 50), st.floats(-50, 50), st.floats(-3.1, 3.1)),
+)
+def test_poses_of_velocity_odometry_give_it_back(
+    pieces: list[tuple[float, float, float]], start: tuple[float, float, float]
+) -> None:
+    # Constant-velocity arcs (under a half turn each) sampled at their ends: the velocities
+    # come back, and after the last pose the robot stands.
+    t = np.concatenate([[0.0], np.cumsum([p[0] for p in pieces])])
+    v = np.array([p[1] for p in pieces] + [0.0])
+    w = np.array([p[2] for p in pieces] + [0.0])
+    odo = Odometry(t, v, w)
+    poses = _poses_of(odo, start)
+    back = Odometry.from_poses(t, poses[:, 0], poses[:, 1], poses[:, 2])
+    assert np.array_equal(back.t, odo.t)
+    assert np.allclose(back.v, v, atol=1e-9, rtol=1e-9)
+    assert np.allclose(back.w, w, atol=1e-9, rtol=1e-9)
+
+
+def test_a_pose_track_is_tracked_like_the_velocities_it_came_from() -> None:
+    ex = example_run()
+    odo = ex.run.odometry
+    poses = _poses_of(odo, (3.0, -1.0, 2.0))  # (the odometry frame's origin is arbitrary)
+    from_poses = Odometry.from_poses(odo.t, poses[:, 0], poses[:, 1], poses[:, 2])
+    a = track(ex.landmarks, odo, ex.run.frames, sensor=ex.sensor, motion=ex.motion).estimates
+    b = track(ex.landmarks, from_poses, ex.run.frames, sensor=ex.sensor, motion=ex.motion)
+    # The same velocities but the last row's (a pose track says nothing after its end),
+    # to rounding.
+    assert np.allclose(from_poses.v[:-1], odo.v[:-1], atol=1e-9)
+    assert np.allclose(from_poses.w[:-1], odo.w[:-1], atol=1e-9)
+    assert [e.state for e in a] == [e.state for e in b.estimates]
+    localized = [(ea, eb) for ea, eb in zip(a, b.estimates, strict=True) if ea.localized]
+    assert len(localized) > 50
+    for ea, eb in localized:
+        # (Ambiguous frames may list places of equal weight in another order.)
+        assert ea.pose is not None and eb.pose is not None
+        assert ea.pose.distance_to(eb.pose)[0] < 1e-6
+
+
+def test_single_pose_and_repeated_rows_stand_still() -> None:
+    one = Odometry.from_poses([5.0], [1.0], [2.0], [0.3])
+    assert one.t.tolist() == [5.0] and one.v.tolist() == [0.0] and one.w.tolist() == [0.0]
+    rep = Odometry.from_poses([0, 1, 1, 2], [0, 1, 1, 2], [0, 0, 0, 0], [0, 0, 0, 0])
+    assert rep.t.tolist() == [0.0, 1.0, 2.0] and np.allclose(rep.v, [1.0, 1.0, 0.0])
+
+
+@pytest.mark.parametrize(
+    ("args", "match"),
+    [
+        (([0, 1], [0, 1], [0, 0], [0]), "one value per row"),
+        (([], [], [], []), "no rows"),
+        (([0, 1], [0, float("nan")], [0, 0], [0, 0]), r"x\[1\] is not finite"),
+        (([1, 0], [0, 1], [0, 0], [0, 0]), "time order|decrease|increase"),
+        (([0, 0], [0, 1], [0, 0], [0, 0]), "cannot move in no time"),
+    ],
+)
+def test_bad_pose_tracks_are_refused_by_name(args: tuple, match: str) -> None:
+    with pytest.raises(InputError, match=match):
+        Odometry.from_poses(*args)
+
+
+def test_sideways_motion_is_dropped_with_a_warning(caplog: pytest.LogCaptureFixture) -> None:
+    t = np.arange(0.0, 10.5, 0.5)
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
+        crab = Odometry.from_poses(t, np.zeros_like(t), 0.2 * t, np.zeros_like(t))
+    assert "sideways by 2.00 m" in caplog.text
+    assert np.allclose(crab.v, 0.0) and np.allclose(crab.w, 0.0)
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
+        Odometry.from_poses(t, 0.2 * t, np.zeros_like(t), np.zeros_like(t))
+    assert "sideways" not in caplog.text
+
+
+def _example_pose_files(tmp_path: Path, tilt: float = 0.0) -> tuple[Odometry, Path, Path]:
+    odo = example_run().run.odometry
+    poses = _poses_of(odo, (0.0, 0.0, 0.0))
+    csv = tmp_path / "odom_poses.csv"
+    csv.write_text(
+        "t,x,y,theta\n"
+        + "".join(
+            f"{float(t)!r},{float(x)!r},{float(y)!r},{float(th)!r}\n"
+            for t, (x, y, th) in zip(odo.t, poses, strict=True)
+        )
+    )
+    tum = tmp_path / "odom.tum"
+    tum.write_text(_tum_lines(odo.t, poses, tilt))
+    return odo, csv, tum
+
+
+def test_pose_files_read_as_the_velocities(tmp_path: Path) -> None:
+    odo, csv, tum = _example_pose_files(tmp_path, tilt=math.radians(3.0))
+    for path in (csv, tum):
+        got = load_odometry(path)
+        assert np.allclose(got.t, odo.t, atol=1e-8)
+        # (all but the last row: after the last pose the robot stands)
+        assert np.allclose(got.v[:-1], odo.v[:-1], atol=1e-6)
+        assert np.allclose(got.w[:-1], odo.w[:-1], atol=1e-6)
+        assert got.v[-1] == got.w[-1] == 0.0
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        ("t,a,b\n0,1,2\n", r"t,v,w \(velocities\) or t,x,y,theta"),
+        ("t,x,y,theta\n0,0,0,0\n1,1,0,0\n1,2,0,0\n", r":4: a pose at the time of the line before"),
+        ("t,x,y,theta\n0,0,0,0\n1,1,0,0\n0.5,2,0,0\n", ":4"),
+        ("t,x,y,theta\n", "no odometry rows"),
+        ("0 0 0 0 0 0 0 1\n1 1 0 0 nan 0 0 1\n", ":2: a value that is not a finite number"),
+        ("0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 0\n", ":2: the quaternion has length 0"),
+    ],
+)
+def test_bad_odometry_files_name_the_problem(tmp_path: Path, text: str, match: str) -> None:
+    path = tmp_path / "odom.txt"
+    path.write_text(text)
+    with pytest.raises(InputError, match=match):
+        load_odometry(path)
+
+
+def test_a_tum_file_that_leans_is_not_a_planar_robot(tmp_path: Path) -> None:
+    _, _, tum = _example_pose_files(tmp_path, tilt=math.radians(20.0))
+    with pytest.raises(InputError, match=r"odom.tum:2: the pose leans 20.0 deg"):
+        load_odometry(tum)
+
+
+def test_omniloc_track_takes_a_tum_odometry(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    examples = Path(__file__).resolve().parent.parent / "examples" / "grid-run"
+    _, _, tum = _example_pose_files(tmp_path)
+    common = [
+        "-q",
+        "track",
+        "--map",
+        str(examples / "landmarks.csv"),
+        "--frames",
+        str(examples / "frames.csv"),
+        "--config",
+        str(examples / "settings.json"),
+        "--json",
+    ]
+    assert main([*common, "--odometry", str(examples / "odometry.csv")]) == 0
+    velocity = [line for line in capsys.readouterr().out.splitlines() if line.startswith("{")]
+    assert main([*common, "--odometry", str(tum)]) == 0
+    poses = [line for line in capsys.readouterr().out.splitlines() if line.startswith("{")]
+    assert len(poses) == len(velocity) > 100
+    states = [line.split('"state": ')[1].split(",")[0] for line in velocity]
+    assert states == [line.split('"state": ')[1].split(",")[0] for line in poses]
