@@ -1752,6 +1752,11 @@ def _tracker_targets() -> list[Target]:
         tr.odometry(kw["t"], kw["v"], kw["w"])
         return [tr.frame(3.0, omniloc.predict_bearings(room().xy, ROOM_POSE))]
 
+    def odometry_poses(kw: dict[str, Any]) -> Any:
+        tr = Tracker(room(), omniloc.SensorModel(sigma=math.radians(0.5)))
+        tr.odometry_poses(kw["t"], kw["x"], kw["y"], kw["theta"])
+        return [tr.frame(3.0, omniloc.predict_bearings(room().xy, ROOM_POSE))]
+
     return [
         Target("TrackerConfig", lambda kw: run(config=kw), dict, cfg, check=check, limit_s=20.0),
         Target("MotionModel", lambda kw: run(motion=kw), dict, motion, check=check, limit_s=20.0),
@@ -1767,6 +1772,13 @@ def _tracker_targets() -> list[Target]:
             odometry,
             lambda: {"t": [0.0, 1.0], "v": [0.0, 0.1], "w": [0.0, 0.0]},
             {k: Arg(("odometry",), arrays) for k in ("t", "v", "w")},
+            check=check,
+        ),
+        Target(
+            "Tracker.odometry_poses",
+            odometry_poses,
+            lambda: {"t": [0.0, 1.0], "x": [0.0, 0.1], "y": [0.0, 0.0], "theta": [0.0, 0.1]},
+            {k: Arg(("odometry poses", "odometry"), arrays) for k in ("t", "x", "y", "theta")},
             check=check,
         ),
     ]

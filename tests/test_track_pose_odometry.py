@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -14,9 +15,16 @@ from hypothesis import strategies as st
 
 from omniloc.cli import main
 from omniloc.errors import InputError
-from omniloc.track import MotionModel, Odometry, load_odometry, track
-from omniloc.track.motion import compose, integrate
-from omniloc.track.simulate import example_run
+from omniloc.track import (
+    MotionModel,
+    Odometry,
+    Tracker,
+    TrackEstimate,
+    load_odometry,
+    track,
+)
+from omniloc.track.motion import between, compose, integrate
+from omniloc.track.simulate import Example, example_run
 
 MODEL = MotionModel()
 
@@ -198,3 +206,90 @@ def test_omniloc_track_takes_a_tum_odometry(
     assert len(poses) == len(velocity) > 100
     states = [line.split('"state": ')[1].split(",")[0] for line in velocity]
     assert states == [line.split('"state": ')[1].split(",")[0] for line in poses]
+
+
+def _online(ex: Example, feed: Callable[[Tracker, int, int], None]) -> list[TrackEstimate]:
+    """The example's frames through a tracker fed odometry by ``feed(tracker, k0, k1)``
+    (rows ``k0:k1``) before each frame."""
+    tr = Tracker(ex.landmarks, ex.sensor, ex.motion)
+    odo = ex.run.odometry
+    k, out = 0, []
+    for f in ex.run.frames:
+        k1 = int(np.searchsorted(odo.t, f.t, side="right"))
+        if k1 > k:
+            feed(tr, k, k1)
+            k = k1
+        out.append(tr.frame(f.t, f.bearings))
+    return out
+
+
+def test_online_poses_are_the_increments_between_them() -> None:
+    ex = example_run()
+    odo = ex.run.odometry
+    poses = _poses_of(odo, (3.0, -1.0, 2.0))
+    inc = np.vstack([np.zeros((1, 3)), between(poses[:-1], poses[1:])])
+    by_poses = _online(
+        ex,
+        lambda tr, a, b: tr.odometry_poses(odo.t[a:b], poses[a:b, 0], poses[a:b, 1], poses[a:b, 2]),
+    )
+    by_increments = _online(
+        ex, lambda tr, a, b: tr.increments(odo.t[a:b], inc[a:b, 0], inc[a:b, 1], inc[a:b, 2])
+    )
+    assert [e.as_dict() for e in by_poses] == [e.as_dict() for e in by_increments]
+
+
+def test_online_poses_track_as_the_recording_does() -> None:
+    # A node that reads /odom poses, fed pose by pose before each frame, against the
+    # offline run over Odometry.from_poses. Online, a frame between two poses is reached
+    # with the last interval's motion (the next is not known yet); offline, with the
+    # interval it lies in: 1 frame of 240 decides otherwise, the poses agree to a millimetre.
+    ex = example_run()
+    odo = ex.run.odometry
+    poses = _poses_of(odo, (3.0, -1.0, 2.0))
+    offline = track(
+        ex.landmarks,
+        Odometry.from_poses(odo.t, poses[:, 0], poses[:, 1], poses[:, 2]),
+        ex.run.frames,
+        sensor=ex.sensor,
+        motion=ex.motion,
+    ).estimates
+    online = _online(
+        ex,
+        lambda tr, a, b: tr.odometry_poses(odo.t[a:b], poses[a:b, 0], poses[a:b, 1], poses[a:b, 2]),
+    )
+    same = sum(a.state == b.state for a, b in zip(online, offline, strict=True))
+    assert same >= 0.99 * len(offline)
+    both = [(a, b) for a, b in zip(online, offline, strict=True) if a.localized and b.localized]
+    assert len(both) > 50
+    for a, b in both:
+        assert a.pose is not None and b.pose is not None
+        assert a.pose.distance_to(b.pose)[0] < 1e-3
+
+
+def test_online_poses_refused_change_nothing() -> None:
+    ex = example_run()
+    tr = Tracker(ex.landmarks, ex.sensor, ex.motion)
+    with pytest.raises(InputError, match=r"odometry poses x\[1\] is not finite"):
+        tr.odometry_poses([0.0, 1.0], [0.0, float("nan")], [0.0, 0.0], [0.0, 0.0])
+    with pytest.raises(InputError, match="pose row 1 moves the robot in zero time"):
+        tr.odometry_poses([0.0, 0.0], [0.0, 1.0], [0.0, 0.0], [0.0, 0.0])
+    # A refused first increment does not tie the tracker to increments either.
+    with pytest.raises(InputError, match="first increment starts the clock"):
+        tr.increments([0.0], [1.0], [0.0], [0.0])
+    tr.odometry_poses([0.0], [5.0], [5.0], [0.0])  # the first pose: anywhere
+    tr.odometry_poses([1.0, 2.0], [5.0, 5.0], [5.5, 6.0], [0.0, 0.0])  # sideways, kept
+    assert tr._rows[-1][:, 2].tolist() == [0.5, 0.5]  # (t, vx, vy, w): 0.5 m/s sideways
+    with pytest.raises(InputError, match="takes poses; it cannot also take velocities"):
+        tr.odometry([3.0], [0.1], [0.0])
+    with pytest.raises(InputError, match="out of time order"):
+        tr.odometry_poses([1.5], [5.0], [6.0], [0.0])
+    tr.odometry_poses([3.0], [5.0], [6.0], [math.pi / 2])  # from the pose at t = 2
+    assert tr._rows[-1][:, 3].tolist() == pytest.approx([math.pi / 2])
+
+
+@pytest.mark.parametrize("method", ["increments", "odometry_poses"])
+def test_rows_of_different_lengths_are_named(method: str) -> None:
+    # (np.stack's own error came through for increments until 2026-12-05.)
+    tr = Tracker(example_run().landmarks)
+    with pytest.raises(InputError, match="one value per row: got 2, 2, 3, 2"):
+        getattr(tr, method)([0.0, 1.0], [0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0])

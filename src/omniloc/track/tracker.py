@@ -269,6 +269,8 @@ class Tracker:
         self._hold_t: float | None = None
         self._last_row_t: float | None = None
         self._input_kind: str | None = None
+        # The last odometry pose taken (odometry_poses), which the next one is moved from.
+        self._last_pose: FloatArray | None = None
         self._t: float | None = None  # time of the last frame (motion integrated up to it)
         self._warned_no_odometry = False
         self._after_gap = False  # a gap was reported and no odometry row came since
@@ -338,26 +340,31 @@ class Tracker:
         if bad.size:
             k = int(bad[0]) + 1
             raise InputError(
-                f"{what} times must not decrease: row {k} has t={t[k]!r} after {t[k - 1]!r}"
+                f"{what} times must not decrease: row {k} has t={float(t[k])!r} after "
+                f"{float(t[k - 1])!r}"
             )
         if self._last_row_t is not None and t[0] < self._last_row_t:
             raise InputError(
-                f"{what} out of time order: t={t[0]!r} after a row at {self._last_row_t!r}"
+                f"{what} out of time order: t={float(t[0])!r} after a row at {self._last_row_t!r}"
             )
         if self._t is not None and t[0] + self.motion.delay_s < self._t:
             raise InputError(
-                f"{what} at t={t[0]!r} arrived after the frame at t={self._t!r} that it would "
-                "move: feed odometry before the frames it covers"
+                f"{what} at t={float(t[0])!r} arrived after the frame at t={self._t!r} that it "
+                "would move: feed odometry before the frames it covers"
             )
 
-    def _set_kind(self, kind: str) -> None:
-        if self._input_kind is None:
-            self._input_kind = kind
-        elif self._input_kind != kind:
+    def _check_kind(self, kind: str) -> None:
+        """Refuse a kind of odometry other than the one this tracker took first (call
+        :meth:`_set_kind` once the rows are accepted)."""
+        if self._input_kind is not None and self._input_kind != kind:
             raise InputError(
                 f"this tracker takes {self._input_kind}; it cannot also take {kind} "
                 "(feed one kind of odometry)"
             )
+
+    def _set_kind(self, kind: str) -> None:
+        self._check_kind(kind)
+        self._input_kind = kind
 
     def odometry(self, t: ArrayLike, v: ArrayLike, w: ArrayLike) -> None:
         """Velocity odometry: rows ``t`` (s), forward velocity ``v`` (m/s), turn rate ``w``
@@ -401,22 +408,58 @@ class Tracker:
             with a non-zero motion between them.
         """
         tt = _float_array("increments t", t, scalar=True)
-        dd = np.stack(
-            [
-                _float_array(n, a, scalar=True)
-                for n, a in (("dx", dx), ("dy", dy), ("dtheta", dtheta))
-            ],
-            axis=1,
-        )
-        if dd.shape[0] != tt.size:
+        cols = [
+            _float_array(n, a, scalar=True) for n, a in (("dx", dx), ("dy", dy), ("dtheta", dtheta))
+        ]
+        if any(c.size != tt.size for c in cols):
             raise InputError(
-                f"increments t, dx, dy and dtheta must have one value per row: got {tt.size} "
-                f"times and {dd.shape[0]} increments"
+                "increments t, dx, dy and dtheta must have one value per row: got "
+                + ", ".join(str(c.size) for c in (tt, *cols))
+            )
+        self._add_increments(tt, np.stack(cols, axis=1).reshape(-1, 3), "increments")
+
+    def odometry_poses(self, t: ArrayLike, x: ArrayLike, y: ArrayLike, theta: ArrayLike) -> None:
+        """Odometry as poses: the odometry's own estimate of the pose (m, m, rad) at times
+        ``t``, in its own frame (ROS's ``/odom``, or the transform from ``odom`` to the
+        robot); only the motion between poses is read. The first pose ever starts the
+        clock; each later one adds the motion from the pose before it (this call's or the
+        last call's), as :meth:`increments` does, sideways part included; after the last
+        pose the robot is taken to go on as in the last interval until a frame.
+
+        Raises
+        ------
+        InputError
+            As :meth:`increments`; also two different poses at one time. Nothing is changed
+            then.
+        """
+        tt = _float_array("odometry poses t", t, scalar=True)
+        cols = [
+            _float_array(f"odometry poses {n}", a, scalar=True)
+            for n, a in (("x", x), ("y", y), ("theta", theta))
+        ]
+        if any(c.size != tt.size for c in cols):
+            raise InputError(
+                "odometry poses t, x, y and theta must have one value per row: got "
+                + ", ".join(str(c.size) for c in (tt, *cols))
             )
         if tt.size == 0:
             return
-        self._check_row_times(tt, "increments")
-        self._set_kind("increments")
+        poses = np.stack(cols, axis=1)
+        self._check_kind("poses")
+        chain = poses if self._last_pose is None else np.vstack([self._last_pose, poses])
+        dd = between(chain[:-1], chain[1:])
+        if self._last_pose is None:
+            dd = np.vstack([np.zeros((1, 3)), dd])
+        self._add_increments(tt, dd, "poses")
+        self._last_pose = poses[-1].copy()
+
+    def _add_increments(self, tt: FloatArray, dd: FloatArray, kind: str) -> None:
+        """Rows of increments ``dd`` (k, 3) ending at times ``tt`` (k,), checked first:
+        nothing is changed when they are refused."""
+        if tt.size == 0:
+            return
+        self._check_row_times(tt, "odometry poses" if kind == "poses" else kind)
+        self._check_kind(kind)
         prev = self._last_row_t
         if prev is None:
             if np.any(dd[0] != 0):
@@ -429,9 +472,11 @@ class Tracker:
         dur = tt - starts
         moving = np.any(dd != 0, axis=1)
         bad = np.flatnonzero((dur <= 0) & moving)
-        if bad.size and not (bad[0] == 0 and self._last_row_t is None):
+        if bad.size:
             k = int(bad[0])
-            raise InputError(f"increment row {k} moves the robot in zero time (t={tt[k]!r})")
+            what = "pose" if kind == "poses" else "increment"
+            raise InputError(f"{what} row {k} moves the robot in zero time (t={float(tt[k])!r})")
+        self._set_kind(kind)
         keep = dur > 0
         tw = np.zeros((tt.size, 3))
         if keep.any():
