@@ -1310,6 +1310,10 @@ GROUNDTRUTH_FILES: Pool = (
     ("one row", file_with("gt.csv", "t,x,y,theta\n0,0,0,0\n")),
     ("equal times", file_with("gt.csv", "t,x,y,theta\n0,0,0,0\n0,1,1,1\n")),
     ("gap nan", file_with("gt.csv", "t,x,y,theta,gap\n0,0,0,0,nan\n1,1,1,1,0\n")),
+    ("tum: equal times", file_with("gt.tum", "0 0 0 0 0 0 0 1\n0 1 0 0 0 0 0 1\n")),
+    ("tum: leaning", file_with("gt.tum", "0 0 0 0 0.5 0 0 0.866\n")),
+    ("tum: nan", file_with("gt.tum", "0 0 0 0 0 0 0 1\n1 nan 0 0 0 0 0 1\n")),
+    ("tum: then a csv line", file_with("gt.tum", "0 0 0 0 0 0 0 1\n1,0,0,0\n")),
 )
 FRAME_FILES: Pool = (
     *TEXT_FILES,

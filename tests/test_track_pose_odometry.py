@@ -20,6 +20,7 @@ from omniloc.track import (
     Odometry,
     Tracker,
     TrackEstimate,
+    load_groundtruth,
     load_odometry,
     track,
 )
@@ -293,3 +294,23 @@ def test_rows_of_different_lengths_are_named(method: str) -> None:
     tr = Tracker(example_run().landmarks)
     with pytest.raises(InputError, match="one value per row: got 2, 2, 3, 2"):
         getattr(tr, method)([0.0, 1.0], [0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.0])
+
+
+def test_a_tum_ground_truth_reads_as_the_csv(tmp_path: Path) -> None:
+    # examples/grid-run/groundtruth.tum is `omniloc track --truth-out`'s: the true poses at
+    # the frames' times, which the CSV track gives by interpolation.
+    examples = Path(__file__).resolve().parent.parent / "examples" / "grid-run"
+    tum = load_groundtruth(examples / "groundtruth.tum")
+    csv = load_groundtruth(examples / "groundtruth.csv")
+    poses, _ = csv.at(tum.t)
+    assert tum.t.size == 240
+    assert np.abs(poses[:, :2] - np.c_[tum.x, tum.y]).max() < 1e-6  # (the file's 6 decimals)
+    assert np.abs(np.angle(np.exp(1j * (poses[:, 2] - tum.theta)))).max() < 1e-8
+    leaning = tmp_path / "gt.tum"
+    leaning.write_text(_tum_lines(np.array([0.0, 1.0]), np.zeros((2, 3)), math.radians(30.0)))
+    with pytest.raises(InputError, match=r"leans 30\.0 deg.*ground truth was read as a TUM file"):
+        load_groundtruth(leaning)
+    same_time = tmp_path / "gt2.tum"
+    same_time.write_text("0 0 0 0 0 0 0 1\n0 1 0 0 0 0 0 1\n")
+    with pytest.raises(InputError, match="increase"):
+        load_groundtruth(same_time)

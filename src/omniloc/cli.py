@@ -288,7 +288,8 @@ def _build_parser() -> argparse.ArgumentParser:
         required=True,
         type=Path,
         action="append",
-        help="true track of the same run: t,x,y,theta (one per --odometry, in their order)",
+        help="true track of the same run: CSV t,x,y,theta or a TUM file (one per --odometry, in "
+        "their order)",
     )
     _add_settings_out(f)
     fs = sub.add_parser(
@@ -309,7 +310,8 @@ def _build_parser() -> argparse.ArgumentParser:
         required=True,
         type=Path,
         action="append",
-        help="true track of the same run: t,x,y,theta (one per --frames, in their order)",
+        help="true track of the same run: CSV t,x,y,theta or a TUM file (one per --frames, in "
+        "their order)",
     )
     fs.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
     fs.add_argument("--fov", type=_fov_deg, help="full field of view, deg (default: all around)")
@@ -351,7 +353,7 @@ def _add_fit_confidence_parser(sub: Any) -> None:
     for name, what in (
         ("--odometry", ODOMETRY_HELP),
         ("--frames", "frames: CSV t,bearing or MRCLAM robotR_frames.csv"),
-        ("--groundtruth", "true track t,x,y,theta"),
+        ("--groundtruth", "true track: CSV t,x,y,theta or a TUM file"),
     ):
         fc.add_argument(
             name,
@@ -442,8 +444,9 @@ def _add_track_parser(sub: Any) -> None:
     t.add_argument(
         "--groundtruth",
         type=Path,
-        help="true track t,x,y,theta: errors in the summary and figure; with frames that name "
-        "their landmarks (MRCLAM's), also what the data allow a localizer told them",
+        help="true track (CSV t,x,y,theta or a TUM file): errors in the summary and figure; "
+        "with frames that name their landmarks (MRCLAM's), also what the data allow a "
+        "localizer told them",
     )
     t.add_argument("--out", type=_out_path, metavar="TRAJ.tum", help="localized poses, TUM format")
     t.add_argument(

@@ -370,10 +370,11 @@ ODOMETRY_W_WARN = 2.0 * math.pi
 ODOMETRY_V_WARN = 10.0
 
 
-#: Largest tilt (roll and pitch together, rad) of a TUM file's poses read as odometry: the
-#: heading of poses that lean a little (a 3-D odometry on a floor that is not quite level)
-#: is the robot's; beyond it the trajectory is not a planar robot's.
-ODOMETRY_MAX_TILT = math.radians(10.0)
+#: Largest tilt (roll and pitch together, rad) of a TUM file's poses read as odometry or
+#: ground truth: the heading of poses that lean a little (a 3-D odometry or motion capture
+#: on a floor that is not quite level) is the robot's; beyond it the trajectory is not a
+#: planar robot's.
+TUM_MAX_TILT = math.radians(10.0)
 
 
 def _is_tum(path: PathLike) -> bool:
@@ -410,7 +411,7 @@ def load_odometry(path: PathLike) -> Odometry:
         from .io import read_tum  # (io reads this module's records)
 
         try:
-            a = read_tum(path, max_tilt=ODOMETRY_MAX_TILT)
+            a = read_tum(path, max_tilt=TUM_MAX_TILT)
             _check_times(str(path), a[:, 0], strict=False)
             return Odometry.from_poses(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
         except InputError as exc:
@@ -468,10 +469,23 @@ def load_odometry(path: PathLike) -> Odometry:
 
 
 def load_groundtruth(path: PathLike) -> GroundTruth:
-    """Read a ground-truth track (``t,x,y,theta[,gap]``; theta in radians).
+    """Read a ground-truth track: CSV ``t,x,y,theta[,gap]`` (theta in radians) or a TUM file
+    (``t x y z qx qy qz qw``, as evo and ``omniloc track --truth-out`` write; poses that lean
+    up to :data:`TUM_MAX_TILT` are read for their heading).
 
     A heading beyond a full turn is logged as a warning naming the line: degrees, probably
     (radians unwrapped over several turns are read correctly and may ignore it)."""
+    if _is_tum(path):
+        from .io import read_tum  # (io reads this module's records)
+
+        try:
+            a = read_tum(path, max_tilt=TUM_MAX_TILT)
+            _check_times(str(path), a[:, 0])
+            return GroundTruth(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
+        except InputError as exc:
+            raise InputError(
+                f"{exc}; the ground truth was read as a TUM file (t x y z qx qy qz qw)"
+            ) from exc
     src, header, rows = _table(path, "ground truth")
     t, x, y, th = _columns(src, header, rows, ("t", "x", "y", "theta"))
     gap = _columns(src, header, rows, ("gap",))[0] if "gap" in header else None
