@@ -1,5 +1,7 @@
 """Odometry given as a pose track (ROS's ``nav_msgs/Odometry``, a TUM file from evo):
-``Odometry.from_poses`` and ``load_odometry`` on ``t,x,y,theta`` CSV and TUM files."""
+``Odometry.from_poses``, ``load_odometry`` on ``t,x,y,theta`` CSV and TUM files,
+``Tracker.odometry_poses`` online, ``omniloc track --odometry ODOM.tum``; and a ground truth
+read from a TUM file."""
 
 from __future__ import annotations
 
