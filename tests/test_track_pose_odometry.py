@@ -316,3 +316,35 @@ def test_a_tum_ground_truth_reads_as_the_csv(tmp_path: Path) -> None:
     same_time.write_text("0 0 0 0 0 0 0 1\n0 1 0 0 0 0 0 1\n")
     with pytest.raises(InputError, match="increase"):
         load_groundtruth(same_time)
+
+
+def test_frames_and_odometry_of_two_clocks_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # A bag's stamps (seconds since 1970) against frames stamped from 0: no frame lies within
+    # the odometry's time, which the tracker would take for a robot standing still, lost.
+    ex = example_run()
+    odo = ex.run.odometry
+    late = Odometry(odo.t + 1.7e9, odo.v, odo.w)
+    with pytest.raises(InputError, match=r"frames \(t = 0.125 to 59.875 s\) and the odometry "):
+        track(ex.landmarks, late, ex.run.frames, sensor=ex.sensor, motion=ex.motion)
+    early = Odometry(odo.t - 100.0, odo.v, odo.w)
+    with pytest.raises(InputError, match="share no time: are they stamped by one clock"):
+        track(ex.landmarks, early, ex.run.frames, sensor=ex.sensor, motion=ex.motion)
+    # Odometry that starts after the first frames, or ends before the last, is not refused.
+    part = Odometry(odo.t[100:-100], odo.v[100:-100], odo.w[100:-100])
+    run = track(ex.landmarks, part, ex.run.frames, sensor=ex.sensor, motion=ex.motion)
+    assert len(run.estimates) == len(ex.run.frames)
+    examples = Path(__file__).resolve().parent.parent / "examples" / "grid-run"
+    shifted = tmp_path / "odometry.csv"
+    shifted.write_text(
+        "t,v,w\n"
+        + "".join(
+            f"{float(t) + 1.7e9!r},{float(v)!r},{float(w)!r}\n"
+            for t, v, w in zip(odo.t, odo.v, odo.w, strict=True)
+        )
+    )
+    args = ["track", "--map", str(examples / "landmarks.csv"), "--odometry", str(shifted)]
+    assert main([*args, "--frames", str(examples / "frames.csv")]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "odometry (t = 1700000000 to 1700000060 s)" in err

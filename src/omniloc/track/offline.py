@@ -91,8 +91,8 @@ def track(
     Raises
     ------
     InputError
-        Frames out of time order (the message names the frame), or what
-        :meth:`Tracker.frame` refuses.
+        Frames out of time order (the message names the frame), frames and odometry that
+        share no time (two clocks), or what :meth:`Tracker.frame` refuses.
 
     Examples
     --------
@@ -119,6 +119,13 @@ def track(
         raise InputError(
             f"frames out of time order: frame {k} at t={float(times[k])!r} "
             f"after t={float(times[k - 1])!r}"
+        )
+    if times.size and not (times[0] <= odometry.t[-1] and odometry.t[0] <= times[-1]):
+        # (Each file may be right on its own: two clocks, or seconds against nanoseconds.)
+        f0, f1, o0, o1 = (float(v) for v in (times[0], times[-1], odometry.t[0], odometry.t[-1]))
+        raise InputError(
+            f"the frames (t = {f0:.12g} to {f1:.12g} s) and the odometry (t = {o0:.12g} to "
+            f"{o1:.12g} s) share no time: are they stamped by one clock, in seconds?"
         )
     tracker = Tracker(lm, sensor, motion, config)
     out: list[TrackEstimate] = []
