@@ -367,6 +367,35 @@ def test_generic_frames_with_a_ground_truth_say_nothing_of_the_bound(
     assert "what the data allow" not in out  # the frames do not say which landmark is which
 
 
+def test_a_ground_truth_of_another_time_is_refused_and_a_partial_one_said(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omniloc.track import GroundTruth, write_groundtruth
+
+    lm, odo, fr = _write_inputs(tmp_path)
+    truth = _run().truth
+    argv = ["-q", "track", "--map", str(lm), "--odometry", str(odo), "--frames", str(fr)]
+    # Stamped by another clock: refused before the tracker runs (it used to print "0.0 % of
+    # localized frames" and an RMSE of nan, with numpy's warning).
+    late = tmp_path / "late.csv"
+    write_groundtruth(late, GroundTruth(truth.t + 1.7e9, truth.x, truth.y, truth.theta))
+    assert main([*argv, "--groundtruth", str(late)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "share no time" in err and "t = 1700000000 to" in err
+    # Covering the first half only: the errors are over the frames it covers, and it says
+    # how many localized frames it leaves out.
+    half = tmp_path / "half.csv"
+    keep = truth.t <= truth.t[0] + 0.5 * (truth.t[-1] - truth.t[0])
+    write_groundtruth(
+        half, GroundTruth(truth.t[keep], truth.x[keep], truth.y[keep], truth.theta[keep])
+    )
+    assert main([*argv, "--groundtruth", str(half)]) == 0
+    out = capsys.readouterr().out
+    line = next(ln for ln in out.splitlines() if ln.startswith("against the ground truth"))
+    assert "100.0 % of localized frames" in line and "nan" not in line
+    assert "localized frames outside the ground truth's time)" in line
+
+
 @pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
 def test_track_on_mrclam_with_its_ground_truth_says_what_the_data_allow(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]

@@ -965,6 +965,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
     frames = _frames_for_track(args, lm, truth is not None)
     if not frames:
         raise InputError(f"{args.frames}: no frames")
+    if truth is not None and not (frames[0].t <= truth.t[-1] and truth.t[0] <= frames[-1].t):
+        raise InputError(
+            f"{args.groundtruth}: the ground truth (t = {float(truth.t[0]):.12g} to "
+            f"{float(truth.t[-1]):.12g} s) and the frames (t = {frames[0].t:.12g} to "
+            f"{frames[-1].t:.12g} s) share no time: are they stamped by one clock, in seconds?"
+        )
     changes: dict[str, Any] = {}
     if args.sigma is not None:
         changes["sigma"] = float(np.deg2rad(args.sigma))
@@ -1021,12 +1027,25 @@ def _cmd_track(args: argparse.Namespace) -> int:
 
         ok, d_pos, d_hdg = errors_against(truth, est)
         loc = np.array([e.localized for e in est])
-        if loc.any():
+        # (Localized frames outside the ground truth's time have no error to count.)
+        scored = loc & np.isfinite(d_pos)
+        if scored.any():
+            beyond = int(loc.sum() - scored.sum())
             print(
                 f"against the ground truth: localized and within 0.3 m / 5 deg "
-                f"{100 * np.mean(ok[loc]):.1f} % of localized frames; position RMSE "
-                f"{np.sqrt(np.nanmean(d_pos[loc] ** 2)):.3f} m, heading RMSE "
-                f"{np.sqrt(np.nanmean(d_hdg[loc] ** 2)):.2f} deg"
+                f"{100 * np.mean(ok[scored]):.1f} % of localized frames; position RMSE "
+                f"{np.sqrt(np.mean(d_pos[scored] ** 2)):.3f} m, heading RMSE "
+                f"{np.sqrt(np.mean(d_hdg[scored] ** 2)):.2f} deg"
+                + (
+                    f" ({beyond} localized frames outside the ground truth's time)"
+                    if beyond
+                    else ""
+                )
+            )
+        elif loc.any():
+            print(
+                f"against the ground truth: none of the {int(loc.sum())} localized frames lies "
+                f"within its time (t = {float(truth.t[0]):.12g} to {float(truth.t[-1]):.12g} s)"
             )
         said = _what_the_data_allow(lm, odo, frames, truth, sensor, motion, config, est[0].t)
         if said:
