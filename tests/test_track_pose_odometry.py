@@ -348,3 +348,43 @@ def test_frames_and_odometry_of_two_clocks_are_refused(
     assert main([*args, "--frames", str(examples / "frames.csv")]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "odometry (t = 1700000000 to 1700000060 s)" in err
+
+
+def test_times_that_are_not_seconds_are_warned_of(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    from omniloc.track import load_frames
+
+    examples = Path(__file__).resolve().parent.parent / "examples" / "grid-run"
+    files = {
+        "odometry.csv": "t,v,w\n{t0},0.1,0\n{t1},0.1,0\n",
+        "poses.csv": "t,x,y,theta\n{t0},0,0,0\n{t1},0.1,0,0\n",
+        "odom.tum": "{t0} 0 0 0 0 0 0 1\n{t1} 0.1 0 0 0 0 0 1\n",
+        "gt.csv": "t,x,y,theta\n{t0},0,0,0\n{t1},0.1,0,0\n",
+        "frames.csv": "t,bearing\n{t0},0.1\n{t1},0.2\n",
+    }
+    readers = {
+        "odometry.csv": load_odometry,
+        "poses.csv": load_odometry,
+        "odom.tum": load_odometry,
+        "gt.csv": load_groundtruth,
+        "frames.csv": load_frames,
+    }
+    for stamps, warned in (
+        ((1.7e18, 1.7e18 + 2e7), True),  # a ROS stamp in nanoseconds
+        ((0.0, 2e4), True),  # microseconds from the start, 50 Hz
+        ((1.7e9, 1.7e9 + 0.02), False),  # seconds since 1970
+    ):
+        for name, text in files.items():
+            path = tmp_path / name
+            path.write_text(text.format(t0=repr(stamps[0]), t1=repr(stamps[1])))
+            caplog.clear()
+            with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
+                readers[name](path)
+            assert ("are they in nanoseconds" in caplog.text) is warned, (name, stamps)
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
+        load_odometry(examples / "odometry.csv")
+        load_frames(examples / "frames.csv")
+        load_groundtruth(examples / "groundtruth.csv")
+    assert "nanoseconds" not in caplog.text

@@ -93,6 +93,29 @@ def _check_times(
         raise InputError(f"{at}: times must {order} (t={float(t[k])!r} after {float(t[k - 1])!r})")
 
 
+#: Above these a file's times are probably not seconds (a warning, not an error): a time
+#: beyond 1e11 s (3,000 years; milliseconds since 1970 are 1.7e12, a ROS stamp in
+#: nanoseconds 1.7e18) or a median interval beyond 1e4 s (nearly three hours between rows).
+TIME_WARN = 1e11
+INTERVAL_WARN = 1e4
+
+
+def _warn_time_unit(src: str, t: FloatArray) -> None:
+    """Log a warning when the times ``t`` of file ``src`` do not look like seconds."""
+    if t.size == 0:
+        return
+    big = float(np.max(np.abs(t)))
+    step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    if big > TIME_WARN or step > INTERVAL_WARN:
+        log.warning(
+            "%s: times up to %.3g s, a median of %.3g s apart: are they in nanoseconds (a ROS "
+            "stamp), microseconds or milliseconds? omniloc reads seconds",
+            src,
+            big,
+            step,
+        )
+
+
 @dataclass(frozen=True)
 class Odometry:
     """Recorded odometry: forward velocity and turn rate, each holding until the next row.
@@ -413,6 +436,7 @@ def load_odometry(path: PathLike) -> Odometry:
         try:
             a = read_tum(path, max_tilt=TUM_MAX_TILT)
             _check_times(str(path), a[:, 0], strict=False)
+            _warn_time_unit(str(path), a[:, 0])
             return Odometry.from_poses(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
         except InputError as exc:
             raise InputError(
@@ -425,6 +449,7 @@ def load_odometry(path: PathLike) -> Odometry:
             raise InputError(f"{src}: no odometry rows")
         lines = [n for n, _ in rows]
         _check_times(src, t, strict=False, lines=lines)
+        _warn_time_unit(src, t)
         moved = (t[1:] == t[:-1]) & (
             (x[1:] != x[:-1]) | (y[1:] != y[:-1]) | (np.asarray(wrap(theta[1:] - theta[:-1])) != 0)
         )
@@ -447,6 +472,7 @@ def load_odometry(path: PathLike) -> Odometry:
     if t.size == 0:
         raise InputError(f"{src}: no odometry rows")
     _check_times(src, t, strict=False, lines=[n for n, _ in rows])
+    _warn_time_unit(src, t)
     for values, limit, what, unit, other in (
         (w, ODOMETRY_W_WARN, "turn rate w", "rad/s", "degrees per second"),
         (v, ODOMETRY_V_WARN, "speed v", "m/s", "mm/s or cm/s"),
@@ -481,6 +507,7 @@ def load_groundtruth(path: PathLike) -> GroundTruth:
         try:
             a = read_tum(path, max_tilt=TUM_MAX_TILT)
             _check_times(str(path), a[:, 0])
+            _warn_time_unit(str(path), a[:, 0])
             return GroundTruth(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
         except InputError as exc:
             raise InputError(
@@ -490,6 +517,7 @@ def load_groundtruth(path: PathLike) -> GroundTruth:
     t, x, y, th = _columns(src, header, rows, ("t", "x", "y", "theta"))
     gap = _columns(src, header, rows, ("gap",))[0] if "gap" in header else None
     _check_times(src, t, lines=[n for n, _ in rows])
+    _warn_time_unit(src, t)
     if th.size:
         k = int(np.argmax(np.abs(th)))
         if abs(th[k]) > 2.0 * math.pi:
@@ -560,6 +588,7 @@ def load_frames(
     (t,) = _columns(src, header, rows, ("t",))
     (b,) = _columns(src, header, [r for r, ok in zip(rows, seen, strict=True) if ok], (col,))
     _check_times(src, t, strict=False, lines=[n for n, _ in rows])
+    _warn_time_unit(src, t)
     if degrees or col == "bearing_deg":
         b = np.deg2rad(b)
     else:
@@ -582,6 +611,7 @@ def _mrclam_frames(
 ) -> list[Frame]:
     (t,) = _columns(src, header, rows, ("t",))
     _check_times(src, t, strict=False, lines=[n for n, _ in rows])
+    _warn_time_unit(src, t)
     k_lm, k_rb = header.index("landmarks"), header.index("robot_detections")
     frames = []
     for (n, r), tt in zip(rows, t, strict=True):
