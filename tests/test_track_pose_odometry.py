@@ -361,7 +361,7 @@ def test_times_that_are_not_seconds_are_warned_of(
         "poses.csv": "t,x,y,theta\n{t0},0,0,0\n{t1},0.1,0,0\n",
         "odom.tum": "{t0} 0 0 0 0 0 0 1\n{t1} 0.1 0 0 0 0 0 1\n",
         "gt.csv": "t,x,y,theta\n{t0},0,0,0\n{t1},0.1,0,0\n",
-        "frames.csv": "t,bearing\n{t0},0.1\n{t1},0.2\n",
+        "frames.csv": "t,bearing\n{t0},0.1\n{t0},0.3\n{t0},0.4\n{t1},0.2\n",
     }
     readers = {
         "odometry.csv": load_odometry,

@@ -105,7 +105,8 @@ def _warn_time_unit(src: str, t: FloatArray) -> None:
     if t.size == 0:
         return
     big = float(np.max(np.abs(t)))
-    step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+    distinct = np.unique(t)  # (a frame's bearings share one time)
+    step = float(np.median(np.diff(distinct))) if distinct.size > 1 else 0.0
     if big > TIME_WARN or step > INTERVAL_WARN:
         log.warning(
             "%s: times up to %.3g s, a median of %.3g s apart: are they in nanoseconds (a ROS "
