@@ -1297,6 +1297,8 @@ ODOMETRY_FILES: Pool = (
     ("poses: theta nan", file_with("odo.csv", "t,x,y,theta\n0,0,0,nan\n")),
     ("poses: no rows", file_with("odo.csv", "t,x,y,theta\n")),
     ("poses and velocities", file_with("odo.csv", "t,x,y,theta,v,w\n0,0,0,0,0,0\n")),
+    ("vy nan", file_with("odo.csv", "t,v,w,vy\n0,0,0,nan\n")),
+    ("vy empty", file_with("odo.csv", "t,v,w,vy\n0,0,0,\n")),
     ("tum: 7 numbers", file_with("odo.tum", "0 0 0 0 0 0 1\n")),
     ("tum: then 9", file_with("odo.tum", "0 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1 5\n")),
     ("tum: zero quaternion", file_with("odo.tum", "0 0 0 0 0 0 0 0\n")),
@@ -1423,7 +1425,7 @@ def _track_targets() -> list[Target]:
             "Odometry",
             lambda kw: Odometry(**kw),
             lambda: {"t": [0.0, 1.0], "v": [0.0, 0.1], "w": [0.0, 0.0]},
-            {k: Arg((f"odometry {k}", "odometry"), arrays) for k in ("t", "v", "w")},
+            {k: Arg((f"odometry {k}", "odometry"), arrays) for k in ("t", "v", "w", "vy")},
             check=lambda kw, v: None,
         ),
         Target(
@@ -1753,7 +1755,7 @@ def _tracker_targets() -> list[Target]:
 
     def odometry(kw: dict[str, Any]) -> Any:
         tr = Tracker(room(), omniloc.SensorModel(sigma=math.radians(0.5)))
-        tr.odometry(kw["t"], kw["v"], kw["w"])
+        tr.odometry(kw["t"], kw["v"], kw["w"], kw.get("vy"))
         return [tr.frame(3.0, omniloc.predict_bearings(room().xy, ROOM_POSE))]
 
     def odometry_poses(kw: dict[str, Any]) -> Any:
@@ -1775,7 +1777,7 @@ def _tracker_targets() -> list[Target]:
             "Tracker.odometry",
             odometry,
             lambda: {"t": [0.0, 1.0], "v": [0.0, 0.1], "w": [0.0, 0.0]},
-            {k: Arg(("odometry",), arrays) for k in ("t", "v", "w")},
+            {k: Arg(("odometry",), arrays) for k in ("t", "v", "w", "vy")},
             check=check,
         ),
         Target(

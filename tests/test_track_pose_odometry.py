@@ -8,6 +8,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -15,9 +16,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from omniloc import Pose, predict_bearings
 from omniloc.cli import main
 from omniloc.errors import InputError
 from omniloc.track import (
+    Frame,
     MotionModel,
     Odometry,
     Tracker,
@@ -123,16 +126,83 @@ def test_bad_pose_tracks_are_refused_by_name(args: tuple, match: str) -> None:
         Odometry.from_poses(*args)
 
 
-def test_sideways_motion_is_dropped_with_a_warning(caplog: pytest.LogCaptureFixture) -> None:
+def test_sideways_motion_is_kept_and_written_back(tmp_path: Path) -> None:
+    from omniloc.track import write_odometry
+
     t = np.arange(0.0, 10.5, 0.5)
-    with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
-        crab = Odometry.from_poses(t, np.zeros_like(t), 0.2 * t, np.zeros_like(t))
-    assert "sideways by 2.00 m" in caplog.text
+    crab = Odometry.from_poses(t, np.zeros_like(t), 0.2 * t, np.zeros_like(t))
+    assert crab.vy is not None
     assert np.allclose(crab.v, 0.0) and np.allclose(crab.w, 0.0)
-    caplog.clear()
-    with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
-        Odometry.from_poses(t, 0.2 * t, np.zeros_like(t), np.zeros_like(t))
+    assert np.allclose(crab.vy[:-1], 0.2) and crab.vy[-1] == 0.0
+    path = tmp_path / "crab.csv"
+    write_odometry(path, crab)
+    assert path.read_text().splitlines()[0] == "t,v,w,vy"
+    back = load_odometry(path)
+    assert back.vy is not None and np.array_equal(back.vy, crab.vy)
+    with pytest.raises(InputError, match="t, v, w and vy must have one value per row"):
+        Odometry([0.0, 1.0], [0.0, 0.0], [0.0, 0.0], [0.0])
+
+
+def test_a_sensor_frame_off_the_centre_is_tracked_offline_as_online() -> None:
+    # The poses of a frame 0.3 m ahead of the robot's centre: it moves sideways whenever
+    # the robot turns. Offline (Odometry.from_poses, vy kept) and online (odometry_poses)
+    # carry the hypotheses alike; with the sideways part dropped they would part by
+    # centimetres.
+    ex = example_run()
+    odo = ex.run.odometry
+    centre = _poses_of(odo, (3.0, -1.0, 2.0))
+    ahead = compose(centre, np.array([0.3, 0.0, 0.0]))
+    from_poses = Odometry.from_poses(odo.t, ahead[:, 0], ahead[:, 1], ahead[:, 2])
+    assert from_poses.vy is not None and np.abs(from_poses.vy).max() > 0.05
+    # The bearings as the sensor 0.3 m ahead sees them (the same noise; clutter unmoved).
+    L = ex.landmarks.xy
+    frames = []
+    for f in ex.run.frames:
+        true_c, _ = ex.run.truth.at(f.t)
+        true_s = compose(true_c[0], np.array([0.3, 0.0, 0.0]))
+        b = f.bearings.copy()
+        for i, row in enumerate(f.truth or ()):
+            if row is not None:
+                b[i] += (
+                    predict_bearings(L[[row]], true_s)[0] - predict_bearings(L[[row]], true_c[0])[0]
+                )
+        frames.append(Frame(f.t, b))
+    sensor_ex = replace(ex, run=replace(ex.run, frames=frames))
+    offline = track(ex.landmarks, from_poses, frames, sensor=ex.sensor, motion=ex.motion).estimates
+    online = _online(
+        sensor_ex,
+        lambda tr, a, b: tr.odometry_poses(odo.t[a:b], ahead[a:b, 0], ahead[a:b, 1], ahead[a:b, 2]),
+    )
+    both = [(a, b) for a, b in zip(online, offline, strict=True) if a.localized and b.localized]
+    assert len(both) > 50
+    assert max(a.pose.distance_to(b.pose)[0] for a, b in both) < 2e-3  # type: ignore[union-attr]
+    # ... and the sensor's pose is the one localized: right against the truth moved ahead.
+    for e in (e for e in offline if e.localized):
+        true_c, _ = ex.run.truth.at(e.t)
+        assert e.pose is not None
+        true_s = Pose(*compose(true_c[0], np.array([0.3, 0.0, 0.0])))
+        assert e.pose.distance_to(true_s)[0] < 0.1
+
+
+def test_fit_motion_says_it_leaves_the_sideways_part_out(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    from omniloc.track import GroundTruth, estimate_motion
+
+    ex = example_run()
+    odo, truth = ex.run.odometry, ex.run.truth
+    centre = _poses_of(odo, (0.0, 0.0, 0.0))
+    ahead = compose(centre, np.array([0.3, 0.0, 0.0]))
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.calibrate"):
+        estimate_motion(Odometry.from_poses(odo.t, centre[:, 0], centre[:, 1], centre[:, 2]), truth)
     assert "sideways" not in caplog.text
+    moved = compose(np.c_[truth.x, truth.y, truth.theta], np.array([0.3, 0.0, 0.0]))
+    truth_ahead = GroundTruth(truth.t, moved[:, 0], moved[:, 1], moved[:, 2])
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.calibrate"):
+        estimate_motion(
+            Odometry.from_poses(odo.t, ahead[:, 0], ahead[:, 1], ahead[:, 2]), truth_ahead
+        )
+    assert "run 1: the odometry moves sideways by" in caplog.text
 
 
 def _example_pose_files(tmp_path: Path, tilt: float = 0.0) -> tuple[Odometry, Path, Path]:

@@ -37,6 +37,7 @@ likelihood's gain pays for the two extra parameters), the tracker's ``core_share
 from __future__ import annotations
 
 import itertools
+import logging
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
@@ -53,6 +54,8 @@ from ..maps import LandmarkMap, as_landmark_map
 from ..sensor import chi2_quantile, clutter_by_detections
 from .data import Frame, GroundTruth, Odometry
 from .motion import MotionModel, between, integrate
+
+log = logging.getLogger(__name__)
 
 __all__ = [
     "CoreTailFit",
@@ -304,6 +307,20 @@ def estimate_motion(
     given as a list of one gives the same fit as given bare.
     """
     pairs = _paired(odometry, truth, _odometry, "odometry", "run")
+    for n, (odo, _) in enumerate(pairs, 1):
+        # The fit is of a wheeled robot's motion (forward and turning): say what it leaves out.
+        if odo.vy is not None:
+            dt = np.diff(odo.t)
+            side = float(np.abs(odo.vy[:-1]) @ dt)
+            path = float(np.hypot(odo.v[:-1], odo.vy[:-1]) @ dt)
+            if side > max(0.01 * path, 0.05):
+                log.warning(
+                    "run %d: the odometry moves sideways by %.2f m over a path of %.2f m; the "
+                    "motion model is fitted to its forward motion and turns, without it",
+                    n,
+                    side,
+                    path,
+                )
     lengths = _seconds(stretch_s, "stretch_s", "positive lengths")
     if not (lengths > 0).all():
         raise InputError(f"stretch_s must be positive lengths in seconds, got {shorten(stretch_s)}")

@@ -4,13 +4,14 @@ File formats (CSV, a header line, ``#`` comments and blank lines allowed; every 
 the file and the line):
 
 odometry
-    ``t,v,w``: time (s), forward velocity (m/s), turn rate (rad/s). Each row holds until the
-    next (as recorded by MRCLAM's robots). Times must not decrease; of rows with equal times
+    ``t,v,w``: time (s), forward velocity (m/s), turn rate (rad/s), and optionally ``vy``,
+    a sideways velocity (m/s). Each row holds until the next (as recorded by MRCLAM's
+    robots). Times must not decrease; of rows with equal times
     (a logger's duplicates) the last one holds. Or a pose track in the odometry's own frame,
     as ROS's ``nav_msgs/Odometry`` holds it: ``t,x,y,theta`` (metres, radians), or a TUM
     file (``t x y z qx qy qz qw``, what ``evo_traj ... --save_as_tum`` writes of a bag's
-    odometry); each interval becomes the forward velocity and turn rate that carry one pose
-    to the next (:meth:`Odometry.from_poses`).
+    odometry); each interval becomes the velocities and turn rate that carry one pose to the
+    next (:meth:`Odometry.from_poses`).
 frames
     Either the generic ``t,bearing`` (one row per bearing, radians, or degrees with
     ``degrees=True`` or a ``bearing_deg`` column; rows with equal ``t`` form one frame; a row
@@ -129,19 +130,27 @@ class Odometry:
         Forward velocity, m/s.
     w : array_like, shape (n,)
         Turn rate, rad/s (counter-clockwise positive).
+    vy : array_like, shape (n,), optional
+        Sideways velocity, m/s (to the left); None: none, as for a wheeled robot's own
+        frame. A frame mounted off the robot's centre (a sensor's) moves sideways as the
+        robot turns: :meth:`from_poses` keeps that part.
     """
 
     t: FloatArray
     v: FloatArray
     w: FloatArray
+    vy: FloatArray | None = None
 
     def __post_init__(self) -> None:
         t = _float_array("odometry t", self.t)
         v = _float_array("odometry v", self.v)
         w = _float_array("odometry w", self.w)
-        if not (t.shape == v.shape == w.shape):
+        vy = None if self.vy is None else _float_array("odometry vy", self.vy)
+        if not (t.shape == v.shape == w.shape) or (vy is not None and vy.shape != t.shape):
             raise InputError(
-                f"odometry t, v and w must have one value per row: got {t.size}, {v.size}, {w.size}"
+                f"odometry t, v, w{' and vy' if vy is not None else ''} must have one value "
+                f"per row: got {t.size}, {v.size}, {w.size}"
+                + (f", {vy.size}" if vy is not None else "")
             )
         if t.size == 0:
             raise InputError("odometry has no rows")
@@ -150,9 +159,11 @@ class Odometry:
         last = np.concatenate([t[1:] > t[:-1], [True]])
         if not last.all():
             t, v, w = t[last], v[last], w[last]
+            vy = None if vy is None else vy[last]
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "v", v)
         object.__setattr__(self, "w", w)
+        object.__setattr__(self, "vy", vy)
 
     def __len__(self) -> int:
         return int(self.t.size)
@@ -163,12 +174,13 @@ class Odometry:
         times ``t``, in its own frame (ROS's ``nav_msgs/Odometry``; only the motion between
         poses is read, never where the frame is).
 
-        Each interval becomes the constant forward velocity and turn rate that carry one
-        pose to the next (the SE(2) logarithm of the motion between them, divided by the
-        interval); after the last pose the robot is taken to stand still. A sideways part
-        of the motion, which a wheeled robot does not have, is dropped, with a warning in
-        the log when it adds up to more than 1 % of the path (and 5 cm). The poses must be
-        close enough in time that the robot turns less than a half turn between two.
+        Each interval becomes the constant velocities (forward, sideways) and turn rate that
+        carry one pose to the next (the SE(2) logarithm of the motion between them, divided
+        by the interval); after the last pose the robot is taken to stand still. The
+        sideways part is kept: a wheeled robot's own frame has none, but the frame of a
+        sensor mounted off its centre (whose poses make the bearings' geometry exact) moves
+        sideways as the robot turns. The poses must be close enough in time that the robot
+        turns less than a half turn between two.
 
         Parameters
         ----------
@@ -190,6 +202,8 @@ class Odometry:
         >>> odo = Odometry.from_poses([0, 2], [0, 1], [0, 1], [0, math.pi / 2])
         >>> [round(float(v), 4) for v in odo.v], [round(float(w), 4) for w in odo.w]
         ([0.7854, 0.0], [0.7854, 0.0])
+        >>> [round(abs(float(vy)), 4) for vy in odo.vy]
+        [0.0, 0.0]
         """
         tt = _float_array("odometry poses t", t, scalar=True)
         cols = [
@@ -218,19 +232,16 @@ class Odometry:
             keep = np.concatenate([[True], ~same])
             tt, poses = tt[keep], poses[keep]
         if tt.size == 1:
-            return cls(tt, np.zeros(1), np.zeros(1))
+            return cls(tt, np.zeros(1), np.zeros(1), np.zeros(1))
         dt = np.diff(tt)
         tw = twist_of(motion_between(poses[:-1], poses[1:]), 1.0) / dt[:, None]
-        sideways = float(np.abs(tw[:, 1]) @ dt)
-        path = float(np.hypot(tw[:, 0], tw[:, 1]) @ dt)
-        if sideways > max(0.01 * path, 0.05):
-            log.warning(
-                "odometry poses move sideways by %.2f m over a path of %.2f m: the tracker "
-                "takes the robot to drive forward and turn, and drops it",
-                sideways,
-                path,
-            )
-        return cls(tt, np.append(tw[:, 0], 0.0), np.append(tw[:, 2], 0.0))
+        stop = np.zeros(1)
+        return cls(
+            tt,
+            np.concatenate([tw[:, 0], stop]),
+            np.concatenate([tw[:, 2], stop]),
+            np.concatenate([tw[:, 1], stop]),
+        )
 
     def between(self, t0: float, t1: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The constant-velocity pieces that cover ``[t0, t1]``: durations (s), v and w.
@@ -418,8 +429,9 @@ def _is_tum(path: PathLike) -> bool:
 
 
 def load_odometry(path: PathLike) -> Odometry:
-    """Read an odometry file: velocities (``t,v,w``) or a pose track (``t,x,y,theta``, or a
-    TUM file); see the module's documentation and :meth:`Odometry.from_poses`.
+    """Read an odometry file: velocities (``t,v,w``, and ``vy`` when there is a sideways
+    part) or a pose track (``t,x,y,theta``, or a TUM file); see the module's documentation
+    and :meth:`Odometry.from_poses`.
 
     A turn rate above :data:`ODOMETRY_W_WARN` (a turn a second) or a speed above
     :data:`ODOMETRY_V_WARN` (10 m/s) is logged as a warning naming the line: the file is
@@ -492,7 +504,8 @@ def load_odometry(path: PathLike) -> Odometry:
                 other,
                 unit,
             )
-    return Odometry(t, v, w)
+    vy = _columns(src, header, rows, ("vy",))[0] if "vy" in header else None
+    return Odometry(t, v, w, vy)
 
 
 def load_groundtruth(path: PathLike) -> GroundTruth:

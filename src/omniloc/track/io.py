@@ -206,6 +206,9 @@ def write_odometry(path: PathLike, odometry: Odometry) -> int:
     """
     if not isinstance(odometry, Odometry):
         raise InputError(f"write_odometry needs an Odometry, got {type(odometry).__name__}")
+    if odometry.vy is not None:
+        cols = zip(odometry.t, odometry.v, odometry.w, odometry.vy, strict=True)
+        return _csv(path, "t,v,w,vy", cols)
     return _csv(path, "t,v,w", zip(odometry.t, odometry.v, odometry.w, strict=True))
 
 

@@ -76,7 +76,8 @@ def track(
     landmarks : LandmarkMap or array_like, shape (N, 2)
         The map, metres.
     odometry : Odometry
-        Velocity odometry (``t, v, w``), in time order.
+        Velocity odometry (``t, v, w``, and ``vy`` when it has a sideways part), in time
+        order.
     frames : sequence of Frame
         Frames of bearings in time order (their ``truth``, if any, is not read).
     sensor, motion, config
@@ -135,7 +136,8 @@ def track(
     for n, f in enumerate(frames, 1):
         k1 = int(np.searchsorted(odometry.t, f.t, side="right"))
         if k1 > k:
-            tracker.odometry(odometry.t[k:k1], odometry.v[k:k1], odometry.w[k:k1])
+            vy = None if odometry.vy is None else odometry.vy[k:k1]
+            tracker.odometry(odometry.t[k:k1], odometry.v[k:k1], odometry.w[k:k1], vy)
             k = k1
         out.append(tracker.frame(f.t, f.bearings))
         if progress is not None:

@@ -366,9 +366,12 @@ class Tracker:
         self._check_kind(kind)
         self._input_kind = kind
 
-    def odometry(self, t: ArrayLike, v: ArrayLike, w: ArrayLike) -> None:
+    def odometry(
+        self, t: ArrayLike, v: ArrayLike, w: ArrayLike, vy: ArrayLike | None = None
+    ) -> None:
         """Velocity odometry: rows ``t`` (s), forward velocity ``v`` (m/s), turn rate ``w``
-        (rad/s), each row holding until the next (and the last one until a frame).
+        (rad/s) and, optionally, sideways velocity ``vy`` (m/s, to the left), each row
+        holding until the next (and the last one until a frame).
 
         Raises
         ------
@@ -380,16 +383,18 @@ class Tracker:
         tt = _float_array("odometry t", t, scalar=True)
         vv = _float_array("odometry v", v, scalar=True)
         ww = _float_array("odometry w", w, scalar=True)
-        if not (tt.shape == vv.shape == ww.shape):
+        side = np.zeros_like(vv) if vy is None else _float_array("odometry vy", vy, scalar=True)
+        if not (tt.shape == vv.shape == ww.shape == side.shape):
             raise InputError(
-                f"odometry t, v and w must have one value per row: got {tt.size}, {vv.size}, "
-                f"{ww.size}"
+                f"odometry t, v, w{'' if vy is None else ' and vy'} must have one value per "
+                f"row: got {tt.size}, {vv.size}, {ww.size}"
+                + ("" if vy is None else f", {side.size}")
             )
         if tt.size == 0:
             return
         self._check_row_times(tt, "odometry")
         self._set_kind("velocities")
-        rows = np.stack([tt + self.motion.delay_s, vv, np.zeros_like(vv), ww], axis=1)
+        rows = np.stack([tt + self.motion.delay_s, vv, side, ww], axis=1)
         self._rows.append(rows)
         self._last_row_t = float(tt[-1])
         self._after_gap = False
