@@ -601,6 +601,10 @@ def test_a_fit_gives_the_frames_soon_after_a_localized_one_a_table_of_their_own(
     assert fit("ambiguous", 0.6, since_localized=math.nan) < 0.01  # (NaN: never)
     with pytest.raises(InputError, match="since_localized"):
         fit("ambiguous", 0.6, since_localized="soon")  # type: ignore[arg-type]
+    # A negative time would read the recent table, the surer one here: refused, as in a fit.
+    for bad in (-1.0, math.inf):
+        with pytest.raises(InputError, match=r"since_localized must be seconds >= 0"):
+            fit("ambiguous", 0.6, since_localized=bad)
     assert fit.settings()["confidence_recent"] == fit.recent
     assert fit.settings()["confidence_recent_s"] == 20.0
     # Without the times, one table for every ambiguous frame, as before.

@@ -1283,6 +1283,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         "confidence_ambiguous": None,
         "confidence_recent": None,
         "confidence_hypothesis": None,
+        "confidence_hypothesis_recent": None,
     }
     sensor, motion, config = with_settings(sensor, motion, config, settings)
     span = config.confidence_recent_s

@@ -235,6 +235,14 @@ class ConfidenceFit:
                 raise InputError(
                     f"since_localized must be None or seconds, got {shorten(since_localized)}"
                 )
+            # (As in a fit: seconds >= 0, NaN for never; a negative time would read the
+            # recent table, which is surer.)
+            x = float(since_localized)
+            if x < 0.0 or x == math.inf:
+                raise InputError(
+                    f"since_localized must be seconds >= 0 (None or NaN: never localized), "
+                    f"got {x!r}"
+                )
         if s is TrackState.LOST:
             return None
         return confidence_of(self._table(s, since_localized), probability)
@@ -370,7 +378,7 @@ def _since(values: Any, n: int, name: str) -> np.ndarray:
         i = int(np.flatnonzero((since < 0.0) | np.isposinf(since))[0])
         raise InputError(
             f"{name} must be seconds >= 0 (None or NaN: never localized): entry {i} has "
-            f"{since[i]!r}"
+            f"{float(since[i])!r}"
         )
     return since
 
