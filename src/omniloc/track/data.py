@@ -37,6 +37,7 @@ from ..angles import wrap
 from ..errors import InputError
 from ..io import (
     PathLike,
+    _looks_numeric,
     check_radians,
     content_lines,
     parse_float,
@@ -419,13 +420,7 @@ def _is_tum(path: PathLike) -> bool:
     if not lines:
         return False
     parts = lines[0][1].split()
-    if len(parts) != 8 or "," in lines[0][1]:
-        return False
-    try:
-        [float(p) for p in parts]
-    except ValueError:
-        return False
-    return True
+    return len(parts) == 8 and "," not in lines[0][1] and all(map(_looks_numeric, parts))
 
 
 def load_odometry(path: PathLike) -> Odometry:
