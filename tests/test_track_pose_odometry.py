@@ -111,6 +111,18 @@ def test_single_pose_and_repeated_rows_stand_still() -> None:
     assert rep.t.tolist() == [0.0, 1.0, 2.0] and np.allclose(rep.v, [1.0, 1.0, 0.0])
 
 
+def test_a_turn_near_a_half_turn_between_two_poses_is_warned_of(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
+        Odometry.from_poses([0, 1, 2], [0, 0, 0], [0, 0, 0], [0.0, 2.8, 2.9])
+    assert "rows 0 and 1 (t=0.0 and 1.0) are 160 deg apart" in caplog.text
+    caplog.clear()
+    with caplog.at_level(logging.WARNING, logger="omniloc.track.data"):
+        Odometry.from_poses([0, 1, 2], [0, 0, 0], [0, 0, 0], [0.0, 2.3, 2.9])
+    assert caplog.text == ""
+
+
 @pytest.mark.parametrize(
     ("args", "match"),
     [

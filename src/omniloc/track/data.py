@@ -235,7 +235,23 @@ class Odometry:
         if tt.size == 1:
             return cls(tt, np.zeros(1), np.zeros(1), np.zeros(1))
         dt = np.diff(tt)
-        tw = twist_of(motion_between(poses[:-1], poses[1:]), 1.0) / dt[:, None]
+        steps = motion_between(poses[:-1], poses[1:])
+        wide = np.flatnonzero(np.abs(steps[:, 2]) > 0.75 * math.pi)
+        if wide.size:
+            # Between two poses a half turn apart, which way the robot turned is a guess.
+            k = int(wide[0])
+            log.warning(
+                "odometry poses rows %d and %d (t=%r and %r) are %.0f deg apart in heading: "
+                "the turn between them is taken the short way round; poses closer in time "
+                "tell (%d such pairs)",
+                k,
+                k + 1,
+                float(tt[k]),
+                float(tt[k + 1]),
+                math.degrees(abs(float(steps[k, 2]))),
+                wide.size,
+            )
+        tw = twist_of(steps, 1.0) / dt[:, None]
         stop = np.zeros(1)
         return cls(
             tt,
