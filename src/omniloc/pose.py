@@ -10,7 +10,9 @@
   noise; the refinement removes that;
 * :func:`bearing_jacobian`, :func:`fisher_information`, :func:`pose_covariance` and
   :func:`crlb` -- the bearing function's derivatives, the information, the covariance of the
-  maximum-likelihood pose and the Cramer-Rao lower bound for Gaussian bearing noise.
+  maximum-likelihood pose and the Cramer-Rao lower bound for Gaussian bearing noise;
+* :func:`compose`, :func:`inverse`, :func:`between` and :func:`compose_jacobians` -- poses
+  moved by motions in SE(2) (the tracker's odometry, a sensor's mount on the robot).
 
 The formulas themselves are written once, in :mod:`omniloc._kernels.geometry`, and shared with
 the compiled search engines; this module applies them to numpy arrays and checks the input.
@@ -44,9 +46,13 @@ __all__ = [
     "SINGULAR_RTOL",
     "Pose",
     "bearing_jacobian",
+    "between",
+    "compose",
+    "compose_jacobians",
     "crlb",
     "estimate_pose",
     "fisher_information",
+    "inverse",
     "pose_covariance",
     "poses_from_pairs",
     "predict_bearings",
@@ -611,3 +617,92 @@ def refine_pose(
     # Three pairs (no redundancy) or an exact fit: the residuals say nothing of the noise, and
     # a zero covariance would claim a certainty nobody has.
     return pose, np.full((3, 3), np.nan)
+
+
+# ---- SE(2): moving poses by motions -------------------------------------------------------
+def _poses(a: ArrayLike, name: str) -> FloatArray:
+    p = np.asarray(a, dtype=np.float64)
+    if p.shape[-1:] != (3,):
+        raise InputError(f"{name} must have shape (3,) or (n, 3), got {p.shape}")
+    return p
+
+
+def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
+    """``pose (+) delta``: move by ``delta`` given in the frame of ``pose``.
+
+    Parameters
+    ----------
+    pose : array_like, shape (3,) or (n, 3)
+        ``(x, y, theta)``, metres and radians.
+    delta : array_like, shape (3,) or (n, 3)
+        ``(dx, dy, dtheta)`` in the robot frame of ``pose``.
+
+    Returns
+    -------
+    ndarray, shape of the broadcast inputs
+        Headings wrapped to [-pi, pi).
+
+    Examples
+    --------
+    >>> compose([1.0, 2.0, np.pi / 2], [1.0, 0.0, 0.0]).round(6).tolist()
+    [1.0, 3.0, 1.570796]
+    """
+    p = _poses(pose, "pose")
+    d = _poses(delta, "delta")
+    c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
+    out = np.empty(np.broadcast_shapes(p.shape, d.shape))
+    out[..., 0] = p[..., 0] + c * d[..., 0] - s * d[..., 1]
+    out[..., 1] = p[..., 1] + s * d[..., 0] + c * d[..., 1]
+    out[..., 2] = np.asarray(wrap(p[..., 2] + d[..., 2]))
+    return out
+
+
+def compose_jacobians(pose: ArrayLike, delta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Jacobians of :func:`compose` with respect to ``pose`` and to ``delta``.
+
+    Returns
+    -------
+    J_pose, J_delta : ndarray, shape (..., 3, 3)
+    """
+    p = _poses(pose, "pose")
+    d = _poses(delta, "delta")
+    shape = np.broadcast_shapes(p.shape, d.shape)[:-1]
+    c = np.broadcast_to(np.cos(p[..., 2]), shape)
+    s = np.broadcast_to(np.sin(p[..., 2]), shape)
+    dx = np.broadcast_to(d[..., 0], shape)
+    dy = np.broadcast_to(d[..., 1], shape)
+    Jp = np.zeros((*shape, 3, 3))
+    Jp[..., 0, 0] = Jp[..., 1, 1] = Jp[..., 2, 2] = 1.0
+    Jp[..., 0, 2] = -s * dx - c * dy
+    Jp[..., 1, 2] = c * dx - s * dy
+    Jd = np.zeros((*shape, 3, 3))
+    Jd[..., 0, 0], Jd[..., 0, 1] = c, -s
+    Jd[..., 1, 0], Jd[..., 1, 1] = s, c
+    Jd[..., 2, 2] = 1.0
+    return Jp, Jd
+
+
+def inverse(delta: ArrayLike) -> FloatArray:
+    """The motion that undoes ``delta``: ``compose(compose(p, d), inverse(d)) == p``."""
+    d = _poses(delta, "delta")
+    c, s = np.cos(d[..., 2]), np.sin(d[..., 2])
+    out = np.empty(d.shape)
+    out[..., 0] = -c * d[..., 0] - s * d[..., 1]
+    out[..., 1] = s * d[..., 0] - c * d[..., 1]
+    out[..., 2] = np.asarray(wrap(-d[..., 2]))
+    return out
+
+
+def between(a: ArrayLike, b: ArrayLike) -> FloatArray:
+    """The motion from pose ``a`` to pose ``b``, in the frame of ``a``:
+    ``compose(a, between(a, b)) == b``."""
+    pa = _poses(a, "a")
+    pb = _poses(b, "b")
+    c, s = np.cos(pa[..., 2]), np.sin(pa[..., 2])
+    dx = pb[..., 0] - pa[..., 0]
+    dy = pb[..., 1] - pa[..., 1]
+    out = np.empty(np.broadcast_shapes(pa.shape, pb.shape))
+    out[..., 0] = c * dx + s * dy
+    out[..., 1] = -s * dx + c * dy
+    out[..., 2] = np.asarray(wrap(pb[..., 2] - pa[..., 2]))
+    return out

@@ -34,9 +34,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from .._kernels import track as _kernels
-from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number
+from ..pose import _poses, between, compose, compose_jacobians, inverse
 
 __all__ = [
     "MotionModel",
@@ -159,94 +159,6 @@ class MotionModel:
                 self.along_per_s,
             ]
         )
-
-
-def _poses(a: ArrayLike, name: str) -> FloatArray:
-    p = np.asarray(a, dtype=np.float64)
-    if p.shape[-1:] != (3,):
-        raise InputError(f"{name} must have shape (3,) or (n, 3), got {p.shape}")
-    return p
-
-
-def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
-    """``pose (+) delta``: move by ``delta`` given in the frame of ``pose``.
-
-    Parameters
-    ----------
-    pose : array_like, shape (3,) or (n, 3)
-        ``(x, y, theta)``, metres and radians.
-    delta : array_like, shape (3,) or (n, 3)
-        ``(dx, dy, dtheta)`` in the robot frame of ``pose``.
-
-    Returns
-    -------
-    ndarray, shape of the broadcast inputs
-        Headings wrapped to [-pi, pi).
-
-    Examples
-    --------
-    >>> compose([1.0, 2.0, np.pi / 2], [1.0, 0.0, 0.0]).round(6).tolist()
-    [1.0, 3.0, 1.570796]
-    """
-    p = _poses(pose, "pose")
-    d = _poses(delta, "delta")
-    c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
-    out = np.empty(np.broadcast_shapes(p.shape, d.shape))
-    out[..., 0] = p[..., 0] + c * d[..., 0] - s * d[..., 1]
-    out[..., 1] = p[..., 1] + s * d[..., 0] + c * d[..., 1]
-    out[..., 2] = np.asarray(wrap(p[..., 2] + d[..., 2]))
-    return out
-
-
-def compose_jacobians(pose: ArrayLike, delta: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    """Jacobians of :func:`compose` with respect to ``pose`` and to ``delta``.
-
-    Returns
-    -------
-    J_pose, J_delta : ndarray, shape (..., 3, 3)
-    """
-    p = _poses(pose, "pose")
-    d = _poses(delta, "delta")
-    shape = np.broadcast_shapes(p.shape, d.shape)[:-1]
-    c = np.broadcast_to(np.cos(p[..., 2]), shape)
-    s = np.broadcast_to(np.sin(p[..., 2]), shape)
-    dx = np.broadcast_to(d[..., 0], shape)
-    dy = np.broadcast_to(d[..., 1], shape)
-    Jp = np.zeros((*shape, 3, 3))
-    Jp[..., 0, 0] = Jp[..., 1, 1] = Jp[..., 2, 2] = 1.0
-    Jp[..., 0, 2] = -s * dx - c * dy
-    Jp[..., 1, 2] = c * dx - s * dy
-    Jd = np.zeros((*shape, 3, 3))
-    Jd[..., 0, 0], Jd[..., 0, 1] = c, -s
-    Jd[..., 1, 0], Jd[..., 1, 1] = s, c
-    Jd[..., 2, 2] = 1.0
-    return Jp, Jd
-
-
-def inverse(delta: ArrayLike) -> FloatArray:
-    """The motion that undoes ``delta``: ``compose(compose(p, d), inverse(d)) == p``."""
-    d = _poses(delta, "delta")
-    c, s = np.cos(d[..., 2]), np.sin(d[..., 2])
-    out = np.empty(d.shape)
-    out[..., 0] = -c * d[..., 0] - s * d[..., 1]
-    out[..., 1] = s * d[..., 0] - c * d[..., 1]
-    out[..., 2] = np.asarray(wrap(-d[..., 2]))
-    return out
-
-
-def between(a: ArrayLike, b: ArrayLike) -> FloatArray:
-    """The motion from pose ``a`` to pose ``b``, in the frame of ``a``:
-    ``compose(a, between(a, b)) == b``."""
-    pa = _poses(a, "a")
-    pb = _poses(b, "b")
-    c, s = np.cos(pa[..., 2]), np.sin(pa[..., 2])
-    dx = pb[..., 0] - pa[..., 0]
-    dy = pb[..., 1] - pa[..., 1]
-    out = np.empty(np.broadcast_shapes(pa.shape, pb.shape))
-    out[..., 0] = c * dx + s * dy
-    out[..., 1] = -s * dx + c * dy
-    out[..., 2] = np.asarray(wrap(pb[..., 2] - pa[..., 2]))
-    return out
 
 
 def twist_of(delta: ArrayLike, dt: float) -> FloatArray:
