@@ -99,6 +99,28 @@ def _nonnegative_list(text: str) -> tuple[float, ...]:
     return tuple(_nonnegative(t) for t in parts)
 
 
+def _mount_deg(text: str) -> tuple[float, float, float]:
+    """``X,Y,YAW``: the sensor's place on the robot, metres and degrees (as radians)."""
+    parts = [t for t in text.replace(" ", "").split(",")]
+    if len(parts) != 3 or not all(parts):
+        raise argparse.ArgumentTypeError(
+            f"the sensor's X,Y,YAW on the robot (metres, metres, degrees), got {shorten(text, 40)}"
+        )
+    x, y, yaw = (_number(t) for t in parts)
+    if abs(yaw) > 180:
+        raise argparse.ArgumentTypeError(
+            f"YAW is in degrees, at most 180 either way, got {shorten(text, 40)}"
+        )
+    return x, y, math.radians(yaw)
+
+
+MOUNT_HELP = (
+    "where the sensor sits on the robot: X,Y (metres forward and to the left of the robot's "
+    "origin) and YAW (degrees, counter-clockwise from the robot's forward axis), as ROS's "
+    "base_link -> camera_link; the bearings are the sensor's, the poses the robot's"
+)
+
+
 def _fov_deg(text: str) -> float:
     v = _positive(text)
     if v > 360:
@@ -176,6 +198,7 @@ def _build_parser() -> argparse.ArgumentParser:
         "(the last for more), where clutter comes with the landmarks; omniloc fit-sensor "
         "prints it for a recording",
     )
+    p.add_argument("--mount", type=_mount_deg, metavar="X,Y,YAW", help=MOUNT_HELP)
     p.add_argument(
         "--confidence",
         type=_probability,
@@ -316,6 +339,7 @@ def _build_parser() -> argparse.ArgumentParser:
     fs.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
     fs.add_argument("--fov", type=_fov_deg, help="full field of view, deg (default: all around)")
     fs.add_argument("--max-range", type=_positive, help="sensor range, m")
+    fs.add_argument("--mount", type=_mount_deg, metavar="X,Y,YAW", help=MOUNT_HELP)
     fs.add_argument(
         "--gate", type=_positive, default=3.0, help="a bearing within this of a landmark, deg"
     )
@@ -441,6 +465,7 @@ def _add_track_parser(sub: Any) -> None:
     t.add_argument("--sigma", type=_positive, help="bearing noise std, deg (overrides the preset)")
     t.add_argument("--fov", type=_fov_deg, help="full field of view, deg (overrides the preset)")
     t.add_argument("--max-range", type=_positive, help="sensor range, m (overrides the preset)")
+    t.add_argument("--mount", type=_mount_deg, metavar="X,Y,YAW", help=MOUNT_HELP)
     t.add_argument(
         "--groundtruth",
         type=Path,
@@ -519,6 +544,7 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         p_detect=args.p_detect,
         clutter=args.clutter,
         clutter_by_detections=args.clutter_by_detections,
+        mount=args.mount,
         confidence=args.confidence,
         decisive=args.decisive,
         max_nodes=args.max_nodes,
@@ -978,6 +1004,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
         changes["fov"] = float(np.deg2rad(args.fov))
     if args.max_range is not None:
         changes["max_range"] = args.max_range
+    if args.mount is not None:
+        changes["mount"] = args.mount
     if changes:
         sensor = sensor.replace(**changes)
     bar = progress_bar(len(frames), not args.quiet, "tracking")
@@ -1102,6 +1130,12 @@ def _what_the_data_allow(
 
     if not any(f.truth for f in frames):
         return None
+    if sensor.mount is not None:
+        log.warning(
+            "what the data allow: not computed (the bound takes the bearings from the robot's "
+            "origin; this sensor has a mount)"
+        )
+        return None
     share = float(config.core_share)  # the bearing errors as the tracker weighs them
     if share > 0:
         shares, sds = [share, 1.0 - share], [config.core_sigma, sensor.sigma]
@@ -1198,6 +1232,7 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
         max_range=args.max_range,
         gate=float(np.deg2rad(args.gate)),
         frame_period_s=args.frame_period,
+        mount=args.mount,
     )
     print(
         f"{fit.frames} frames with a true pose, {fit.matched} of their {fit.bearings} bearings "
@@ -1241,7 +1276,9 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
             "the median: a pattern is a camera calibration off, which no setting takes in)"
         )
     if args.out is not None:
-        settings = fit.mixture_settings() if args.mixture else fit.settings()
+        settings: dict[str, Any] = fit.mixture_settings() if args.mixture else fit.settings()
+        if args.mount is not None:
+            settings["mount"] = list(args.mount)  # (the tracker needs it too)
         write_text(args.out, json.dumps(settings, indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")
     return 0

@@ -64,7 +64,7 @@ from scipy.special import chdtri, gammaincinv, ndtri
 from .angles import TWO_PI, wrap
 from .errors import InputError
 from .io import finite_number, real_array
-from .pose import MIN_SIGMA, Pose
+from .pose import MIN_SIGMA, Pose, compose, compose_jacobians, inverse
 
 __all__ = [
     "CLUTTER_ENTRY_FRAMES",
@@ -128,6 +128,49 @@ def _rates(name: str, value: Any) -> tuple[float, ...]:
     if not 1 <= len(value) <= MAX_CLUTTER_ENTRIES:
         raise InputError(f"{name} must hold 1 to {MAX_CLUTTER_ENTRIES} entries, got {len(value)}")
     return tuple(_number(f"{name}[{i}]", v, allow_zero=True) for i, v in enumerate(list(value)))
+
+
+def _pose_rows(poses: Pose | ArrayLike, name: str) -> FloatArray:
+    """Poses ``(x, y, theta)`` of shape (3,) or (n, 3), finite, as floats; or a clear error."""
+    if isinstance(poses, Pose):
+        return poses.as_array()
+    p = real_array(poses, name, InputError)
+    if p.ndim not in (1, 2) or p.shape[-1:] != (3,):
+        raise InputError(f"{name} must have shape (3,) or (n, 3), got {p.shape}")
+    if not np.isfinite(p).all():
+        raise InputError(f"{name} must be finite (no NaN or inf)")
+    return p
+
+
+#: The farthest a sensor may sit from the robot's origin, metres (a mount beyond it is a
+#: mistake: a pose, or millimetres).
+MAX_MOUNT_M = 100.0
+
+
+def _mount(value: Any) -> tuple[float, float, float] | None:
+    """``(x, y, yaw)`` of a sensor on the robot, as a tuple of floats (None for the origin),
+    or a clear error."""
+    ordered = isinstance(value, Sequence) and not isinstance(value, (str, bytes))
+    if not (ordered or (isinstance(value, np.ndarray) and value.ndim == 1)) or len(value) != 3:
+        raise InputError(
+            "mount must be the sensor's (x, y, yaw) on the robot: three numbers (metres, "
+            f"metres, radians), got {value!r}"
+        )
+    x, y, yaw = (finite_number(v, f"mount[{i}]") for i, v in enumerate(list(value)))
+    for name, v in (("x", x), ("y", y)):
+        if abs(v) > MAX_MOUNT_M:
+            raise InputError(
+                f"mount {name}={v:.4g} m puts the sensor more than {MAX_MOUNT_M:g} m from the "
+                "robot's origin: the mount is in metres in the robot's frame"
+            )
+    if abs(yaw) > math.pi + 1e-9:
+        raise InputError(
+            f"mount yaw={yaw:.4g} rad is more than half a turn: angles are in radians (did "
+            "you pass degrees?)"
+        )
+    if x == 0.0 and y == 0.0 and yaw == 0.0:
+        return None
+    return (x, y, yaw if -math.pi <= yaw < math.pi else float(wrap(yaw)))
 
 
 #: :func:`clutter_by_detections` has an entry for a count of landmarks only while at least
@@ -250,6 +293,15 @@ class SensorModel:
         and so does the tracker, whose frame likelihood sums over the landmarks each
         bearing may be without counting them (it logs a warning that it does). None: one
         rate for every frame.
+    mount : sequence of 3 floats, optional
+        Where the sensor sits on the robot: ``(x, y, yaw)`` of the sensor's frame in the
+        robot's (metres forward and to the left of the robot's origin, radians of turn from
+        its forward axis; ROS's static transform ``base_link -> camera_link``). Bearings are
+        measured from the sensor; poses given to and returned by omniloc are the robot's:
+        :func:`~omniloc.localize` returns robot poses and covariances, and the tracker takes
+        the robot's odometry and reports the robot's pose (:meth:`sensor_poses`,
+        :meth:`robot_poses`). None (the default) or ``(0, 0, 0)``: the sensor is at the
+        robot's origin, facing forward (stored as None).
     allow_wide : bool, default False
         Accept a ``sigma`` or ``threshold`` above :data:`IMPLAUSIBLE_NOISE` (10 degrees, up
         to pi). A search with such a gate has nearly nothing to prune with: without a budget
@@ -279,6 +331,7 @@ class SensorModel:
     p_detect: float | None = None
     clutter: float | None = None
     clutter_by_detections: tuple[float, ...] | None = None
+    mount: tuple[float, float, float] | None = None
     allow_wide: bool = field(default=False, repr=False)
 
     #: p_detect assumed for the likelihood of a match when the sensor does not say.
@@ -327,6 +380,8 @@ class SensorModel:
                 "clutter_by_detections",
                 _rates("clutter_by_detections", self.clutter_by_detections),
             )
+        if self.mount is not None:
+            set_(self, "mount", _mount(self.mount))
         if not isinstance(self.allow_wide, (bool, np.bool_)):
             raise InputError(f"allow_wide must be True or False, got {self.allow_wide!r}")
         name = "sigma" if self.sigma is not None else "threshold"
@@ -363,6 +418,7 @@ class SensorModel:
         p_detect: float | None = None,
         clutter: float | None = None,
         clutter_by_detections: Any = None,
+        mount: Any = None,
         allow_wide: bool = False,
     ) -> SensorModel:
         """A model from :func:`~omniloc.localize`'s keyword arguments (``p_miss`` is
@@ -388,12 +444,55 @@ class SensorModel:
             p_detect=p_detect,
             clutter=clutter,
             clutter_by_detections=clutter_by_detections,
+            mount=mount,
             allow_wide=allow_wide,
         )
 
     def replace(self, **changes: Any) -> SensorModel:
         """A copy with some fields changed (validated again)."""
         return replace(self, **changes)
+
+    # ---- where the sensor sits on the robot --------------------------------------------------
+    def sensor_poses(self, robot_poses: Pose | ArrayLike) -> FloatArray:
+        """The sensor's poses when the robot is at ``robot_poses`` (shape (3,) or (n, 3)):
+        ``compose(robot, mount)``; a copy of them without a mount."""
+        p = _pose_rows(robot_poses, "robot_poses")
+        return p.copy() if self.mount is None else compose(p, np.asarray(self.mount))
+
+    def robot_poses(
+        self, sensor_poses: Pose | ArrayLike, covariances: ArrayLike | None = None
+    ) -> Any:
+        """The robot's poses when the sensor is at ``sensor_poses`` (shape (3,) or (n, 3)):
+        ``compose(sensor, inverse(mount))``; copies without a mount.
+
+        With ``covariances`` (shape (3, 3) or (n, 3, 3), of the sensor's poses) returns
+        ``(poses, covariances)``, the covariances carried to the robot's frame to first
+        order (``J C J^T``, ``J`` the Jacobian of the composition): a sensor ahead of the
+        robot's origin passes its heading's uncertainty to the robot's position.
+
+        Examples
+        --------
+        >>> s = SensorModel(mount=(0.2, 0.0, 0.0))
+        >>> s.robot_poses([1.0, 0.0, np.pi / 2]).round(6).tolist()
+        [1.0, -0.2, 1.570796]
+        """
+        p = _pose_rows(sensor_poses, "sensor_poses")
+        back = None if self.mount is None else inverse(np.asarray(self.mount))
+        out = p.copy() if back is None else compose(p, back)
+        if covariances is None:
+            return out
+        C = real_array(covariances, "covariances", InputError)
+        if C.shape != (*p.shape[:-1], 3, 3):
+            raise InputError(
+                f"covariances must have shape {(*p.shape[:-1], 3, 3)} for sensor_poses of "
+                f"shape {p.shape}, got {C.shape}"
+            )
+        if not np.isfinite(C).all():
+            raise InputError("covariances must be finite (no NaN or inf)")
+        if back is None:
+            return out, C.copy()
+        J = compose_jacobians(p, back)[0]
+        return out, J @ C @ np.swapaxes(J, -1, -2)
 
     # ---- noise and gates ---------------------------------------------------------------------
     @property
@@ -477,7 +576,8 @@ class SensorModel:
         landmarks_xy : array_like, shape (N, 2) or (K, N, 2)
             Landmark positions, metres (one set, or one per pose).
         pose : Pose or array_like, shape (3,) or (K, 3)
-            ``(x, y, theta)``.
+            ``(x, y, theta)`` of the sensor (with a ``mount``, :meth:`sensor_poses` of the
+            robot's).
 
         Returns
         -------
@@ -494,8 +594,8 @@ class SensorModel:
         and more than twice that away from every reported bearing (not hidden behind one).
 
         These are the landmarks whose absence is evidence against the pose (negative
-        evidence), and what ``p_detect`` is the detection rate of. Shapes as :meth:`visible`;
-        ``bearings`` (radians) are the frame's reported bearings.
+        evidence), and what ``p_detect`` is the detection rate of. Shapes and the sensor's pose as
+        :meth:`visible`; ``bearings`` (radians) are the frame's reported bearings.
         """
         L, p = _landmarks_pose(landmarks_xy, pose)
         b = np.asarray(bearings, dtype=np.float64).reshape(-1)

@@ -16,7 +16,7 @@ from numpy.typing import ArrayLike
 from ..errors import InputError
 from ..io import check_bearings, shorten
 from ..maps import LandmarkMap, as_landmark_map
-from ..pose import Pose
+from ..pose import Pose, compose
 from ._save import save_figure
 
 if TYPE_CHECKING:
@@ -57,8 +57,10 @@ def draw_scene(
     color: str = "tab:blue",
     true_pose: Pose | None = None,
     title: str | None = None,
+    sensor_pose: Pose | None = None,
 ) -> None:
-    """Draw the map, a pose, its rays along the measured bearings and the matched landmarks."""
+    """Draw the map, a pose, its rays along the measured bearings and the matched landmarks
+    (the rays from ``sensor_pose`` when the sensor sits elsewhere on the robot)."""
     L = landmarks.xy
     b = np.asarray(bearings, dtype=float)
     span = float(np.ptp(L, axis=0).max()) or 1.0
@@ -66,17 +68,18 @@ def draw_scene(
     for i, lid in enumerate(landmarks.ids):
         ax.annotate(str(lid), L[i], textcoords="offset points", xytext=(4, 4), fontsize=8)
     ray = 1.5 * span
+    eye = pose if sensor_pose is None else sensor_pose
     for k, beta in enumerate(b):
-        ang = pose.theta + beta
+        ang = eye.theta + beta
         matched = assignment is not None and assignment[k] is not None
-        end = (pose.x + ray * np.cos(ang), pose.y + ray * np.sin(ang))
+        end = (eye.x + ray * np.cos(ang), eye.y + ray * np.sin(ang))
         if matched and assignment is not None:
             lm_i = assignment[k]
             assert lm_i is not None
             end = (L[lm_i, 0], L[lm_i, 1])
         ax.plot(
-            [pose.x, end[0]],
-            [pose.y, end[1]],
+            [eye.x, end[0]],
+            [eye.y, end[1]],
             "-" if matched else ":",
             color=color,
             lw=1.0,
@@ -94,6 +97,13 @@ def draw_scene(
     ax.grid(True, alpha=0.3)
     if title:
         ax.set_title(title, fontsize=10)
+
+
+def _sensor_pose(result: LocalizationResult, pose: Pose) -> Pose | None:
+    """Where the sensor was when the robot is at ``pose`` (None: at the robot's origin)."""
+    if result.mount is None:
+        return None
+    return Pose.from_array(compose(pose.as_array(), np.asarray(result.mount)))
 
 
 def plot_localization(
@@ -161,6 +171,7 @@ def plot_localization(
             sol.assignment,
             color=palette[k % len(palette)],
             true_pose=true_pose,
+            sensor_pose=_sensor_pose(result, p),
             title=(
                 f"solution {k + 1}/{len(result.solutions)}: ({p.x:.2f}, {p.y:.2f}, "
                 f"{np.rad2deg(p.theta):.1f} deg)\nconfidence {sol.confidence:.2f}"
@@ -191,7 +202,16 @@ def plot_solutions_grid(
         if best is None:
             draw_scene(ax, lm, np.zeros(0), truth or Pose(0, 0, 0), title=f"{ttl}: none")
             continue
-        draw_scene(ax, lm, b, best.pose, best.assignment, true_pose=truth, title=ttl)
+        draw_scene(
+            ax,
+            lm,
+            b,
+            best.pose,
+            best.assignment,
+            true_pose=truth,
+            title=ttl,
+            sensor_pose=_sensor_pose(res, best.pose),
+        )
     if path is not None:
         _save(fig, path)
     return fig

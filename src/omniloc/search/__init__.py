@@ -182,6 +182,7 @@ def localize(
     p_detect: float | None = None,
     clutter: float | None = None,
     clutter_by_detections: Sequence[float] | None = None,
+    mount: Sequence[float] | None = None,
     max_nodes: int | None = None,
     timeout_s: float | None = None,
 ) -> LocalizationResult:
@@ -198,7 +199,9 @@ def localize(
         What the sensor measures and how well: bearing noise (or the paper's fixed
         threshold), field of view, range limits, detection probability, clutter. Default:
         the paper's sensor, a fixed 1-degree threshold and nothing else known. The keyword
-        arguments ``threshold`` ... ``p_miss`` below build one instead (not both).
+        arguments ``threshold`` ... ``p_miss`` below build one instead (not both). A sensor
+        with a ``mount`` off the robot's origin: the poses and covariances returned are the
+        robot's (the bearings are the sensor's).
     budget : Budget, optional
         ``Budget(max_nodes=, timeout_s=)``: past it the search stops and returns what it
         has; ``result.complete`` is then False. (Or the keywords ``max_nodes``,
@@ -265,6 +268,9 @@ def localize(
         ``i`` for ``i + 1``), where clutter comes with the landmarks (see
         :class:`~omniloc.sensor.SensorModel`; measured by
         :func:`omniloc.evaluate.estimate_sensor`).
+    mount : sequence of 3 floats, optional
+        Where the sensor sits on the robot, ``(x, y, yaw)`` in the robot's frame (see
+        :class:`~omniloc.sensor.SensorModel`): the poses returned are the robot's.
     max_nodes, timeout_s : optional
         The budget (see ``budget``). A search that nothing bounds -- a gate wider than 10
         degrees (``allow_wide``) or more than LARGE_MAP landmarks without ``max_range`` --
@@ -318,6 +324,7 @@ def localize(
         "p_detect": p_detect,
         "clutter": clutter,
         "clutter_by_detections": clutter_by_detections,
+        "mount": mount,
         "max_nodes": max_nodes,
         "timeout_s": timeout_s,
     }
@@ -399,4 +406,13 @@ def localize(
         ),
         default_budget=default_budget,
     )
-    return LocalizationResult(scored.solutions, stats, lm, scored.ambiguous, scored.unexplained)
+    solutions = scored.solutions
+    if opt.sensor.mount is not None and len(solutions):
+        # The search finds the sensor's pose (the bearings are measured from it); the caller
+        # asked for the robot's.
+        solutions = solutions.with_poses(
+            *opt.sensor.robot_poses(solutions.poses, solutions.covariances)
+        )
+    return LocalizationResult(
+        solutions, stats, lm, scored.ambiguous, scored.unexplained, opt.sensor.mount
+    )

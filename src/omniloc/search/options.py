@@ -171,7 +171,7 @@ def make_options(
     ``legacy`` holds the keyword arguments of :func:`~omniloc.localize` that describe the
     sensor or the budget (``threshold``, ``sigma``, ``confidence``, ``max_range``,
     ``min_range``, ``fov``, ``p_miss``, ``p_detect``, ``clutter``, ``clutter_by_detections``,
-    ``max_nodes``,
+    ``mount``, ``max_nodes``,
     ``timeout_s``) that the caller actually
     gave; with ``sensor`` or ``budget`` also given, they may not repeat what those say.
     """
@@ -186,6 +186,7 @@ def make_options(
         "p_detect",
         "clutter",
         "clutter_by_detections",
+        "mount",
     )
     budget_keys = ("max_nodes", "timeout_s")
     given = {k: v for k, v in legacy.items() if v is not None}

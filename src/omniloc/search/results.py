@@ -215,6 +215,17 @@ class Solutions(Sequence[Solution]):
         """(K, m) landmark rows of each observation, -1 for spurious (read-only)."""
         return self._arrays[1]
 
+    @property
+    def covariances(self) -> FloatArray:
+        """(K, 3, 3) covariances of the poses (read-only)."""
+        return self._arrays[4]
+
+    def with_poses(self, poses: FloatArray, covariances: FloatArray) -> Solutions:
+        """The same solutions at other poses with other covariances (the robot's, when the
+        sensor sits elsewhere on it: :meth:`omniloc.SensorModel.robot_poses`)."""
+        a = self._arrays
+        return Solutions(poses, a[1], a[2], a[3], covariances, a[5], a[6], a[7])
+
     def __len__(self) -> int:
         return len(self._made)
 
@@ -285,6 +296,9 @@ class LocalizationResult:
         maps, few bearings, clutter). True when there is no solution.
     unexplained : float
         Posterior probability that none of the solutions is right: every bearing clutter.
+    mount : tuple of 3 floats or None
+        Where the sensor sits on the robot (:attr:`omniloc.SensorModel.mount`): the poses
+        are the robot's, the bearings were measured from ``compose(pose, mount)``.
     """
 
     solutions: Sequence[Solution]
@@ -292,6 +306,7 @@ class LocalizationResult:
     landmarks: LandmarkMap
     ambiguous: bool = False
     unexplained: float = 0.0
+    mount: tuple[float, float, float] | None = None
 
     @property
     def competing(self) -> int:

@@ -51,7 +51,8 @@ from ..angles import wrap
 from ..errors import InputError
 from ..io import shorten
 from ..maps import LandmarkMap, as_landmark_map
-from ..sensor import chi2_quantile, clutter_by_detections
+from ..pose import compose
+from ..sensor import SensorModel, chi2_quantile, clutter_by_detections
 from .data import Frame, GroundTruth, Odometry
 from .motion import MotionModel, between, integrate
 
@@ -840,6 +841,7 @@ def estimate_frame_sensor(
     gate: float = math.radians(3.0),
     max_gap_s: float = 0.5,
     frame_period_s: float | None = None,
+    mount: Sequence[float] | None = None,
 ) -> SensorFit:
     """Fit the bearing sensor's noise, its growth with the turn rate, the detection
     probability and the clutter from frames of bearings and a ground-truth track (see the
@@ -872,6 +874,10 @@ def estimate_frame_sensor(
         camera frame): the rates the tracker's ``nonempty_frames`` wants
         (:meth:`SensorFit.settings` then sets it). None: every frame the camera took is in
         ``frames``.
+    mount : sequence of 3 floats, optional
+        Where the sensor sits on the robot, ``(x, y, yaw)`` (see
+        :attr:`omniloc.SensorModel.mount`): the truth is the robot's track, the bearings are
+        measured from ``compose(truth, mount)``.
 
     Returns
     -------
@@ -892,6 +898,7 @@ def estimate_frame_sensor(
         _positive("max_range", max_range, 1e9)
     if frame_period_s is not None:
         _positive("frame_period_s", frame_period_s, MAX_STRETCH_S)
+    seat = None if mount is None else SensorModel(mount=mount).mount  # type: ignore[arg-type]
     L = lm.xy
     half = None if fov is None else 0.5 * float(fov)
     # Each recording's frames with its own truth, then all of them as one.
@@ -927,6 +934,11 @@ def estimate_frame_sensor(
         at_after.append(tr.at(t + 0.1)[0] if t.size else np.zeros((0, 3)))
     poses, gaps = np.concatenate(at), np.concatenate(gap_list)
     before, after = np.concatenate(at_before), np.concatenate(at_after)
+    # The bearings were measured from the sensor: the truth is the robot's (its turn rate,
+    # read from before and after, is the sensor's too).
+    if seat is not None:
+        poses = compose(poses, np.asarray(seat))
+        at_empty = [compose(p, np.asarray(seat)) for p in at_empty]
     errors: list[float] = []
     rates: list[float] = []
     where: list[float] = []  # the bearing of each error
@@ -974,8 +986,10 @@ def estimate_frame_sensor(
     if len(errors) < MIN_ERRORS:
         raise InputError(
             f"only {len(errors)} bearings within {math.degrees(gate):.1f} deg of a landmark "
-            "seen from the true pose: too few to fit the sensor (do the frames, the map and "
-            "the truth belong together?)"
+            f"seen from the true {'sensor pose (truth and mount)' if seat else 'pose'}: too "
+            "few to fit the sensor (do the frames, the map"
+            + (", the truth and the mount" if seat else " and the truth")
+            + " belong together?)"
         )
     if visible == 0:
         raise InputError(

@@ -81,7 +81,8 @@ def simulate_run(
     landmarks : LandmarkMap or array_like, shape (N, 2)
     sensor : SensorModel
         What the robot sees (``sigma`` or ``threshold / 3`` as noise; ``p_detect`` default 1;
-        ``clutter`` default 0 per frame).
+        ``clutter`` default 0 per frame), from where it sits on the robot (``mount``; the
+        odometry and the ground truth are the robot's).
     start : Pose
         Where the robot starts.
     duration_s : float
@@ -163,7 +164,8 @@ def simulate_run(
     frames = []
     t_frames = np.arange(0.5 / frame_hz, t[-1], 1.0 / frame_hz)
     for tf in t_frames:
-        pose = truth.pose_at(float(tf))
+        # (The bearings are the sensor's: from where it sits on the robot, ``sensor.mount``.)
+        pose = Pose.from_array(sensor.sensor_poses(truth.pose_at(float(tf))))
         vis = np.flatnonzero(sensor.visible(lm.xy, pose))
         vis = vis[gen.random(vis.size) < p_det]
         d = lm.xy[vis] - pose.xy

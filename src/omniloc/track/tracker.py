@@ -87,7 +87,7 @@ from ..angles import wrap
 from ..errors import InputError
 from ..io import shorten
 from ..maps import LandmarkMap, as_landmark_map
-from ..pose import Pose
+from ..pose import Pose, compose_jacobians
 from ..sensor import SensorModel
 from .confidence import _interpolate, is_recent, knot_arrays
 from .config import _CONFIDENCE_TABLES, TrackerConfig
@@ -227,6 +227,7 @@ class Tracker:
             raise InputError(f"config must be a TrackerConfig, got {type(config).__name__}")
         c = self.config
         self._L = np.ascontiguousarray(self.landmarks.xy, dtype=np.float64)
+        self._mount = None if self.sensor.mount is None else np.array(self.sensor.mount)
         self._model = FrameModel.of(self.sensor)
         if c.core_share > 0:
             self._model = replace(
@@ -304,6 +305,8 @@ class Tracker:
         # The best place's estimate as the last decision made it (index, mean, covariance).
         #: (best hypothesis, its place's pose, covariance and probability within tolerance)
         self._best_place: tuple[int, FloatArray, FloatArray, float] | None = None
+        # The place the last estimate reported, in the sensor's frame.
+        self._place_out: tuple[FloatArray, FloatArray] | None = None
         # The confidence tables as arrays of knots, made once (each is read every frame).
         self._tables = {
             name: None if t is None else knot_arrays(t)
@@ -519,7 +522,30 @@ class Tracker:
         delta, Q = integrate(
             ends - starts, twists[:, 0], twists[:, 2], self.motion, vy=twists[:, 1]
         )
+        delta, Q = self._sensor_motion(delta, Q)
         return delta, Q, gap
+
+    # ---- the sensor's frame --------------------------------------------------------------
+    # The hypotheses, elsewhere's particles and the window are poses of the sensor (what the
+    # bearings are measured from); the odometry is the robot's, and so is what the tracker
+    # reports. Without a mount the two frames are one.
+    def _sensor_motion(self, delta: FloatArray, Q: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """The robot's motion ``delta`` (covariance ``Q``) as the sensor's: ``M^-1 (+) delta
+        (+) M`` for the mount ``M``, its covariance carried to first order."""
+        if self._mount is None:
+            return delta, Q
+        M = self._mount
+        back = inverse(M)
+        head = compose(back, delta)
+        J = compose_jacobians(head, M)[0] @ compose_jacobians(back, delta)[1]
+        return compose(head, M), J @ Q @ J.T
+
+    def _robot(self, mu: FloatArray, P: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Sensor poses ``mu`` (n, 3) and covariances ``P`` (n, 3, 3) as the robot's."""
+        if self._mount is None:
+            return mu, P
+        out: tuple[FloatArray, FloatArray] = self.sensor.robot_poses(mu, P)
+        return out
 
     # ---- the posterior -------------------------------------------------------------------
     def _inside(self, mu: FloatArray) -> NDArray[np.bool_]:
@@ -528,6 +554,8 @@ class Tracker:
         ``tolerance_m`` of slack at its edges."""
         x0, x1, y0, y1 = self.region
         m = self.config.tolerance_m
+        if self._mount is not None and mu.shape[0]:
+            mu = self.sensor.robot_poses(mu)
         return np.asarray(
             (mu[:, 0] >= x0 - m)
             & (mu[:, 0] <= x1 + m)
@@ -1064,9 +1092,9 @@ class Tracker:
         est = self._estimate(tf, state, reason, kidnapped, best)
         if self._localized_id is None:
             self._watch = None
-        elif c.kidnap_fit > 0 and est.localized and est.pose is not None:
-            P = est.covariance if est.covariance is not None else np.zeros((3, 3))
-            self._watch = (est.pose.as_array()[None], np.asarray(P)[None])
+        elif c.kidnap_fit > 0 and est.localized and self._place_out is not None:
+            # (The place as reported, in the sensor's frame the bearings are weighed in.)
+            self._watch = (self._place_out[0][None], self._place_out[1][None])
         return est
 
     def _watch_kidnapping(
@@ -1202,7 +1230,9 @@ class Tracker:
             return TrackState.LOST, "no hypothesis explains the recent bearings yet", None
         i = int(np.argmax(self._logw))
         mu_i, P, mass = self._place_estimate(i)
-        p_tol = within_tolerance(P, c.tolerance_m, c.tolerance_heading)
+        p_tol = within_tolerance(
+            self._robot(mu_i[None], P[None])[1][0], c.tolerance_m, c.tolerance_heading
+        )
         p = mass * p_tol
         # (kept for the estimate of this frame: nothing moves the hypotheses in between)
         self._best_place = (i, mu_i, P, p)
@@ -1286,12 +1316,14 @@ class Tracker:
         self, t: float, state: TrackState, reason: str, kidnapped: bool, best: int | None
     ) -> TrackEstimate:
         since = None if self._localized_t is None else max(t - self._localized_t, 0.0)
+        self._place_out = None
         if best is None or self.n_hypotheses == 0:
             return TrackEstimate(
                 t, TrackState.LOST, reason=reason, kidnapped=kidnapped, since_localized=since
             )
         order = np.argsort(-self._logw, kind="stable")[: self.config.max_reported]
-        rows = self._mu[order].tolist()  # (tolist: the floats float() gives, at once)
+        h_mu, h_P = self._robot(self._mu[order], self._P[order] * self.config.covariance_inflation)
+        rows = h_mu.tolist()  # (tolist: the floats float() gives, at once)
         w = np.minimum(np.exp(self._logw[order]), 1.0)
         weights = w.tolist()
         soon = is_recent(since, self.config.confidence_recent_s)
@@ -1300,13 +1332,7 @@ class Tracker:
             h_table = self._tables["confidence_hypothesis_recent"]
         h_conf = _interpolate(h_table, w)
         hyps = tuple(
-            Hypothesis(
-                Pose(*rows[j]),
-                self._P[k] * self.config.covariance_inflation,
-                weights[j],
-                h_conf[j],
-            )
-            for j, k in enumerate(order)
+            Hypothesis(Pose(*rows[j]), h_P[j], weights[j], h_conf[j]) for j in range(len(rows))
         )
         c = self.config
         cached, self._best_place = self._best_place, None
@@ -1316,8 +1342,12 @@ class Tracker:
             )
         if cached is not None and cached[0] == best:
             _, mu, P, prob = cached
+            self._place_out = (mu, P)
+            mu, P = (a[0] for a in self._robot(mu[None], P[None]))
         else:
             mu, P, mass = self._place_estimate(best)
+            self._place_out = (mu, P)
+            mu, P = (a[0] for a in self._robot(mu[None], P[None]))
             prob = mass * within_tolerance(P, c.tolerance_m, c.tolerance_heading)
         # The model's probability that the pose is within tolerance (what _decide reads),
         # and what the configuration's table says such frames turned out to be (an ambiguous

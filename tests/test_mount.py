@@ -1,0 +1,366 @@
+"""A sensor that sits off the robot's origin (``SensorModel.mount``): the bearings are the
+sensor's, every pose given or returned is the robot's -- single frames (``localize``),
+the tracker, the simulation, the sensor fit, the command line and the figures."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import omniloc
+from omniloc import Pose, SensorModel, localize, predict_bearings
+from omniloc.cli import main
+from omniloc.errors import InputError
+from omniloc.pose import compose, compose_jacobians, inverse
+from omniloc.track import Odometry, Tracker, estimate_frame_sensor, track
+from omniloc.track.simulate import EXAMPLE_MAP, EXAMPLE_MOTION, EXAMPLE_SENSOR, simulate_run
+
+MOUNT = (0.3, 0.1, 0.5)
+
+finite = st.floats(-50.0, 50.0, allow_nan=False)
+angle = st.floats(-math.pi, math.pi, allow_nan=False, exclude_max=True)
+seat = st.tuples(st.floats(-2.0, 2.0), st.floats(-2.0, 2.0), angle)
+
+
+# ---- the model -------------------------------------------------------------------------------
+def test_a_mount_is_three_numbers_in_metres_and_radians() -> None:
+    assert SensorModel(mount=[0.2, -0.1, 0.3]).mount == (0.2, -0.1, 0.3)
+    assert SensorModel(mount=np.array([0.2, 0, 0])).mount == (0.2, 0.0, 0.0)
+    assert SensorModel(mount=(0, 0, 0)).mount is None  # (the origin: no mount)
+    assert SensorModel(mount=(0.1, 0, math.pi)).mount == (0.1, 0.0, -math.pi)  # (wrapped)
+    for bad, words in [
+        ((0.1, 0.2), "three numbers"),
+        ("0.1,0,0", "three numbers"),
+        (0.3, "three numbers"),
+        ((0.1, 0.0, float("nan")), r"mount\[2\]"),
+        ((0.1, 0.0, 30.0), "radians"),
+        ((250.0, 0.0, 0.0), "metres"),
+        ((0.1, "a", 0.0), r"mount\[1\]"),
+    ]:
+        with pytest.raises(InputError, match=words):
+            SensorModel(mount=bad)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.tuples(finite, finite, angle), seat)
+def test_robot_and_sensor_poses_undo_each_other(pose: tuple, mount: tuple) -> None:
+    s = SensorModel(mount=mount)
+    p = np.array(pose)
+    back = s.robot_poses(s.sensor_poses(p))
+    assert np.allclose(back[:2], p[:2], atol=1e-9)
+    assert abs(float(omniloc.wrap(back[2] - p[2]))) < 1e-9
+    if s.mount is not None:
+        # The sensor sits where the mount says, seen from the robot.
+        rel = s.sensor_poses(p)[:2] - p[:2]
+        c, si = math.cos(p[2]), math.sin(p[2])
+        assert np.allclose([c * rel[0] + si * rel[1], -si * rel[0] + c * rel[1]], mount[:2])
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.tuples(finite, finite, angle), seat)
+def test_a_covariance_is_carried_by_the_jacobian_of_the_mount(pose: tuple, mount: tuple) -> None:
+    s = SensorModel(mount=mount)
+    p = np.array(pose)
+    C = np.diag([0.01, 0.02, 0.003])
+    C[0, 2] = C[2, 0] = 0.001
+    _, R = s.robot_poses(p, C)
+    # Numerical Jacobian of sensor -> robot.
+    J = np.zeros((3, 3))
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1e-6
+        d = s.robot_poses(p + e) - s.robot_poses(p - e)
+        d[2] = float(omniloc.wrap(d[2]))
+        J[:, k] = d / 2e-6
+    assert np.allclose(R, J @ C @ J.T, atol=1e-8)
+    # A sensor off the robot's origin passes its heading's uncertainty (uncorrelated here)
+    # to the robot's position.
+    if s.mount is not None and math.hypot(*mount[:2]) > 0.1:
+        D = np.diag([0.01, 0.02, 0.003])
+        assert np.trace(s.robot_poses(p, D)[1][:2, :2]) > np.trace(D[:2, :2]) + 0.003 * 0.009
+
+
+def test_robot_poses_check_their_input() -> None:
+    s = SensorModel(mount=MOUNT)
+    with pytest.raises(InputError, match="shape"):
+        s.robot_poses(np.zeros((2, 2)))
+    with pytest.raises(InputError, match="finite"):
+        s.sensor_poses([0.0, float("nan"), 0.0])
+    with pytest.raises(InputError, match=r"covariances must have shape \(2, 3, 3\)"):
+        s.robot_poses(np.zeros((2, 3)), np.zeros((3, 3)))
+    # Many at once, and a Pose.
+    assert s.sensor_poses(np.zeros((4, 3))).shape == (4, 3)
+    assert s.sensor_poses(Pose(1.0, 2.0, 0.0)).tolist() == pytest.approx([1.3, 2.1, 0.5])
+
+
+# ---- single frames ---------------------------------------------------------------------------
+def test_localize_returns_the_robot_pose_of_a_mounted_sensor() -> None:
+    room = omniloc.demo_room()
+    rng = np.random.default_rng(4)
+    sensor = SensorModel(sigma=math.radians(0.3), mount=(0.15, 0.05, -0.4))
+    plain = sensor.replace(mount=None)
+    for _ in range(10):
+        robot = omniloc.random_pose(room, rng=rng).as_array()
+        z = predict_bearings(room.xy, sensor.sensor_poses(robot))
+        res = localize(room, z, sensor)
+        assert res.mount == sensor.mount
+        got = res.best.pose.as_array()
+        assert np.allclose(got[:2], robot[:2], atol=1e-6)
+        assert abs(float(omniloc.wrap(got[2] - robot[2]))) < 1e-6
+        # The same search without the mount finds the sensor; carried to the robot with its
+        # covariance, it is the answer above.
+        bare = localize(room, z, plain)
+        pose, cov = sensor.robot_poses(bare.best.pose.as_array(), bare.best.covariance)
+        assert np.allclose(pose, got, atol=1e-9)
+        assert np.allclose(cov, res.best.covariance, atol=1e-12)
+        assert np.allclose(res.poses[0], got)
+        assert bare.best.pose.distance_to(res.best.pose)[0] > 0.1
+    # The keyword builds the same sensor, and may not repeat a sensor's.
+    kw = localize(room, z, sigma=math.radians(0.3), mount=(0.15, 0.05, -0.4))
+    assert np.allclose(kw.best.pose.as_array(), got)
+    with pytest.raises(InputError, match="mount"):
+        localize(room, z, sensor, mount=(0.1, 0.0, 0.0))
+
+
+def test_the_figure_draws_the_rays_from_the_sensor(tmp_path: Path) -> None:
+    pytest.importorskip("matplotlib")
+    from omniloc.plot.scene import plot_localization
+
+    room = omniloc.demo_room()
+    sensor = SensorModel(sigma=math.radians(0.3), mount=(0.5, 0.0, 0.0))
+    robot = np.array([5.0, 3.0, 0.4])
+    z = predict_bearings(room.xy, sensor.sensor_poses(robot))
+    res = localize(room, z, sensor)
+    fig = plot_localization(res, z, tmp_path / "scene.png")
+    eye = sensor.sensor_poses(robot)
+    starts = {
+        (round(float(line.get_xdata()[0]), 6), round(float(line.get_ydata()[0]), 6))
+        for line in fig.axes[0].lines
+        if len(line.get_xdata()) == 2
+    }
+    assert (round(float(eye[0]), 6), round(float(eye[1]), 6)) in starts
+    assert (round(float(robot[0]), 6), round(float(robot[1]), 6)) not in starts
+    assert (tmp_path / "scene.png").stat().st_size > 0
+
+
+# ---- over time -------------------------------------------------------------------------------
+def _run(mount: tuple[float, float, float] | None, seed: int = 3):
+    return simulate_run(
+        EXAMPLE_MAP,
+        EXAMPLE_SENSOR.replace(mount=mount),
+        Pose(6.0, 4.0, 0.3),
+        duration_s=40.0,
+        rng=seed,
+    )
+
+
+def _errors(estimates, truth) -> np.ndarray:
+    out = []
+    for e in estimates:
+        if e.localized:
+            d = e.pose.as_array() - truth.pose_at(e.t).as_array()
+            out.append((math.hypot(d[0], d[1]), abs(float(omniloc.wrap(d[2])))))
+    return np.array(out).reshape(-1, 2)
+
+
+def test_the_tracker_reports_the_robot_of_a_mounted_sensor() -> None:
+    run = _run(MOUNT)
+    sensor = EXAMPLE_SENSOR.replace(mount=MOUNT)
+    est = track(EXAMPLE_MAP, run.odometry, run.frames, sensor=sensor, motion=EXAMPLE_MOTION)
+    err = _errors(est.estimates, run.truth)
+    assert len(err) > 80
+    assert err[:, 0].max() < 0.06 and err[:, 1].max() < math.radians(3)
+    # Its hypotheses are the robot's too, and so is the covariance.
+    last = [e for e in est.estimates if e.localized][-1]
+    assert last.hypotheses[0].pose.distance_to(run.truth.pose_at(last.t))[0] < 0.06
+    assert last.covariance is not None and last.covariance.shape == (3, 3)
+    # Told nothing of the mount, it localizes far less often, and where it does, it is wrong
+    # by the mount.
+    bare = track(
+        EXAMPLE_MAP, run.odometry, run.frames, sensor=EXAMPLE_SENSOR, motion=EXAMPLE_MOTION
+    )
+    wrong = _errors(bare.estimates, run.truth)
+    assert len(wrong) < len(err) / 2
+    assert len(wrong) == 0 or np.median(wrong[:, 0]) > 0.2
+
+
+def test_a_mount_equals_the_sensor_frames_own_odometry() -> None:
+    # The workaround before the mount: the odometry of the sensor's frame (TF odom ->
+    # camera_link); the tracker then tracks the sensor. Carried to the robot, the same.
+    run = _run(MOUNT)
+    sensor = EXAMPLE_SENSOR.replace(mount=MOUNT)
+    odo = run.odometry
+    robot = [run.truth.pose_at(float(odo.t[0])).as_array()]
+    from omniloc.track.motion import integrate
+
+    for k in range(len(odo) - 1):
+        d, _ = integrate([odo.t[k + 1] - odo.t[k]], [odo.v[k]], [odo.w[k]], EXAMPLE_MOTION)
+        robot.append(compose(robot[-1], d))
+    eye = sensor.sensor_poses(np.array(robot))
+    eye_odo = Odometry.from_poses(odo.t, eye[:, 0], eye[:, 1], eye[:, 2])
+    mounted = track(EXAMPLE_MAP, odo, run.frames, sensor=sensor, motion=EXAMPLE_MOTION)
+    by_eye = track(EXAMPLE_MAP, eye_odo, run.frames, sensor=EXAMPLE_SENSOR, motion=EXAMPLE_MOTION)
+    pairs = [
+        (a, b)
+        for a, b in zip(mounted.estimates, by_eye.estimates, strict=True)
+        if a.localized and b.localized
+    ]
+    assert len(pairs) > 80
+    apart = []
+    for a, b in pairs:
+        assert a.pose is not None and b.pose is not None
+        back = sensor.robot_poses(b.pose.as_array())
+        apart.append(math.hypot(*(a.pose.as_array()[:2] - back[:2])))
+    # (Not to the bit: the odometry's noise is modelled on the robot's motion in one, on the
+    # sensor's in the other.)
+    assert max(apart) < 0.03 and float(np.median(apart)) < 5e-3
+
+
+def test_a_mount_at_the_origin_changes_nothing() -> None:
+    run = _run(None)
+    a = track(EXAMPLE_MAP, run.odometry, run.frames, sensor=EXAMPLE_SENSOR, motion=EXAMPLE_MOTION)
+    b = track(
+        EXAMPLE_MAP,
+        run.odometry,
+        run.frames,
+        sensor=EXAMPLE_SENSOR.replace(mount=(0.0, 0.0, 0.0)),
+        motion=EXAMPLE_MOTION,
+    )
+    assert [e.as_dict() for e in a.estimates] == [e.as_dict() for e in b.estimates]
+
+
+def test_the_motion_of_the_sensor_is_the_robots_seen_from_the_mount() -> None:
+    tracker = Tracker(EXAMPLE_MAP, EXAMPLE_SENSOR.replace(mount=MOUNT), EXAMPLE_MOTION)
+    delta = np.array([0.4, 0.05, 0.3])
+    Q = np.diag([1e-3, 2e-4, 5e-4])
+    ds, Qs = tracker._sensor_motion(delta, Q)
+    M = np.array(MOUNT)
+    start = np.array([1.0, 2.0, 0.7])
+    # The sensor moves from start (+) M to start (+) delta (+) M.
+    assert np.allclose(
+        compose(compose(start, M), ds), compose(compose(start, delta), M), atol=1e-12
+    )
+    J = (
+        compose_jacobians(compose(inverse(M), delta), M)[0]
+        @ compose_jacobians(inverse(M), delta)[1]
+    )
+    assert np.allclose(Qs, J @ Q @ J.T)
+    # A robot turning on the spot moves a sensor ahead of it sideways.
+    ds, _ = tracker._sensor_motion(np.array([0.0, 0.0, 0.5]), np.zeros((3, 3)))
+    assert math.hypot(ds[0], ds[1]) > 0.1
+
+
+# ---- calibration -----------------------------------------------------------------------------
+def test_the_sensor_fit_takes_the_mount() -> None:
+    sensor = EXAMPLE_SENSOR.replace(mount=MOUNT)
+    run = _run(MOUNT)
+    fit = estimate_frame_sensor(
+        EXAMPLE_MAP, run.frames, run.truth, max_range=5.0, mount=MOUNT, gate=math.radians(3)
+    )
+    assert fit.sigma == pytest.approx(sensor.sigma, rel=0.25)
+    assert fit.p_detect == pytest.approx(0.9, abs=0.08)
+    # Taken from the robot's origin, the bearings are 29 deg off: nothing is matched.
+    with pytest.raises(InputError, match="too few to fit the sensor"):
+        estimate_frame_sensor(EXAMPLE_MAP, run.frames, run.truth, max_range=5.0)
+    with pytest.raises(InputError, match="mount"):
+        estimate_frame_sensor(EXAMPLE_MAP, run.frames, run.truth, mount=(0.1, 0.2))
+
+
+# ---- the command line ------------------------------------------------------------------------
+def _files(tmp_path: Path, run) -> dict[str, Path]:
+    from omniloc.track import write_frames, write_groundtruth, write_odometry
+
+    paths = {k: tmp_path / f"{k}.csv" for k in ("map", "odometry", "frames", "truth")}
+    paths["map"].write_text(
+        "id,x,y\n"
+        + "".join(f"{i},{float(x)!r},{float(y)!r}\n" for i, (x, y) in enumerate(EXAMPLE_MAP.xy))
+    )
+    write_odometry(paths["odometry"], run.odometry)
+    write_frames(paths["frames"], run.frames)
+    write_groundtruth(paths["truth"], run.truth)
+    return paths
+
+
+def _options(**paths: Path) -> list[str]:
+    """``--name path`` for each keyword."""
+    return [a for k, v in paths.items() for a in (f"--{k}", str(v))]
+
+
+def test_track_and_fit_sensor_take_mount_on_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = _run(MOUNT)
+    p = _files(tmp_path, run)
+    settings_path = tmp_path / "settings.json"
+    settings_path.write_text(
+        json.dumps(
+            {
+                "sigma": EXAMPLE_SENSOR.sigma,
+                "max_range": 5.0,
+                "p_detect": 0.9,
+                "clutter": 0.3,
+                "along_per_m": EXAMPLE_MOTION.along_per_m,
+            }
+        )
+    )
+    yaw_deg = math.degrees(MOUNT[2])
+    files = _options(map=p["map"], frames=p["frames"], groundtruth=p["truth"])
+    common = ["-q", "track", *files, *_options(odometry=p["odometry"], config=settings_path)]
+    common.append("--json")
+    assert main([*common, "--mount", f"{MOUNT[0]},{MOUNT[1]},{yaw_deg}"]) == 0
+    rows = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line[:1] == "{"]
+    near = [
+        math.hypot(r["x"] - run.truth.pose_at(r["t"]).x, r["y"] - run.truth.pose_at(r["t"]).y)
+        for r in rows
+        if r["state"] == "localized"
+    ]
+    assert len(near) > 80 and max(near) < 0.06
+    # The same as a setting, in radians.
+    assert main([*common, "--set", f"mount={list(MOUNT)}"]) == 0
+    again = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line[:1] == "{"]
+    assert again == rows
+    # A mount that is not three numbers is refused by argparse, by name.
+    assert main([*common, "--mount", "0.3,0.1"]) == 1
+    assert "X,Y,YAW" in capsys.readouterr().err
+    # fit-sensor with the mount writes it into the settings it fits.
+    out = tmp_path / "sensor.json"
+    mount = f"{MOUNT[0]},{MOUNT[1]},{yaw_deg}"
+    fit = ["fit-sensor", *files, "--max-range", "5", "--mount", mount, "--out", str(out)]
+    assert main(fit) == 0
+    fitted = json.loads(out.read_text())
+    assert fitted["mount"] == pytest.approx(list(MOUNT))
+    assert fitted["sigma"] == pytest.approx(EXAMPLE_SENSOR.sigma, rel=0.25)
+
+
+def test_localize_takes_mount_on_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    room = omniloc.demo_room()
+    mount = (0.2, 0.0, math.radians(90))
+    sensor = SensorModel(mount=mount)
+    robot = np.array([5.6, 2.1, math.radians(30)])
+    z = predict_bearings(room.xy, sensor.sensor_poses(robot))
+    bearings = tmp_path / "z.txt"
+    bearings.write_text("\n".join(repr(float(v)) for v in z) + "\n")
+    room_csv = tmp_path / "room.csv"
+    room_csv.write_text(
+        "id,x,y\n"
+        + "".join(
+            f"{i},{float(x)!r},{float(y)!r}\n" for i, (x, y) in zip(room.ids, room.xy, strict=True)
+        )
+    )
+    args = ["localize", "--map", str(room_csv), "--bearings", str(bearings), "--json"]
+    args += ["--sigma", "0.3"]
+    assert main([*args, "--mount", "0.2,0,90"]) == 0
+    best = json.loads(capsys.readouterr().out)["solutions"][0]
+    assert best["x"] == pytest.approx(robot[0], abs=1e-6)
+    assert best["y"] == pytest.approx(robot[1], abs=1e-6)
+    assert best["theta"] == pytest.approx(robot[2], abs=1e-6)
+    assert main([*args, "--mount", "0.2,0,400"]) == 1
+    assert "YAW is in degrees" in capsys.readouterr().err
