@@ -518,6 +518,18 @@ POSES: Pool = (
 )
 
 
+#: Poses and covariances for functions that take arrays of them.
+POSE_ARRAYS: Pool = (
+    *POSES,
+    ("(2, 3)", np.zeros((2, 3))),
+    ("(3, 3)", np.eye(3)),
+    ("(2, 3, 3)", np.zeros((2, 3, 3))),
+    ("empty (0, 3)", np.zeros((0, 3))),
+    ("ragged", [[1.0, 2.0, 3.0], [1.0]]),
+    ("bools", [True, False, True]),
+)
+
+
 def _on_circle_pose() -> tuple[float, float, float]:
     """A pose on the circle through the first three landmarks of room_xy5()."""
     a, b, c = room_xy5()[:3]
@@ -692,6 +704,34 @@ def _clutter_table_check(v: Any) -> None:
         raise Insane(f"not a table of finite clutter rates: {v!r}")
 
 
+#: A sensor's place on the robot (``SensorModel.mount``, ``localize``'s ``mount``, the sensor
+#: fit's): three numbers, metres and radians.
+MOUNTS: Pool = (
+    ("valid", (0.2, 0.0, 0.1)),
+    ("origin", (0.0, 0.0, 0.0)),
+    ("two numbers", (0.2, 0.0)),
+    ("four numbers", [0.1, 0.0, 0.0, 0.0]),
+    ("empty", []),
+    ("string", "0.2,0,0"),
+    ("number", 0.2),
+    ("dict", {"x": 0.2}),
+    ("set", {0.2, 0.0, 0.1}),
+    ("nan", [float("nan"), 0.0, 0.0]),
+    ("inf", [0.0, float("inf"), 0.0]),
+    ("1e300", [1e300, 0.0, 0.0]),
+    ("degrees", [0.1, 0.0, 90.0]),
+    ("400-digit int", [10**400, 0, 0]),
+    ("bools", [True, False, True]),
+    ("strings", ["a", "b", "c"]),
+    ("complex", [1j, 0, 0]),
+    ("nested", [[0.1], [0.0], [0.0]]),
+    ("numpy", Lazy(lambda: np.array([0.1, 0.0, 0.2]))),
+    ("numpy 2-D", Lazy(lambda: np.zeros((1, 3)))),
+    ("numpy 0-D", Lazy(lambda: np.array(0.3))),
+    ("None", None),
+)
+
+
 def _search_targets() -> list[Target]:
     from omniloc.search import Budget
     from omniloc.sensor import SensorModel, clutter_by_detections
@@ -721,6 +761,7 @@ def _search_targets() -> list[Target]:
         }
     )
     keywords["clutter_by_detections"] = Arg(("clutter_by_detections",), CLUTTER_TABLES)
+    keywords["mount"] = Arg(("mount",), MOUNTS)
     args = {
         "landmarks": Arg(("landmark", "map"), LANDMARKS),
         "bearings": Arg(("bearing",), BEARINGS),
@@ -752,7 +793,25 @@ def _search_targets() -> list[Target]:
             }
             | {k: Arg((k,), PROBABILITIES) for k in ("gate_confidence", "p_detect")}
             | {"allow_wide": Arg(("allow_wide",), (("string", "yes"), ("None", None)))}
-            | {"clutter_by_detections": Arg(("clutter_by_detections",), CLUTTER_TABLES)},
+            | {"clutter_by_detections": Arg(("clutter_by_detections",), CLUTTER_TABLES)}
+            | {"mount": Arg(("mount",), MOUNTS)},
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "SensorModel.robot_poses",
+            lambda kw: SensorModel(mount=(0.2, 0.0, 0.1)).robot_poses(**kw),
+            lambda: {"sensor_poses": [1.0, 2.0, 0.3], "covariances": np.eye(3) * 0.01},
+            {
+                "sensor_poses": Arg(("sensor_poses",), POSE_ARRAYS),
+                "covariances": Arg(("covariances",), POSE_ARRAYS),
+            },
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "SensorModel.sensor_poses",
+            lambda kw: SensorModel(mount=(0.2, 0.0, 0.1)).sensor_poses(**kw),
+            lambda: {"robot_poses": [1.0, 2.0, 0.3]},
+            {"robot_poses": Arg(("robot_poses",), POSE_ARRAYS)},
             check=lambda kw, v: None,
         ),
         Target(
@@ -1554,6 +1613,7 @@ def _settings_targets() -> list[Target]:
                     )
                     for k in ("fov", "max_range", "gate", "max_gap_s", "frame_period_s")
                 },
+                "mount": Arg(("mount",), MOUNTS),
             },
             check=lambda kw, v: None,
         ),
@@ -2326,6 +2386,20 @@ def _given(flag: str | None, value: Any, folder: Path) -> list[str]:
     return out
 
 
+#: ``--mount X,Y,YAW`` (metres, metres, degrees).
+CLI_MOUNTS: Pool = (
+    *CLI_NUMBERS,
+    ("valid", "0.2,0,10"),
+    ("two numbers", "0.2,0"),
+    ("four numbers", "0.2,0,0,0"),
+    ("empty entries", ",,"),
+    ("a word among numbers", "0.2,x,0"),
+    ("nan x", "nan,0,0"),
+    ("yaw 400", "0,0,400"),
+    ("x 1e300", "1e300,0,0"),
+    ("x of 400 digits", "1" + "0" * 400 + ",0,0"),
+)
+
 #: The numeric options of ``omniloc localize``.
 LOCALIZE_NUMERIC = (
     "--threshold",
@@ -2373,6 +2447,7 @@ def cli_targets() -> dict[str, CliTarget]:
                 ("1e999", "1e999,1"),
             ),
             **{k: CLI_NUMBERS for k in LOCALIZE_NUMERIC},
+            "--mount": CLI_MOUNTS,
         },
     )
     bearings = CliTarget(
@@ -2435,6 +2510,7 @@ def cli_targets() -> dict[str, CliTarget]:
             ),
             "--preset": (("unknown", "fast"), ("empty", "")),
             **{k: CLI_NUMBERS for k in ("--sigma", "--fov", "--max-range")},
+            "--mount": CLI_MOUNTS,
             "--config": (
                 *TEXT_FILES,
                 ("json array", file_with("s.json", "[1, 2]")),
@@ -2512,6 +2588,7 @@ def cli_targets() -> dict[str, CliTarget]:
                 ("under a file", Lazy(lambda f: _a_file(f) / "s.json", needs_dir=True)),
             ),
             **{k: CLI_NUMBERS for k in ("--fov", "--max-range", "--gate", "--frame-period")},
+            "--mount": CLI_MOUNTS,
         },
     )
     return {t.name: t for t in (localize, bearings, demo, evaluate, track, fit_motion, fit_sensor)}
