@@ -364,3 +364,80 @@ def test_localize_takes_mount_on_the_command_line(
     assert best["theta"] == pytest.approx(robot[2], abs=1e-6)
     assert main([*args, "--mount", "0.2,0,400"]) == 1
     assert "YAW is in degrees" in capsys.readouterr().err
+
+
+# ---- the mount fitted ------------------------------------------------------------------------
+@pytest.mark.parametrize("mount", [(0.3, 0.1, 0.5), (0.0, 0.0, 0.0), (0.25, -0.25, 3.0)])
+def test_the_mount_is_fitted_from_a_recording(mount: tuple[float, float, float]) -> None:
+    from omniloc.track import estimate_mount
+
+    run = _run(mount)
+    fit = estimate_mount(EXAMPLE_MAP, run.frames, run.truth, max_range=5.0)
+    assert fit.mount[0] == pytest.approx(mount[0], abs=0.01)
+    assert fit.mount[1] == pytest.approx(mount[1], abs=0.01)
+    assert abs(float(omniloc.wrap(fit.mount[2] - mount[2]))) < math.radians(0.2)
+    assert all(0.0 < s < 0.01 for s in fit.sd)
+    assert fit.matched > 0.8 * fit.bearings
+    assert fit.residual_sd == pytest.approx(EXAMPLE_SENSOR.sigma, rel=0.2)
+    # The same from a guess nearer the truth, and from several recordings at once.
+    again = estimate_mount(
+        EXAMPLE_MAP,
+        [run.frames, run.frames],
+        [run.truth, run.truth],
+        max_range=5.0,
+        initial=(0.1, 0.0, 0.0),
+    )
+    assert np.allclose(again.mount[:2], fit.mount[:2], atol=2e-3)
+
+
+def test_the_mount_fit_refuses_what_it_cannot_fit() -> None:
+    from omniloc.track import Frame, GroundTruth, estimate_mount
+
+    run = _run(MOUNT)
+    with pytest.raises(InputError, match="no frame with bearings lies on the true track"):
+        estimate_mount(EXAMPLE_MAP, [Frame(1e6, np.array([0.1]))], run.truth)
+    noise = [Frame(f.t, np.random.default_rng(1).uniform(-3, 3, 1)) for f in run.frames[:30]]
+    with pytest.raises(InputError, match="too few to fit it"):
+        estimate_mount(EXAMPLE_MAP, noise, run.truth, max_range=5.0)
+    # One landmark seen from one place: its bearing fixes neither x nor y.
+    t = np.arange(30.0)
+    still = GroundTruth(t, np.zeros(30), np.zeros(30), np.zeros(30))
+    frames = [Frame(float(ti), np.array([0.0])) for ti in t]
+    with pytest.raises(InputError, match="cannot tell the mount's x, y and yaw apart"):
+        estimate_mount([[3.0, 0.0], [50.0, 50.0], [60.0, -40.0]], frames, still, max_range=5.0)
+    with pytest.raises(InputError, match="mount"):
+        estimate_mount(EXAMPLE_MAP, run.frames, run.truth, initial=(0.1, 0.0))
+
+
+def test_the_mount_of_mrclam_robot_4(shared_data: Path) -> None:
+    # Its camera sits about 9 cm ahead of the tracked centre, turned 0.6-0.7 deg (a fit told
+    # each bearing's landmark, benchmarks/bearing_correlation.py: 0.089 m, 0.73 deg).
+    from omniloc import LandmarkMap
+    from omniloc.track import estimate_mount, load_frames, load_groundtruth
+
+    data = shared_data / "mrclam-ds6"
+    fit = estimate_mount(
+        LandmarkMap.load(data / "landmarks.csv"),
+        load_frames(data / "robot4_frames.csv"),
+        load_groundtruth(data / "robot4_groundtruth_10hz.csv"),
+        fov=math.radians(67.0),
+        max_range=7.0,
+    )
+    assert 0.06 < fit.mount[0] < 0.12 and abs(fit.mount[1]) < 0.06
+    assert math.radians(0.3) < fit.mount[2] < math.radians(0.9)
+
+
+def test_fit_sensor_fits_the_mount_on_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = _run(MOUNT)
+    p = _files(tmp_path, run)
+    out = tmp_path / "sensor.json"
+    files = _options(map=p["map"], frames=p["frames"], groundtruth=p["truth"])
+    assert main(["fit-sensor", *files, "--max-range", "5", "--fit-mount", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert text.startswith("mount  x 0.300 m, y 0.099 m, yaw 28.63 deg")
+    assert "omniloc track --mount 0.300,0.099,28.63" in text
+    fitted = json.loads(out.read_text())
+    assert fitted["mount"] == pytest.approx(list(MOUNT), abs=0.01)
+    assert fitted["sigma"] == pytest.approx(EXAMPLE_SENSOR.sigma, rel=0.25)

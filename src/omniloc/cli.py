@@ -341,6 +341,13 @@ def _build_parser() -> argparse.ArgumentParser:
     fs.add_argument("--max-range", type=_positive, help="sensor range, m")
     fs.add_argument("--mount", type=_mount_deg, metavar="X,Y,YAW", help=MOUNT_HELP)
     fs.add_argument(
+        "--fit-mount",
+        action="store_true",
+        help="fit the sensor's mount on the robot (X, Y, YAW) to the frames and the truth "
+        "first (from --mount as a guess within about 0.3 m, default the origin; any yaw), then "
+        "the sensor from it; --out writes the mount too",
+    )
+    fs.add_argument(
         "--gate", type=_positive, default=3.0, help="a bearing within this of a landmark, deg"
     )
     fs.add_argument(
@@ -1215,7 +1222,7 @@ def _cmd_fit_motion(args: argparse.Namespace) -> int:
 def _cmd_fit_sensor(args: argparse.Namespace) -> int:
     from .io import write_text
     from .maps import LandmarkMap
-    from .track import estimate_frame_sensor, load_frames, load_groundtruth
+    from .track import estimate_frame_sensor, estimate_mount, load_frames, load_groundtruth
 
     if len(args.frames) != len(args.groundtruth):
         raise InputError(
@@ -1224,16 +1231,27 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
         )
     frames = [load_frames(path, degrees=args.degrees) for path in args.frames]
     truths = [load_groundtruth(path) for path in args.groundtruth]
-    fit = estimate_frame_sensor(
-        LandmarkMap.load(args.map),
+    lm = LandmarkMap.load(args.map)
+    fov = None if args.fov is None else float(np.deg2rad(args.fov))
+    gate = float(np.deg2rad(args.gate))
+    mount = args.mount
+    runs = (
+        lm,
         frames[0] if len(frames) == 1 else frames,
         truths[0] if len(truths) == 1 else truths,
-        fov=None if args.fov is None else float(np.deg2rad(args.fov)),
-        max_range=args.max_range,
-        gate=float(np.deg2rad(args.gate)),
-        frame_period_s=args.frame_period,
-        mount=args.mount,
     )
+    view = {"fov": fov, "max_range": args.max_range, "gate": gate}
+    if args.fit_mount:
+        seat = estimate_mount(*runs, **view, initial=args.mount)
+        mount = seat.mount
+        print(
+            f"mount  x {seat.mount[0]:.3f} m, y {seat.mount[1]:.3f} m, yaw "
+            f"{np.rad2deg(seat.mount[2]):.2f} deg (standard errors {seat.sd[0]:.3f} m, "
+            f"{seat.sd[1]:.3f} m, {np.rad2deg(seat.sd[2]):.2f} deg; {seat.matched} of "
+            f"{seat.bearings} bearings within {args.gate:g} deg of a landmark; omniloc track "
+            f"--mount {seat.mount[0]:.3f},{seat.mount[1]:.3f},{np.rad2deg(seat.mount[2]):.2f})"
+        )
+    fit = estimate_frame_sensor(*runs, **view, frame_period_s=args.frame_period, mount=mount)
     print(
         f"{fit.frames} frames with a true pose, {fit.matched} of their {fit.bearings} bearings "
         f"within {args.gate:g} deg of a landmark"
@@ -1277,8 +1295,8 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
         )
     if args.out is not None:
         settings: dict[str, Any] = fit.mixture_settings() if args.mixture else fit.settings()
-        if args.mount is not None:
-            settings["mount"] = list(args.mount)  # (the tracker needs it too)
+        if mount is not None:
+            settings["mount"] = list(mount)  # (the tracker needs it too)
         write_text(args.out, json.dumps(settings, indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")
     return 0

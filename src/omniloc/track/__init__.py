@@ -5,7 +5,8 @@
 * :func:`track` (:mod:`.offline`) -- the same over a whole recording;
 * :mod:`.motion` -- the odometry's motion and noise (:class:`MotionModel`); :mod:`.calibrate`
   -- that model fitted to odometry and a ground-truth track (:func:`estimate_motion`), and
-  the bearing sensor to frames and the track (:func:`estimate_frame_sensor`);
+  the bearing sensor to frames and the track (:func:`estimate_frame_sensor`), and where it
+  sits on the robot (:func:`estimate_mount`);
 * :mod:`.likelihood` -- what a frame of bearings says about a set of Gaussian pose
   hypotheses, and how it moves them;
 * :mod:`.window`, :mod:`.relocalize` -- the recent frames, and new hypotheses from the
@@ -28,7 +29,14 @@ import sys
 import types
 from typing import Any
 
-from .calibrate import MotionFit, SensorFit, estimate_frame_sensor, estimate_motion
+from .calibrate import (
+    MotionFit,
+    MountFit,
+    SensorFit,
+    estimate_frame_sensor,
+    estimate_motion,
+    estimate_mount,
+)
 from .confidence import ConfidenceFit, fit_confidence
 from .data import Frame, GroundTruth, Odometry, load_frames, load_groundtruth, load_odometry
 from .io import (
@@ -54,6 +62,7 @@ __all__ = [
     "Hypothesis",
     "MotionFit",
     "MotionModel",
+    "MountFit",
     "Odometry",
     "Preset",
     "SensorFit",
@@ -65,6 +74,7 @@ __all__ = [
     "TrackerConfig",
     "estimate_frame_sensor",
     "estimate_motion",
+    "estimate_mount",
     "fit_confidence",
     "load_frames",
     "load_groundtruth",
