@@ -1537,6 +1537,7 @@ def _settings_targets() -> list[Target]:
         Odometry,
         estimate_frame_sensor,
         estimate_motion,
+        estimate_mount,
         load_settings,
         preset,
     )
@@ -1557,6 +1558,25 @@ def _settings_targets() -> list[Target]:
     good_later = GroundTruth(t + 100.0, good.x, good.y, good.theta)
     short = GroundTruth(t[:20], t[:20], t[:20], t[:20])
     far = GroundTruth(t + 1e6, t, t, t)
+
+    def view_arg(k: str) -> Arg:
+        return Arg((k,), (("nan", float("nan")), ("zero", 0.0), ("huge", 1e300), ("bool", True)))
+
+    def sensor_fit_args(also: tuple[str, ...] = ()) -> dict[str, Arg]:
+        """The arguments the two sensor fits share: the recording and the view."""
+        return {
+            "frames": Arg(
+                ("frames", "too few", *also),
+                (("None", None), ("a string", "frames.csv"), ("empty", []), ("ints", [1, 2])),
+            ),
+            "truth": Arg(
+                ("truth", "GroundTruth", "too few", "recording", *also),
+                (("None", None), ("list", [1]), ("two tracks", [still, still]), ("no tracks", [])),
+            ),
+            "landmarks": Arg(("landmark", "map", "positions"), (("nan", [[float("nan"), 0]]),)),
+            **{k: view_arg(k) for k in ("fov", "max_range", "gate", "max_gap_s")},
+        }
+
     return [
         Target(
             "with_settings",
@@ -1591,30 +1611,15 @@ def _settings_targets() -> list[Target]:
             "estimate_frame_sensor",
             lambda kw: estimate_frame_sensor(**kw),
             lambda: {"landmarks": room(), "frames": frames, "truth": still},
-            {
-                "frames": Arg(
-                    ("frames", "too few"),
-                    (("None", None), ("a string", "frames.csv"), ("empty", []), ("ints", [1, 2])),
-                ),
-                "truth": Arg(
-                    ("truth", "GroundTruth", "too few", "recording"),
-                    (
-                        ("None", None),
-                        ("list", [1]),
-                        ("two tracks", [still, still]),
-                        ("no tracks", []),
-                    ),
-                ),
-                "landmarks": Arg(("landmark", "map", "positions"), (("nan", [[float("nan"), 0]]),)),
-                **{
-                    k: Arg(
-                        (k,),
-                        (("nan", float("nan")), ("zero", 0.0), ("huge", 1e300), ("bool", True)),
-                    )
-                    for k in ("fov", "max_range", "gate", "max_gap_s", "frame_period_s")
-                },
-                "mount": Arg(("mount",), MOUNTS),
-            },
+            {**sensor_fit_args(), "frame_period_s": view_arg("frame_period_s")}
+            | {"mount": Arg(("mount",), MOUNTS)},
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "estimate_mount",
+            lambda kw: estimate_mount(**kw),
+            lambda: {"landmarks": room(), "frames": frames, "truth": still},
+            sensor_fit_args(("nothing to fit",)) | {"initial": Arg(("mount", "initial"), MOUNTS)},
             check=lambda kw, v: None,
         ),
         Target(
