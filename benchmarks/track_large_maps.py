@@ -18,7 +18,12 @@ frames:
   robot driving at 0.3 m/s and turning at 0.2 rad/s (a robot that is not localized): the
   median over the frames without a search, and over those with one (about one a second:
   the search, then the replay of its candidates through the last frames);
-* the neighbour lists a map's first search builds (``search.neighbours``), once per map.
+* the neighbour lists a map's first search builds (``search.neighbours``), once per map;
+* on the largest map, the CPU a tracker that is not localized spends per second of
+  recording (the same frames: every frame, searches included), with the preset's settings
+  and with the two that trade a search's recall for time (``max_candidates`` 300 replayed
+  instead of 3,000; ``search_max_nodes`` 10,000 instead of 50,000): above 1, such a
+  robot falls behind real time.
 
 Writes ``results_track_large_maps.json`` and ``.md`` beside this file.
 """
@@ -83,13 +88,14 @@ def weighing_ms(n: int, frames: int, repeat: int, cells: bool, seed: int = 0) ->
         lk.CELL_MIN_LANDMARKS, lk.CELL_CALL_PAIRS = saved
 
 
-def frame_ms(n: int, frames: int, seed: int = 0) -> tuple[float, float]:
+def frame_ms(n: int, frames: int, seed: int = 0, **settings: int) -> tuple[float, float, float]:
     """Median milliseconds of a whole ``Tracker.frame`` on a map of ``n`` landmarks, over
-    the frames without a search and over those with one (NaN: none)."""
+    the frames without a search and over those with one (NaN: none), and the seconds of
+    all of them per second of recording (``settings``: the tracker's, changed)."""
     rng = np.random.default_rng(seed)
     lm = LandmarkMap(rng.uniform(0.0, SIDE_M, (n, 2)))
     sensor, motion, config = preset("mrclam")
-    tracker = Tracker(lm, sensor, motion, replace(config, region=None))
+    tracker = Tracker(lm, sensor, motion, replace(config, region=None, **settings))
     plain, searched = [], []
     t = 0.0
     for i in range(frames + 5):
@@ -105,6 +111,7 @@ def frame_ms(n: int, frames: int, seed: int = 0) -> tuple[float, float]:
     return (
         1e3 * statistics.median(plain),
         1e3 * statistics.median(searched) if searched else math.nan,
+        (sum(plain) + sum(searched)) / (0.25 * frames),
     )
 
 
@@ -143,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         picked = "cells" if lk._cell_groups(poses, L, 7.0) is not None else "whole map"
 
-        frame, with_search = frame_ms(n, args.frames)
+        frame, with_search, per_s = frame_ms(n, args.frames)
         lists = neighbours_ms(n, args.repeat)
         rows.append(
             {
@@ -155,6 +162,7 @@ def main(argv: list[str] | None = None) -> int:
                 "frame_ms": frame,
                 "frame_with_search_ms": with_search,
                 "neighbour_lists_ms": lists,
+                "cpu_per_s": per_s,
             }
         )
         print(
@@ -162,8 +170,17 @@ def main(argv: list[str] | None = None) -> int:
             f"whole map (same numbers: {same}; the default: {picked}); a whole frame "
             f"{frame:.1f} ms, with a search {with_search:.0f} ms; neighbour lists {lists:.0f} ms"
         )
+    knobs = [{}, {"max_candidates": 300}, {"max_candidates": 300, "search_max_nodes": 10_000}]
+    lost = []
+    for kw in knobs:
+        _, searched, per_s = frame_ms(rows[-1]["landmarks"], args.frames, **kw)
+        lost.append({"settings": kw, "frame_with_search_ms": searched, "cpu_per_s": per_s})
+        print(
+            f"{rows[-1]['landmarks']:,} landmarks, not localized, {kw or 'the preset'}: a frame "
+            f"with a search {searched:.0f} ms, {per_s:.2f} s of CPU per second of recording"
+        )
     meta = run_meta("track_large_maps.py", argv, particles=PARTICLES, side_m=SIDE_M)
-    write_results(args.out.with_suffix(".json"), meta, rows=rows)
+    write_results(args.out.with_suffix(".json"), meta, rows=rows, not_localized=lost)
     lines = [
         "# The tracker's frame on large maps (`benchmarks/track_large_maps.py`)",
         "",
@@ -184,6 +201,18 @@ def main(argv: list[str] | None = None) -> int:
             f"{r['default']} | {r['frame_ms']:.1f} ms | {r['frame_with_search_ms']:.0f} ms | "
             f"{r['neighbour_lists_ms']:.0f} ms |"
         )
+    lines += [
+        "",
+        f"A tracker that is not localized on the {rows[-1]['landmarks']:,}-landmark map, every "
+        "frame (searches included) per second of recording: above 1 s it falls behind real "
+        "time.",
+        "",
+        "| settings | a frame with a search | CPU per second of recording |",
+        "|---|---|---|",
+    ]
+    for r in lost:
+        name = ", ".join(f"`{k}` {v:,}" for k, v in r["settings"].items()) or "the preset"
+        lines.append(f"| {name} | {r['frame_with_search_ms']:.0f} ms | {r['cpu_per_s']:.2f} s |")
     args.out.with_suffix(".md").write_text("\n".join(lines) + "\n")
     print(f"wrote {args.out.with_suffix('.md')}")
     return 0 if all(r["same_numbers"] for r in rows) else 1
