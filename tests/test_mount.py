@@ -355,13 +355,19 @@ def test_localize_takes_mount_on_the_command_line(
             f"{i},{float(x)!r},{float(y)!r}\n" for i, (x, y) in zip(room.ids, room.xy, strict=True)
         )
     )
-    args = ["localize", "--map", str(room_csv), "--bearings", str(bearings), "--json"]
-    args += ["--sigma", "0.3"]
-    assert main([*args, "--mount", "0.2,0,90"]) == 0
+    args = ["localize", "--map", str(room_csv), "--bearings", str(bearings), "--sigma", "0.3"]
+    assert main([*args, "--json", "--mount", "0.2,0,90"]) == 0
     best = json.loads(capsys.readouterr().out)["solutions"][0]
     assert best["x"] == pytest.approx(robot[0], abs=1e-6)
     assert best["y"] == pytest.approx(robot[1], abs=1e-6)
     assert best["theta"] == pytest.approx(robot[2], abs=1e-6)
+    # The output says whose poses they are.
+    assert main([*args, "--mount", "0.2,0,90", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["mount"] == pytest.approx(list(mount))
+    assert main([*args, "--mount", "0.2,0,90"]) == 0
+    assert "(the robot's poses; the sensor at x = 0.200 m, y = 0.000 m, yaw = 1.57080 rad" in (
+        capsys.readouterr().out
+    )
     assert main([*args, "--mount", "0.2,0,400"]) == 1
     assert "YAW is in degrees" in capsys.readouterr().err
 

@@ -587,6 +587,8 @@ def _cmd_localize(args: argparse.Namespace) -> int:
             "complete": result.complete,
             "stats": result.stats.as_dict(),
         }
+        if result.mount is not None:
+            out["mount"] = list(result.mount)  # (the poses are the robot's, seen from it)
         print(json.dumps(to_jsonable(out), indent=2))
         return 0
     deg = args.degrees
@@ -633,6 +635,12 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         )
     if len(result) > len(shown):
         print(f"  ... and {len(result) - len(shown)} more (all of them with --json)")
+    if result.mount is not None:
+        x, y, yaw = result.mount
+        print(
+            f"(the robot's poses; the sensor at x = {x:.3f} m, y = {y:.3f} m, "
+            f"yaw = {_fmt_angle(yaw, deg)} on it)"
+        )
     return 0
 
 
