@@ -63,7 +63,7 @@ from scipy.special import chdtri, gammaincinv, ndtri
 
 from .angles import TWO_PI, wrap
 from .errors import InputError
-from .io import finite_number, real_array
+from .io import finite_number, real_array, shorten
 from .pose import MIN_SIGMA, Pose, compose, compose_jacobians, inverse
 
 __all__ = [
@@ -154,7 +154,7 @@ def _mount(value: Any) -> tuple[float, float, float] | None:
     if not (ordered or (isinstance(value, np.ndarray) and value.ndim == 1)) or len(value) != 3:
         raise InputError(
             "mount must be the sensor's (x, y, yaw) on the robot: three numbers (metres, "
-            f"metres, radians), got {value!r}"
+            f"metres, radians), got {shorten(value)}"
         )
     x, y, yaw = (finite_number(v, f"mount[{i}]") for i, v in enumerate(list(value)))
     for name, v in (("x", x), ("y", y)):
