@@ -447,3 +447,17 @@ def test_fit_sensor_fits_the_mount_on_the_command_line(
     fitted = json.loads(out.read_text())
     assert fitted["mount"] == pytest.approx(list(MOUNT), abs=0.01)
     assert fitted["sigma"] == pytest.approx(EXAMPLE_SENSOR.sigma, rel=0.25)
+
+
+def test_elsewhere_covers_where_a_far_mounted_sensor_may_be() -> None:
+    # A sensor on a 2 m boom: a robot at the region's edge carries it 2 m beyond.
+    far = EXAMPLE_SENSOR.replace(mount=(2.0, 0.0, 0.0))
+    region = (0.0, 12.0, 0.0, 8.0)
+    from omniloc.track import TrackerConfig
+
+    tracker = Tracker(EXAMPLE_MAP, far, EXAMPLE_MOTION, TrackerConfig(region=region))
+    xy = tracker._elsewhere.poses[:, :2]
+    assert xy[:, 0].min() < -1.0 and xy[:, 0].max() > 13.0
+    assert tracker.region == region  # (the robot's region is as given)
+    plain = Tracker(EXAMPLE_MAP, EXAMPLE_SENSOR, EXAMPLE_MOTION, TrackerConfig(region=region))
+    assert plain._elsewhere.poses[:, 0].min() >= 0.0

@@ -258,8 +258,15 @@ class Tracker:
         self.region = (x0, x1, y0, y1)
         # ln of the prior density of a pose, uniform over the region and all headings.
         self._log_prior = -math.log((x1 - x0) * (y1 - y0) * 2.0 * math.pi)
+        # Elsewhere's particles are the sensor's poses: where a robot inside the region may
+        # carry its sensor (the region widened by the mount's reach).
+        reach = 0.0 if self._mount is None else math.hypot(self._mount[0], self._mount[1])
+        x0, x1, y0, y1 = self.region
         self._elsewhere = Elsewhere(
-            self.region, c.elsewhere_samples, c.elsewhere_inject, seed=c.seed
+            (x0 - reach, x1 + reach, y0 - reach, y1 + reach),
+            c.elsewhere_samples,
+            c.elsewhere_inject,
+            seed=c.seed,
         )
         self._window = Window(max(c.replay_s, c.search_window_s) + 1e-9)
         # (t, ln elsewhere mass, cumulative normaliser) before each frame of the window.
