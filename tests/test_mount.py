@@ -321,6 +321,11 @@ def test_track_and_fit_sensor_take_mount_on_the_command_line(
         if r["state"] == "localized"
     ]
     assert len(near) > 80 and max(near) < 0.06
+    # Without --json the summary says whose poses they are.
+    assert main([*common[:-1], "--mount", f"{MOUNT[0]},{MOUNT[1]},{yaw_deg}"]) == 0
+    assert "(the robot's poses; the sensor at x = 0.300 m, y = 0.100 m, yaw = 28.65 deg" in (
+        capsys.readouterr().out
+    )
     # The same as a setting, in radians.
     assert main([*common, "--set", f"mount={list(MOUNT)}"]) == 0
     again = [json.loads(line) for line in capsys.readouterr().out.splitlines() if line[:1] == "{"]

@@ -1094,6 +1094,12 @@ def _cmd_track(args: argparse.Namespace) -> int:
         if said:
             print(said)
     print(_last_frame_line(est[-1]))
+    if sensor.mount is not None:
+        x, y, yaw = sensor.mount
+        print(
+            f"(the robot's poses; the sensor at x = {x:.3f} m, y = {y:.3f} m, "
+            f"yaw = {np.rad2deg(yaw):.2f} deg on it)"
+        )
     return 0
 
 
