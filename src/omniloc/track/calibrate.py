@@ -1309,11 +1309,12 @@ def estimate_mount(
         yaws = y0 + MOUNT_YAW_STEP * np.arange(-1.0, 1.05, 0.1)
     m = np.array([guess[0], guess[1], float(wrap(y0))])
 
-    def rounds(m: FloatArray, first: float) -> tuple[FloatArray, FloatArray | None]:
+    def rounds(m: FloatArray, first: float) -> tuple[FloatArray, FloatArray] | int:
         # Association and robust least squares until the association stands: the first two
-        # rounds at the gate ``first``, the others at ``gate``.
+        # rounds at the gate ``first``, the others at ``gate``. (The count of bearings
+        # matched where too few are to fit.)
         last: NDArray[np.int64] | None = None
-        jac = None
+        jac = np.zeros((0, 3))
         for k in range(MOUNT_ROUNDS):
             g = first if k < 2 else float(gate)
             idx, _ = matched(m, g)
@@ -1322,20 +1323,21 @@ def estimate_mount(
             last = idx
             use = np.flatnonzero(idx >= 0)
             if use.size < MIN_ERRORS:
-                raise InputError(
-                    f"only {use.size} bearings within {math.degrees(g):.1f} deg of a landmark "
-                    "from any mount near the guess: too few to fit it (do the frames, the map "
-                    "and the truth belong together? is the guess within about 0.3 m?)"
-                )
+                return int(use.size)
             m, jac = _robust_mount_fit(poses[use], b[use], L[idx[use]], m, float(gate) / 3.0)
         return m, jac
 
     # Two chains from the first look: at the gate throughout, and with two rounds at the wide
     # gate first (for a sensor far from the guess; there, clutter may pass for landmarks and
     # pull the mount away). The one whose mount explains the bearings better is kept.
-    chains = [rounds(m, float(gate)), rounds(m, wide)]
+    chains = [c for c in (rounds(m, float(gate)), rounds(m, wide)) if not isinstance(c, int)]
+    if not chains:
+        raise InputError(
+            f"too few bearings within {math.degrees(gate):.1f} deg of a landmark from any "
+            f"mount near the guess to fit it (at least {MIN_ERRORS}; do the frames, the map "
+            "and the truth belong together? is the guess within about 0.3 m?)"
+        )
     m, J = min(chains, key=lambda c: score(c[0]))
-    assert J is not None
     idx, err = matched(m, float(gate))
     e = err[idx >= 0]
     if e.size < MIN_ERRORS:
@@ -1348,7 +1350,8 @@ def estimate_mount(
     if not np.isfinite(JtJ).all() or np.linalg.cond(JtJ) > 1e12:
         raise InputError(
             "the recording cannot tell the mount's x, y and yaw apart (landmarks seen from "
-            "too few places and ranges): fix x and y by measuring them, and fit the yaw only"
+            "too few places and ranges): measure the mount, or record the robot driving and "
+            "turning among the landmarks"
         )
     cov = np.linalg.inv(JtJ) * max(spread, 1e-12) ** 2
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
