@@ -408,7 +408,7 @@ def test_the_mount_fit_refuses_what_it_cannot_fit() -> None:
     with pytest.raises(InputError, match="no frame with bearings lies on the true track"):
         estimate_mount(EXAMPLE_MAP, [Frame(1e6, np.array([0.1]))], run.truth)
     noise = [Frame(f.t, np.random.default_rng(1).uniform(-3, 3, 1)) for f in run.frames[:30]]
-    with pytest.raises(InputError, match="too few bearings within 3.0 deg"):
+    with pytest.raises(InputError, match=r"too few bearings within 3\.0 deg"):
         estimate_mount(EXAMPLE_MAP, noise, run.truth, max_range=5.0)
     # One landmark seen from one place: its bearing fixes neither x nor y.
     t = np.arange(30.0)
