@@ -18,7 +18,10 @@ the truth can apply), when the best hypothesis's place (the hypotheses within 0.
 5 deg of it) first holds 0.99 and is right (what a localizer can tell for itself, as the
 tracker's ``localized`` does, without the covariance's part), the shares of the frames
 after each where the same holds, and when some wrong place first held 0.99 (the model
-sure of the wrong place).
+sure of the wrong place). Last, a decision as the tracker's ``localized`` takes it from the
+model (the best place's mass times its moment-matched covariance's chance at least 0.99,
+from ``min_age_s`` on; not its confirmations by searches, its fit or its hysteresis): its
+first right frame, and its frames localized and right or wrong.
 
 ``--odometry``: moved instead by the recorded odometry with the preset's motion model and
 its noise, as the tracker moves its hypotheses (the tracker's own integration): a tracker
@@ -53,6 +56,7 @@ from omniloc.track import (  # noqa: E402
 )
 from omniloc.track.likelihood import frame_update_clutter  # noqa: E402
 from omniloc.track.motion import between, move  # noqa: E402
+from omniloc.track.tracker import within_tolerance  # noqa: E402
 
 DATA = HERE.parent.parent / "shared" / "data" / "mrclam-ds6"
 STEP_M, STEP_HEADING = 0.4, math.radians(10.0)
@@ -117,6 +121,8 @@ def run(robot: int, until_s: float, odometry: bool = False) -> dict[str, object]
     t_prev = None
     sure_right = sure_wrong = sure_place = math.nan
     place_after = place_right_after = 0
+    loc_right = loc_wrong = 0
+    first_loc = math.nan
     wrong_by = (math.nan, math.nan)
     after = right_after = 0
     counts = []
@@ -165,6 +171,19 @@ def run(robot: int, until_s: float, odometry: bool = False) -> dict[str, object]
         )
         best_right = dpos[b] <= TOL_M and dth[b] <= TOL_HEADING
         place = float(w[near].sum())
+        # A decision as the tracker's `localized`: the best place's mass times the chance its
+        # moment-matched covariance gives the tolerance, at least 0.99, from min_age_s on.
+        wn = w[near] / place
+        mbar = mu[near].T @ wn
+        dm = mu[near] - mbar
+        dm[:, 2] = np.asarray(wrap(dm[:, 2]))
+        Pm = np.einsum("k,kij->ij", wn, P[near]) + np.einsum("k,ki,kj->ij", wn, dm, dm)
+        decided = place * within_tolerance(Pm, TOL_M, TOL_HEADING) >= SURE
+        if decided and f.t - t0 >= config.min_age_s:
+            loc_right += int(best_right)
+            loc_wrong += int(not best_right)
+            if best_right and math.isnan(first_loc):
+                first_loc = f.t - t0
         if best_right and place >= SURE and math.isnan(sure_place):
             sure_place = f.t - t0
         if not math.isnan(sure_place):
@@ -191,6 +210,9 @@ def run(robot: int, until_s: float, odometry: bool = False) -> dict[str, object]
         "place_right_after": place_right_after / place_after if place_after else math.nan,
         "hypotheses_first": counts[0] if counts else 0,
         "hypotheses_median": float(np.median(counts)) if counts else 0.0,
+        "localized_first_right_s": first_loc,
+        "localized_right": loc_right,
+        "localized_wrong": loc_wrong,
         "cpu_s": time.perf_counter() - started,
     }
 
@@ -216,7 +238,10 @@ def main(argv: list[str] | None = None) -> int:
             f"a wrong place held {SURE} first at "
             f"{row['sure_wrong_s']:.1f} s ({row['sure_wrong_off_m_deg'][0]:.2f} m, "
             f"{row['sure_wrong_off_m_deg'][1]:.1f} deg off); {row['hypotheses_first']} seeds, "
-            f"median {row['hypotheses_median']:.0f} hypotheses; {row['cpu_s']:.0f} s",
+            f"median {row['hypotheses_median']:.0f} hypotheses; {row['cpu_s']:.0f} s; "
+            f"localized as the tracker's model would: first right at "
+            f"{row['localized_first_right_s']:.1f} s, {row['localized_right']} frames right, "
+            f"{row['localized_wrong']} wrong of {row['frames']}",
             flush=True,
         )
     meta = run_meta("seeded_filter.py", argv)
@@ -237,8 +262,9 @@ def main(argv: list[str] | None = None) -> int:
         + "; 'sure' is 0.99 of the mass within 0.3 m and 5 deg.",
         "",
         "| robot | mass at the truth from | then in | best place sure and right from | "
-        "then in | a wrong place sure first at | seeds | hypotheses (median) |",
-        "|---|---|---|---|---|---|---|---|",
+        "then in | a wrong place sure first at | localized as the model decides: first right, "
+        "frames right / wrong | seeds | hypotheses (median) |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         off = r["sure_wrong_off_m_deg"]
@@ -251,7 +277,9 @@ def main(argv: list[str] | None = None) -> int:
         place = "never" if math.isnan(r["sure_place_s"]) else f"{r['sure_place_s']:.1f} s"
         lines.append(
             f"| {r['robot']} | {right} | {100 * r['right_after']:.1f} % | {place} | "
-            f"{100 * r['place_right_after']:.1f} % | {wrong} | {r['hypotheses_first']:,} | "
+            f"{100 * r['place_right_after']:.1f} % | {wrong} | "
+            f"{r['localized_first_right_s']:.1f} s, {r['localized_right']} / "
+            f"{r['localized_wrong']} of {r['frames']} | {r['hypotheses_first']:,} | "
             f"{r['hypotheses_median']:.0f} |"
         )
     places = [r["sure_place_s"] for r in rows]
