@@ -55,7 +55,7 @@ import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -459,9 +459,17 @@ class SensorModel:
         p = _pose_rows(robot_poses, "robot_poses")
         return p.copy() if self.mount is None else compose(p, np.asarray(self.mount))
 
+    @overload
+    def robot_poses(self, sensor_poses: Pose | ArrayLike) -> FloatArray: ...
+
+    @overload
+    def robot_poses(
+        self, sensor_poses: Pose | ArrayLike, covariances: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]: ...
+
     def robot_poses(
         self, sensor_poses: Pose | ArrayLike, covariances: ArrayLike | None = None
-    ) -> Any:
+    ) -> FloatArray | tuple[FloatArray, FloatArray]:
         """The robot's poses when the sensor is at ``sensor_poses`` (shape (3,) or (n, 3)):
         ``compose(sensor, inverse(mount))``; copies without a mount.
 

@@ -551,8 +551,7 @@ class Tracker:
         """Sensor poses ``mu`` (n, 3) and covariances ``P`` (n, 3, 3) as the robot's."""
         if self._mount is None:
             return mu, P
-        out: tuple[FloatArray, FloatArray] = self.sensor.robot_poses(mu, P)
-        return out
+        return self.sensor.robot_poses(mu, P)
 
     # ---- the posterior -------------------------------------------------------------------
     def _inside(self, mu: FloatArray) -> NDArray[np.bool_]:
