@@ -179,7 +179,10 @@ class Tracker:
     sensor : SensorModel, optional
         Noise, field of view, range, detection probability and clutter of the bearing
         sensor (default: ``SensorModel(sigma=0.5 deg)``; without ``p_detect`` or ``clutter``
-        the tracker takes 0.5 and 0.5 per frame).
+        the tracker takes 0.5 and 0.5 per frame), and where it sits on the robot
+        (``mount``): the bearings are the sensor's, the odometry and every pose the tracker
+        reports are the robot's (it follows the sensor's pose inside, each odometry step
+        carried to it).
     motion : MotionModel, optional
         Odometry noise and latency (default: ``MotionModel()``).
     config : TrackerConfig, optional
