@@ -1088,8 +1088,10 @@ class MountFit:
     mount : tuple of 3 floats
         ``(x, y, yaw)``, metres and radians (:attr:`omniloc.SensorModel.mount`).
     sd : tuple of 3 floats
-        Their standard errors, from the fit (errors that repeat from frame to frame make
-        them optimistic).
+        Their standard errors: the spread of the fit over recordings resampled by stretches
+        of :data:`MOUNT_BLOCK_S` (a block bootstrap; a camera's bearing errors repeat for
+        seconds, which the least squares' own covariance takes for independent evidence),
+        at least that covariance's.
     matched : int
         Bearings taken as a landmark's (within the gate) at the fitted mount.
     bearings : int
@@ -1114,6 +1116,10 @@ MOUNT_FIRST_GATE = math.radians(6.0)
 MOUNT_ROUNDS = 8
 #: Landmark/bearing pairs computed at once (memory).
 MOUNT_CHUNK_PAIRS = 2_000_000
+#: The block bootstrap of the standard errors: stretches of this many seconds (longer than
+#: the errors' memory: MRCLAM's tubes drift over about 14 s), resampled this many times.
+MOUNT_BLOCK_S = 20.0
+MOUNT_BOOTSTRAP = 50
 
 
 def _nearest_landmark(
@@ -1201,6 +1207,32 @@ def _robust_mount_fit(
     return np.array([v[0], v[1], float(wrap(v[2]))]), J
 
 
+def _mount_bootstrap(
+    P: FloatArray,
+    z: FloatArray,
+    Lj: FloatArray,
+    block: NDArray[np.int64],
+    m: FloatArray,
+    gate: float,
+) -> FloatArray:
+    """Standard errors of the mount ``m`` fitted to the pairs (robot poses ``P``, bearings
+    ``z``, their landmarks ``Lj``): the spread of the fit over :data:`MOUNT_BOOTSTRAP`
+    resamplings of the stretches ``block`` (with replacement, seeded: the same figures each
+    run). Zeros with fewer than two stretches."""
+    stretches = [np.flatnonzero(block == k) for k in np.unique(block)]
+    if len(stretches) < 2:
+        return np.zeros(3)
+    rng = np.random.default_rng(0)
+    fits = []
+    for _ in range(MOUNT_BOOTSTRAP):
+        pick = np.concatenate(
+            [stretches[k] for k in rng.integers(0, len(stretches), len(stretches))]
+        )
+        v, _ = _robust_mount_fit(P[pick], z[pick], Lj[pick], m, gate / 3.0)
+        fits.append([v[0] - m[0], v[1] - m[1], float(wrap(v[2] - m[2]))])
+    return np.asarray(np.std(np.array(fits), axis=0, ddof=1))
+
+
 def estimate_mount(
     landmarks: LandmarkMap | ArrayLike,
     frames: Sequence[Frame] | Sequence[Sequence[Frame]],
@@ -1278,7 +1310,9 @@ def estimate_mount(
     half = None if fov is None or fov >= 2 * math.pi else 0.5 * float(fov)
     poses_l: list[FloatArray] = []
     bear_l: list[FloatArray] = []
-    for fr, tr in pairs:
+    block_l: list[tuple[int, int]] = []  # (recording, stretch) of each bearing
+    for r, (fr, tr) in enumerate(pairs):
+        t_first = min((f.t for f in fr), default=0.0)
         for f in fr:
             if f.bearings.size == 0:
                 continue
@@ -1286,9 +1320,12 @@ def estimate_mount(
             if np.isfinite(p).all() and g[0] <= max_gap_s:
                 poses_l.append(np.repeat(p, f.bearings.size, axis=0))
                 bear_l.append(np.asarray(f.bearings, dtype=np.float64))
+                block_l += [(r, int((f.t - t_first) // MOUNT_BLOCK_S))] * f.bearings.size
     if not bear_l:
         raise InputError("no frame with bearings lies on the true track: nothing to fit")
     poses, b = np.concatenate(poses_l), np.concatenate(bear_l)
+    block = np.unique(np.array(block_l, dtype=np.int64), axis=0, return_inverse=True)[1]
+    block = block.reshape(-1)
     L = np.asarray(lm.xy, dtype=np.float64)
     wide = max(MOUNT_FIRST_GATE, float(gate))
 
@@ -1354,7 +1391,10 @@ def estimate_mount(
             "turning among the landmarks"
         )
     cov = np.linalg.inv(JtJ) * max(spread, 1e-12) ** 2
-    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    sd = np.maximum(
+        np.sqrt(np.maximum(np.diag(cov), 0.0)),
+        _mount_bootstrap(poses[idx >= 0], b[idx >= 0], L[idx[idx >= 0]], block[idx >= 0], m, gate),
+    )
     x, y, yaw = (float(v) for v in m)
     for name, v in (("x", x), ("y", y)):
         if abs(v) > 10.0:
