@@ -119,6 +119,17 @@ def _warn_time_unit(src: str, t: FloatArray) -> None:
         )
 
 
+def _moved_in_no_time(t: FloatArray, poses: FloatArray) -> int | None:
+    """The first ``k`` whose poses ``k`` and ``k + 1`` (n, 3) share a time but differ (the
+    heading compared wrapped), or None."""
+    same = np.flatnonzero(t[1:] == t[:-1])
+    if same.size == 0:
+        return None
+    d = motion_between(poses[same], poses[same + 1])
+    moved = same[np.any(d != 0.0, axis=1)]
+    return int(moved[0]) if moved.size else None
+
+
 @dataclass(frozen=True)
 class Odometry:
     """Recorded odometry: forward velocity and turn rate, each holding until the next row.
@@ -222,10 +233,8 @@ class Odometry:
         poses = np.stack(cols, axis=1)
         same = tt[1:] == tt[:-1]
         if same.any():
-            d = motion_between(poses[:-1], poses[1:])
-            moved = np.flatnonzero(same & np.any(d != 0.0, axis=1))
-            if moved.size:
-                k = int(moved[0])
+            k = _moved_in_no_time(tt, poses)
+            if k is not None:
                 raise InputError(
                     f"odometry poses rows {k} and {k + 1} are at one time (t={float(tt[k])!r}) but "
                     "differ: the robot cannot move in no time"
@@ -474,11 +483,8 @@ def load_odometry(path: PathLike) -> Odometry:
         lines = [n for n, _ in rows]
         _check_times(src, t, strict=False, lines=lines)
         _warn_time_unit(src, t)
-        moved = (t[1:] == t[:-1]) & (
-            (x[1:] != x[:-1]) | (y[1:] != y[:-1]) | (np.asarray(wrap(theta[1:] - theta[:-1])) != 0)
-        )
-        if moved.any():
-            k = int(np.flatnonzero(moved)[0])
+        k = _moved_in_no_time(t, np.stack([x, y, theta], axis=1))
+        if k is not None:
             raise InputError(
                 f"{src}:{lines[k + 1]}: a pose at the time of the line before (t={float(t[k])!r}) "
                 "that differs from it: the robot cannot move in no time"
