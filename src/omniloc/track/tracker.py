@@ -1349,14 +1349,15 @@ class Tracker:
             return TrackEstimate(
                 t, state, reason=reason, kidnapped=kidnapped, since_localized=since
             )
+        mass: float | None = None
         if cached is not None and cached[0] == best:
             _, mu, P, prob = cached
-            self._place_out = (mu, P)
-            mu, P = (a[0] for a in self._robot(mu[None], P[None]))
         else:
             mu, P, mass = self._place_estimate(best)
-            self._place_out = (mu, P)
-            mu, P = (a[0] for a in self._robot(mu[None], P[None]))
+        # (The place in the sensor's frame, for the kidnapping watch; reported as the robot's.)
+        self._place_out = (mu, P)
+        mu, P = (a[0] for a in self._robot(mu[None], P[None]))
+        if mass is not None:
             prob = mass * within_tolerance(P, c.tolerance_m, c.tolerance_heading)
         # The model's probability that the pose is within tolerance (what _decide reads),
         # and what the configuration's table says such frames turned out to be (an ambiguous
