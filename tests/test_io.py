@@ -13,7 +13,16 @@ import pytest
 
 from omniloc.angles import angdiff
 from omniloc.errors import InputError, ObservationError
-from omniloc.io import check_bearings, load_bearings, save_bearings, to_jsonable, write_json
+from omniloc.io import (
+    check_bearings,
+    content_lines,
+    first_content_line,
+    load_bearings,
+    read_text,
+    save_bearings,
+    to_jsonable,
+    write_json,
+)
 from omniloc.maps import LandmarkMap
 
 DATA = Path(__file__).parent / "data"
@@ -241,6 +250,41 @@ def test_load_bearings_unreadable(tmp_path: Path, name: str) -> None:
     binary.write_bytes(b"\x80\x81\x82")
     with pytest.raises(ObservationError, match=r"not a UTF-8 text file"):
         load_bearings(binary)
+
+
+def test_first_content_line_counts_lines_as_content_lines_does(tmp_path: Path) -> None:
+    f = tmp_path / "f.txt"
+    for text in (
+        "\ufeff# a comment\n\n   \n  # another\r\n1 2 3\r\n4 5 6\n",
+        "1 2 3\n",
+        "1 2 3",  # no line end
+        "# only\n1 2 3\rstill the same line\n",  # a lone CR ends no line
+    ):
+        f.write_bytes(text.encode("utf-8"))
+        first = first_content_line(f, InputError)
+        lines = content_lines(f.read_bytes().decode("utf-8-sig"))
+        assert first == lines[0][1]
+    f.write_text("# nothing but comments\n\n")
+    assert first_content_line(f, InputError) is None
+    f.write_text("")
+    assert first_content_line(f, InputError) is None
+
+
+def test_first_content_line_reads_no_further_and_names_failures(tmp_path: Path) -> None:
+    # The file is read in blocks as far as the first content line, not to its end: an
+    # undecodable byte a megabyte further is no error (reading the whole file is).
+    f = tmp_path / "f.txt"
+    f.write_bytes(b"# head\n1 2 3\n" + b"4 5 6\n" * 200_000 + b"\x80")
+    assert first_content_line(f, InputError) == "1 2 3"
+    with pytest.raises(InputError, match="not a UTF-8 text file"):
+        read_text(f, InputError)
+    f.write_bytes(b"# head\n\x80\n")
+    with pytest.raises(InputError, match=r"f\.txt: not a UTF-8 text file \(undecodable byte at"):
+        first_content_line(f, InputError)
+    with pytest.raises(ObservationError, match=r"missing\.txt: file not found"):
+        first_content_line(tmp_path / "missing.txt", ObservationError)
+    with pytest.raises(InputError, match="is a directory"):
+        first_content_line(tmp_path, InputError)
 
 
 # --------------------------------------------------------------------------------------------

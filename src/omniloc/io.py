@@ -153,26 +153,49 @@ def finite_number(value: object, name: str, error: type[InputError] = InputError
     return out
 
 
+def _file_error(src: str, exc: BaseException, error: type[InputError]) -> InputError:
+    """``error`` saying why the file ``src`` could not be read (``exc``: what reading raised)."""
+    if isinstance(exc, FileNotFoundError):
+        return error(f"{src}: file not found")
+    if isinstance(exc, IsADirectoryError):
+        return error(f"{src}: is a directory, not a file")
+    if isinstance(exc, PermissionError):
+        return error(f"{src}: permission denied")
+    if isinstance(exc, UnicodeDecodeError):
+        return error(f"{src}: not a UTF-8 text file (undecodable byte at offset {exc.start})")
+    if isinstance(exc, MemoryError):
+        return error(f"{src}: file too large to read")
+    assert isinstance(exc, OSError)
+    return error(f"{src}: cannot read file: {exc.strerror or exc}")
+
+
 def read_text(path: PathLike, error: type[InputError]) -> str:
     """Read a UTF-8 text file, turning every OS or decoding failure into ``error``."""
     src = os.fspath(as_path(path, "path", error))
     try:
         with open(src, encoding="utf-8-sig") as f:
             return f.read()
-    except FileNotFoundError:
-        raise error(f"{src}: file not found") from None
-    except IsADirectoryError:
-        raise error(f"{src}: is a directory, not a file") from None
-    except PermissionError:
-        raise error(f"{src}: permission denied") from None
-    except OSError as e:
-        raise error(f"{src}: cannot read file: {e.strerror or e}") from None
-    except UnicodeDecodeError as e:
-        raise error(
-            f"{src}: not a UTF-8 text file (undecodable byte at offset {e.start})"
-        ) from None
-    except MemoryError:
-        raise error(f"{src}: file too large to read") from None
+    except (OSError, UnicodeDecodeError, MemoryError) as e:
+        raise _file_error(src, e, error) from None
+
+
+def first_content_line(path: PathLike, error: type[InputError]) -> str | None:
+    """The first line of a UTF-8 text file that is neither blank nor a comment (as
+    :func:`content_lines` counts them), None for a file without one. The file is read in
+    blocks as far as that line, not to its end (to sniff a format before parsing). Every OS
+    or decoding failure on the way becomes ``error``, as in :func:`read_text`."""
+    src = os.fspath(as_path(path, "path", error))
+    try:
+        # (newline="\n": only "\n" ends a line, as in content_lines.)
+        with open(src, encoding="utf-8-sig", newline="\n") as f:
+            for raw in f:
+                line = raw.rstrip("\n").rstrip("\r")
+                stripped = line.strip()
+                if stripped and not stripped.startswith("#"):
+                    return line
+        return None
+    except (OSError, UnicodeDecodeError, MemoryError) as e:
+        raise _file_error(src, e, error) from None
 
 
 def make_folder(folder: Path, what: str, error: type[InputError] = InputError) -> Path:

@@ -40,6 +40,7 @@ from ..io import (
     _looks_numeric,
     check_radians,
     content_lines,
+    first_content_line,
     parse_float,
     read_text,
     shorten,
@@ -440,12 +441,12 @@ TUM_MAX_TILT = math.radians(10.0)
 
 def _is_tum(path: PathLike) -> bool:
     """Whether ``path`` reads as a TUM trajectory: its first line that is not blank or a
-    comment is 8 numbers separated by blanks."""
-    lines = content_lines(read_text(path, InputError))
-    if not lines:
+    comment is 8 numbers separated by blanks (the file is read no further)."""
+    line = first_content_line(path, InputError)
+    if line is None:
         return False
-    parts = lines[0][1].split()
-    return len(parts) == 8 and "," not in lines[0][1] and all(map(_looks_numeric, parts))
+    parts = line.split()
+    return len(parts) == 8 and "," not in line and all(map(_looks_numeric, parts))
 
 
 def load_odometry(path: PathLike) -> Odometry:
