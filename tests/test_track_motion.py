@@ -128,6 +128,37 @@ def test_bad_input() -> None:
     assert MotionModel(delay_s=-0.1).delay_s == -0.1  # odometry stamped late
 
 
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: compose([np.nan, 0.0, 0.0], [1.0, 0.0, 0.0]), r"pose must be finite"),
+        (lambda: compose([0.0, 0.0, 0.0], [1.0, np.inf, 0.0]), r"delta must be finite"),
+        (lambda: between([0.0, 0.0, 0.0], "abc"), r"b must be a numeric array"),
+        (lambda: inverse([1.0, 2.0]), r"delta must have shape \(3,\) or \(n, 3\), got \(2,\)"),
+        (lambda: inverse(np.zeros((2, 2, 3))), r"got \(2, 2, 3\)"),
+        (lambda: compose_jacobians([[0, 0, 1j]], [0, 0, 0]), r"pose must contain real numbers"),
+        (
+            lambda: compose(np.zeros((2, 3)), np.zeros((5, 3))),
+            r"pose and delta: .*\(2, 3\) and \(5, 3\)",
+        ),
+        (lambda: between(np.zeros((4, 3)), np.zeros((3, 3))), r"a and b: .*\(4, 3\) and \(3, 3\)"),
+        (lambda: compose_jacobians(np.zeros((2, 3)), np.zeros((3, 3))), r"pose and delta: "),
+    ],
+)
+def test_se2_functions_refuse_what_is_not_poses(call: object, match: str) -> None:
+    # Public functions (omniloc.track.compose and its kin): a NaN pose is an error naming the
+    # argument, never a NaN answer; shapes that do not pair are named, not numpy's message.
+    with pytest.raises(InputError, match=match):
+        call()  # type: ignore[operator]
+
+
+def test_se2_functions_take_a_pose_object() -> None:
+    from omniloc import Pose
+
+    got = compose(Pose(1.0, 2.0, np.pi / 2), [1.0, 0.0, 0.0])
+    np.testing.assert_allclose(got, [1.0, 3.0, np.pi / 2], atol=1e-12)
+
+
 @settings(max_examples=60, deadline=None)  # (the first call may compile the kernel)
 @given(st.lists(poses, min_size=1, max_size=6), poses, st.integers(0, 2**31 - 1))
 def test_moving_gaussians_is_composition_and_first_order_propagation(

@@ -620,11 +620,28 @@ def refine_pose(
 
 
 # ---- SE(2): moving poses by motions -------------------------------------------------------
-def _poses(a: ArrayLike, name: str) -> FloatArray:
-    p = np.asarray(a, dtype=np.float64)
-    if p.shape[-1:] != (3,):
+def _poses(a: Pose | ArrayLike, name: str) -> FloatArray:
+    """Poses (or motions) ``(x, y, theta)`` of shape (3,) or (n, 3), real and finite, as
+    floats; or an :class:`InputError` naming ``name``."""
+    if isinstance(a, Pose):
+        return a.as_array()
+    p = real_array(a, name, InputError)
+    if p.ndim not in (1, 2) or p.shape[-1:] != (3,):
         raise InputError(f"{name} must have shape (3,) or (n, 3), got {p.shape}")
+    if not np.isfinite(p).all():
+        raise InputError(f"{name} must be finite (no NaN or inf)")
     return p
+
+
+def _pair_shape(a: FloatArray, b: FloatArray, names: str) -> tuple[int, ...]:
+    """The broadcast shape of two pose arrays, or an error naming both shapes."""
+    try:
+        return np.broadcast_shapes(a.shape, b.shape)
+    except ValueError:
+        raise InputError(
+            f"{names}: one pose, or as many rows as the other, expected; got shapes {a.shape} "
+            f"and {b.shape}"
+        ) from None
 
 
 def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
@@ -650,7 +667,7 @@ def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
     p = _poses(pose, "pose")
     d = _poses(delta, "delta")
     c, s = np.cos(p[..., 2]), np.sin(p[..., 2])
-    out = np.empty(np.broadcast_shapes(p.shape, d.shape))
+    out = np.empty(_pair_shape(p, d, "pose and delta"))
     out[..., 0] = p[..., 0] + c * d[..., 0] - s * d[..., 1]
     out[..., 1] = p[..., 1] + s * d[..., 0] + c * d[..., 1]
     out[..., 2] = np.asarray(wrap(p[..., 2] + d[..., 2]))
@@ -666,7 +683,7 @@ def compose_jacobians(pose: ArrayLike, delta: ArrayLike) -> tuple[FloatArray, Fl
     """
     p = _poses(pose, "pose")
     d = _poses(delta, "delta")
-    shape = np.broadcast_shapes(p.shape, d.shape)[:-1]
+    shape = _pair_shape(p, d, "pose and delta")[:-1]
     c = np.broadcast_to(np.cos(p[..., 2]), shape)
     s = np.broadcast_to(np.sin(p[..., 2]), shape)
     dx = np.broadcast_to(d[..., 0], shape)
@@ -698,10 +715,10 @@ def between(a: ArrayLike, b: ArrayLike) -> FloatArray:
     ``compose(a, between(a, b)) == b``."""
     pa = _poses(a, "a")
     pb = _poses(b, "b")
+    out = np.empty(_pair_shape(pa, pb, "a and b"))
     c, s = np.cos(pa[..., 2]), np.sin(pa[..., 2])
     dx = pb[..., 0] - pa[..., 0]
     dy = pb[..., 1] - pa[..., 1]
-    out = np.empty(np.broadcast_shapes(pa.shape, pb.shape))
     out[..., 0] = c * dx + s * dy
     out[..., 1] = -s * dx + c * dy
     out[..., 2] = np.asarray(wrap(pb[..., 2] - pa[..., 2]))

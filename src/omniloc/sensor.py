@@ -64,7 +64,7 @@ from scipy.special import chdtri, gammaincinv, ndtri
 from .angles import TWO_PI, wrap
 from .errors import InputError
 from .io import finite_number, real_array, shorten
-from .pose import MIN_SIGMA, Pose, compose, compose_jacobians, inverse
+from .pose import MIN_SIGMA, Pose, _poses, compose, compose_jacobians, inverse
 
 __all__ = [
     "CLUTTER_ENTRY_FRAMES",
@@ -128,18 +128,6 @@ def _rates(name: str, value: Any) -> tuple[float, ...]:
     if not 1 <= len(value) <= MAX_CLUTTER_ENTRIES:
         raise InputError(f"{name} must hold 1 to {MAX_CLUTTER_ENTRIES} entries, got {len(value)}")
     return tuple(_number(f"{name}[{i}]", v, allow_zero=True) for i, v in enumerate(list(value)))
-
-
-def _pose_rows(poses: Pose | ArrayLike, name: str) -> FloatArray:
-    """Poses ``(x, y, theta)`` of shape (3,) or (n, 3), finite, as floats; or a clear error."""
-    if isinstance(poses, Pose):
-        return poses.as_array()
-    p = real_array(poses, name, InputError)
-    if p.ndim not in (1, 2) or p.shape[-1:] != (3,):
-        raise InputError(f"{name} must have shape (3,) or (n, 3), got {p.shape}")
-    if not np.isfinite(p).all():
-        raise InputError(f"{name} must be finite (no NaN or inf)")
-    return p
 
 
 #: The farthest a sensor may sit from the robot's origin, metres (a mount beyond it is a
@@ -456,7 +444,7 @@ class SensorModel:
     def sensor_poses(self, robot_poses: Pose | ArrayLike) -> FloatArray:
         """The sensor's poses when the robot is at ``robot_poses`` (shape (3,) or (n, 3)):
         ``compose(robot, mount)``; a copy of them without a mount."""
-        p = _pose_rows(robot_poses, "robot_poses")
+        p = _poses(robot_poses, "robot_poses")
         return p.copy() if self.mount is None else compose(p, np.asarray(self.mount))
 
     @overload
@@ -484,7 +472,7 @@ class SensorModel:
         >>> s.robot_poses([1.0, 0.0, np.pi / 2]).round(6).tolist()
         [1.0, -0.2, 1.570796]
         """
-        p = _pose_rows(sensor_poses, "sensor_poses")
+        p = _poses(sensor_poses, "sensor_poses")
         back = None if self.mount is None else inverse(np.asarray(self.mount))
         out = p.copy() if back is None else compose(p, back)
         if covariances is None:
