@@ -5,6 +5,7 @@ the tracker, the simulation, the sensor fit, the command line and the figures.""
 from __future__ import annotations
 
 import json
+import logging
 import math
 from pathlib import Path
 
@@ -400,6 +401,8 @@ def test_the_mount_is_fitted_from_a_recording(mount: tuple[float, float, float])
     assert all(abs(e) <= 4.0 * s for e, s in zip(err, fit.sd, strict=True))
     assert fit.matched > 0.8 * fit.bearings
     assert fit.residual_sd == pytest.approx(EXAMPLE_SENSOR.sigma, rel=0.2)
+    # 40 s are two stretches of 20 s: too few to bootstrap, said so.
+    assert fit.stretches == 2 and not fit.bootstrapped
     # The same from a guess nearer the truth, and from several recordings at once.
     again = estimate_mount(
         EXAMPLE_MAP,
@@ -409,6 +412,36 @@ def test_the_mount_is_fitted_from_a_recording(mount: tuple[float, float, float])
         initial=(0.1, 0.0, 0.0),
     )
     assert np.allclose(again.mount[:2], fit.mount[:2], atol=2e-3)
+
+
+def test_the_mount_s_standard_errors_say_where_they_come_from(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    from omniloc.track import estimate_mount
+    from omniloc.track.calibrate import MOUNT_MIN_STRETCHES
+
+    short = _run(MOUNT)  # 40 s
+    with caplog.at_level(logging.WARNING, logger="omniloc"):
+        fit = estimate_mount(EXAMPLE_MAP, short.frames, short.truth, max_range=5.0)
+    assert not fit.bootstrapped
+    assert "span 2 stretch(es) of 20 s, fewer than 5" in caplog.text
+    caplog.clear()
+    # Long enough: the bootstrap's spread, at least the least squares' own (the short fit's
+    # scale: the same noise), and no warning.
+    long = simulate_run(
+        EXAMPLE_MAP,
+        EXAMPLE_SENSOR.replace(mount=MOUNT),
+        Pose(6.0, 4.0, 0.3),
+        duration_s=20.0 * MOUNT_MIN_STRETCHES + 5.0,
+        rng=3,
+    )
+    with caplog.at_level(logging.WARNING, logger="omniloc"):
+        fit = estimate_mount(EXAMPLE_MAP, long.frames, long.truth, max_range=5.0)
+    assert fit.bootstrapped and fit.stretches == MOUNT_MIN_STRETCHES + 1
+    assert "stretch" not in caplog.text
+    err = np.subtract(fit.mount, MOUNT)
+    err[2] = float(omniloc.wrap(err[2]))
+    assert all(abs(e) <= 4.0 * s for e, s in zip(err, fit.sd, strict=True))
 
 
 def test_the_mount_fit_refuses_what_it_cannot_fit() -> None:

@@ -1091,13 +1091,18 @@ class MountFit:
         Their standard errors: the spread of the fit over recordings resampled by stretches
         of :data:`MOUNT_BLOCK_S` (a block bootstrap; a camera's bearing errors repeat for
         seconds, which the least squares' own covariance takes for independent evidence),
-        at least that covariance's.
+        at least that covariance's. With fewer than :data:`MOUNT_MIN_STRETCHES` stretches
+        (``bootstrapped`` False) the least squares' own, which are optimistic when the
+        errors repeat (on MRCLAM 3-5 times too small); a warning is logged.
     matched : int
         Bearings taken as a landmark's (within the gate) at the fitted mount.
     bearings : int
         Bearings with a true pose.
     residual_sd : float
         Robust spread of the matched bearings' errors at the fitted mount, radians.
+    stretches : int
+        Stretches of :data:`MOUNT_BLOCK_S` the matched bearings fall in (over every
+        recording).
     """
 
     mount: tuple[float, float, float]
@@ -1105,6 +1110,13 @@ class MountFit:
     matched: int
     bearings: int
     residual_sd: float
+    stretches: int = 0
+
+    @property
+    def bootstrapped(self) -> bool:
+        """Whether ``sd`` comes from the block bootstrap (enough stretches), not from the
+        least squares alone."""
+        return self.stretches >= MOUNT_MIN_STRETCHES
 
 
 #: Steps of the first look for the mount's yaw (a whole turn), radians.
@@ -1120,6 +1132,9 @@ MOUNT_CHUNK_PAIRS = 2_000_000
 #: the errors' memory: MRCLAM's tubes drift over about 14 s), resampled this many times.
 MOUNT_BLOCK_S = 20.0
 MOUNT_BOOTSTRAP = 50
+#: Fewest stretches the bootstrap resamples (with fewer, its spread says little: the
+#: least squares' own standard errors are reported, with a warning).
+MOUNT_MIN_STRETCHES = 5
 
 
 def _nearest_landmark(
@@ -1218,9 +1233,9 @@ def _mount_bootstrap(
     """Standard errors of the mount ``m`` fitted to the pairs (robot poses ``P``, bearings
     ``z``, their landmarks ``Lj``): the spread of the fit over :data:`MOUNT_BOOTSTRAP`
     resamplings of the stretches ``block`` (with replacement, seeded: the same figures each
-    run). Zeros with fewer than two stretches."""
+    run). Zeros with fewer than :data:`MOUNT_MIN_STRETCHES` stretches."""
     stretches = [np.flatnonzero(block == k) for k in np.unique(block)]
-    if len(stretches) < 2:
+    if len(stretches) < MOUNT_MIN_STRETCHES:
         return np.zeros(3)
     rng = np.random.default_rng(0)
     fits = []
@@ -1402,6 +1417,21 @@ def estimate_mount(
                 f"the fitted mount puts the sensor {v:.3g} m from the robot's origin in {name}: "
                 "not a mount (do the frames and the truth belong together?)"
             )
+    n_stretches = int(np.unique(block[idx >= 0]).size)
+    if n_stretches < MOUNT_MIN_STRETCHES:
+        log.warning(
+            "the mount's bearings span %d stretch(es) of %g s, fewer than %d: its standard "
+            "errors are the least squares' own, which take a camera's repeating errors for "
+            "independent evidence (likely too small); record longer for honest ones",
+            n_stretches,
+            MOUNT_BLOCK_S,
+            MOUNT_MIN_STRETCHES,
+        )
     return MountFit(
-        (x, y, yaw), (float(sd[0]), float(sd[1]), float(sd[2])), int(e.size), int(b.size), spread
+        (x, y, yaw),
+        (float(sd[0]), float(sd[1]), float(sd[2])),
+        int(e.size),
+        int(b.size),
+        spread,
+        n_stretches,
     )
