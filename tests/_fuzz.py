@@ -733,6 +733,7 @@ MOUNTS: Pool = (
 
 
 def _search_targets() -> list[Target]:
+    from omniloc.pose import between, compose, compose_jacobians, inverse
     from omniloc.search import Budget
     from omniloc.sensor import SensorModel, clutter_by_detections
 
@@ -812,6 +813,27 @@ def _search_targets() -> list[Target]:
             lambda kw: SensorModel(mount=(0.2, 0.0, 0.1)).sensor_poses(**kw),
             lambda: {"robot_poses": [1.0, 2.0, 0.3]},
             {"robot_poses": Arg(("robot_poses",), POSE_ARRAYS)},
+            check=lambda kw, v: None,
+        ),
+        *(
+            Target(
+                f"pose.{name}",
+                lambda kw, fn=fn: fn(**kw),
+                lambda a=a, b=b: {a: [1.0, 2.0, 0.3], b: [0.5, 0.1, -0.2]},
+                {a: Arg((a,), POSE_ARRAYS), b: Arg((b,), POSE_ARRAYS)},
+                check=lambda kw, v: None,
+            )
+            for name, fn, a, b in (
+                ("compose", compose, "pose", "delta"),
+                ("compose_jacobians", compose_jacobians, "pose", "delta"),
+                ("between", between, "a", "b"),
+            )
+        ),
+        Target(
+            "pose.inverse",
+            lambda kw: inverse(**kw),
+            lambda: {"delta": [0.5, 0.1, -0.2]},
+            {"delta": Arg(("delta",), POSE_ARRAYS)},
             check=lambda kw, v: None,
         ),
         Target(
