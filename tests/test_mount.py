@@ -513,3 +513,13 @@ def test_elsewhere_covers_where_a_far_mounted_sensor_may_be() -> None:
     assert tracker.region == region  # (the robot's region is as given)
     plain = Tracker(EXAMPLE_MAP, EXAMPLE_SENSOR, EXAMPLE_MOTION, TrackerConfig(region=region))
     assert plain._elsewhere.poses[:, 0].min() >= 0.0
+
+
+def test_places_are_grouped_by_the_robot_poses() -> None:
+    # Two sensor poses at one spot, 4 deg apart (one place for a sensor at the centre): a
+    # sensor on a 5 m boom puts their robots 0.35 m apart, beyond the 0.3 m tolerance.
+    boom = EXAMPLE_SENSOR.replace(mount=(5.0, 0.0, 0.0))
+    for sensor, together in ((EXAMPLE_SENSOR, True), (boom, False)):
+        tracker = Tracker(EXAMPLE_MAP, sensor, EXAMPLE_MOTION)
+        tracker._mu = np.array([[6.0, 4.0, 0.3], [6.0, 4.0, 0.3 + math.radians(4.0)]])
+        assert tracker._place(0).tolist() == [True, together]

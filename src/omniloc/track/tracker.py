@@ -1210,9 +1210,11 @@ class Tracker:
         return float(np.exp(self._logw[self._place(int(where[0]))]).sum())
 
     def _place(self, i: int) -> NDArray[np.bool_]:
-        """Which hypotheses are at the place of hypothesis ``i`` (within the tolerances)."""
+        """Which hypotheses are at the place of hypothesis ``i`` (within the tolerances, which
+        are the robot's: with a mount, between the robot poses the sensor poses stand for)."""
         c = self.config
-        d = self._mu - self._mu[i]
+        mu = self._mu if self._mount is None else self.sensor.robot_poses(self._mu)
+        d = mu - mu[i]
         dh = np.abs(np.asarray(wrap(d[:, 2])))
         return np.asarray(
             (np.hypot(d[:, 0], d[:, 1]) <= c.tolerance_m) & (dh <= c.tolerance_heading)
