@@ -1262,9 +1262,7 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
         print(
             f"mount  x {seat.mount[0]:.3f} m, y {seat.mount[1]:.3f} m, yaw "
             f"{np.rad2deg(seat.mount[2]):.2f} deg (standard errors {seat.sd[0]:.3f} m, "
-            f"{seat.sd[1]:.3f} m, {np.rad2deg(seat.sd[2]):.2f} deg"
-            f"{naive}; "
-            f"{seat.matched} of "
+            f"{seat.sd[1]:.3f} m, {np.rad2deg(seat.sd[2]):.2f} deg{naive}; {seat.matched} of "
             f"{seat.bearings} bearings within {args.gate:g} deg of a landmark; omniloc track "
             f"--mount {seat.mount[0]:.3f},{seat.mount[1]:.3f},{np.rad2deg(seat.mount[2]):.2f})"
         )

@@ -165,8 +165,7 @@ def _file_error(src: str, exc: BaseException, error: type[InputError]) -> InputE
         return error(f"{src}: not a UTF-8 text file (undecodable byte at offset {exc.start})")
     if isinstance(exc, MemoryError):
         return error(f"{src}: file too large to read")
-    assert isinstance(exc, OSError)
-    return error(f"{src}: cannot read file: {exc.strerror or exc}")
+    return error(f"{src}: cannot read file: {getattr(exc, 'strerror', None) or exc}")
 
 
 def read_text(path: PathLike, error: type[InputError]) -> str:

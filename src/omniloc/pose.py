@@ -644,20 +644,27 @@ def _pair_shape(a: FloatArray, b: FloatArray, names: str) -> tuple[int, ...]:
         ) from None
 
 
-def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
+def compose(pose: Pose | ArrayLike, delta: Pose | ArrayLike) -> FloatArray:
     """``pose (+) delta``: move by ``delta`` given in the frame of ``pose``.
 
     Parameters
     ----------
-    pose : array_like, shape (3,) or (n, 3)
-        ``(x, y, theta)``, metres and radians.
-    delta : array_like, shape (3,) or (n, 3)
-        ``(dx, dy, dtheta)`` in the robot frame of ``pose``.
+    pose : Pose or array_like, shape (3,) or (n, 3)
+        ``(x, y, theta)``, metres and radians, finite.
+    delta : Pose or array_like, shape (3,) or (n, 3)
+        ``(dx, dy, dtheta)`` in the robot frame of ``pose``; one row, or as many as ``pose``.
 
     Returns
     -------
     ndarray, shape of the broadcast inputs
         Headings wrapped to [-pi, pi).
+
+    Raises
+    ------
+    InputError
+        An argument that is not finite real poses of shape (3,) or (n, 3), or rows that do
+        not pair (the message names the argument, or both shapes); as do
+        :func:`compose_jacobians`, :func:`inverse` and :func:`between`.
 
     Examples
     --------
@@ -674,7 +681,9 @@ def compose(pose: ArrayLike, delta: ArrayLike) -> FloatArray:
     return out
 
 
-def compose_jacobians(pose: ArrayLike, delta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+def compose_jacobians(
+    pose: Pose | ArrayLike, delta: Pose | ArrayLike
+) -> tuple[FloatArray, FloatArray]:
     """Jacobians of :func:`compose` with respect to ``pose`` and to ``delta``.
 
     Returns
@@ -699,7 +708,7 @@ def compose_jacobians(pose: ArrayLike, delta: ArrayLike) -> tuple[FloatArray, Fl
     return Jp, Jd
 
 
-def inverse(delta: ArrayLike) -> FloatArray:
+def inverse(delta: Pose | ArrayLike) -> FloatArray:
     """The motion that undoes ``delta``: ``compose(compose(p, d), inverse(d)) == p``."""
     d = _poses(delta, "delta")
     c, s = np.cos(d[..., 2]), np.sin(d[..., 2])
@@ -710,7 +719,7 @@ def inverse(delta: ArrayLike) -> FloatArray:
     return out
 
 
-def between(a: ArrayLike, b: ArrayLike) -> FloatArray:
+def between(a: Pose | ArrayLike, b: Pose | ArrayLike) -> FloatArray:
     """The motion from pose ``a`` to pose ``b``, in the frame of ``a``:
     ``compose(a, between(a, b)) == b``."""
     pa = _poses(a, "a")

@@ -441,7 +441,7 @@ TUM_MAX_TILT = math.radians(10.0)
 
 def _is_tum(path: PathLike) -> bool:
     """Whether ``path`` reads as a TUM trajectory: its first line that is not blank or a
-    comment is 8 numbers separated by blanks (the file is read no further)."""
+    comment is 8 numbers separated by blanks (the file is read only that far)."""
     line = first_content_line(path, InputError)
     if line is None:
         return False
