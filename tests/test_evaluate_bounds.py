@@ -257,6 +257,37 @@ def test_the_steps_follow_the_true_path_and_its_bearings() -> None:
     np.testing.assert_allclose(steps.HtH[1], G.T @ G)
 
 
+@pytest.mark.parametrize("mount", [(0.3, 0.1, 0.5), (-0.2, 0.25, -2.0)])
+def test_a_mounted_sensor_s_bearings_inform_the_robot_pose_through_the_mount(
+    mount: tuple[float, float, float],
+) -> None:
+    # The information about the robot's pose of bearings taken from robot (+) mount: G^T G,
+    # G the numerical gradient of those bearings with respect to the robot's pose.
+    from omniloc.pose import compose
+
+    s = _line("a", 12, 0.0)
+    steps = bound_steps(s, MOTION, mount)
+    robot = np.array([0.05, 0.0, 0.0])  # frame 1's true pose; it sees landmark 1
+    L = s.landmarks.xy[[1]]
+
+    def bearing(p: np.ndarray) -> np.ndarray:
+        return predict_bearings(L, Pose(*compose(p, mount)))
+
+    G = np.zeros((1, 3))
+    for k in range(3):
+        e = np.zeros(3)
+        e[k] = 1e-6
+        G[:, k] = (bearing(robot + e) - bearing(robot - e)) / 2e-6
+    np.testing.assert_allclose(steps.HtH[1], G.T @ G, rtol=1e-5)
+    plain = bound_steps(s, MOTION)
+    assert not np.allclose(steps.HtH[1], plain.HtH[1])
+    # The motion's steps are the robot's either way; a mount at the origin changes nothing.
+    np.testing.assert_array_equal(steps.F, plain.F)
+    np.testing.assert_array_equal(bound_steps(s, MOTION, (0.0, 0.0, 0.0)).HtH, plain.HtH)
+    with pytest.raises(InputError, match="mount"):
+        bound_steps(s, MOTION, (0.1, 0.2))
+
+
 def test_frames_without_truth_cannot_be_bounded() -> None:
     with pytest.raises(InputError, match="no landmark truth"):
         bound_steps(_line("a", 4, 0.0, truth_rows=False), MOTION)

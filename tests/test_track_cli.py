@@ -414,6 +414,10 @@ def test_track_on_mrclam_with_its_ground_truth_says_what_the_data_allow(
     # Robot 2 sees four tubes in its first seconds: a localizer told them is sure at once.
     after = float(line.split("(")[2].split(" s after")[0])
     assert 0.0 <= after < 10.0 and "% of the frames" in line
+    # A camera off the centre: the bound takes its bearings from where the camera is.
+    assert main([*argv, *gt, "--mount", "0.1,0.03,0.6"]) == 0
+    seated = next(s for s in capsys.readouterr().out.splitlines() if "what the data allow" in s)
+    assert "sure enough to be localized from t = " in seated
     # A map that lacks a tube the frames name: the run goes on, without the bound.
     lines = (data / "landmarks.csv").read_text().splitlines()
     kept = [s for s in lines if not s.startswith("15,")]  # tube 15, in robot 2's first frame

@@ -1151,12 +1151,6 @@ def _what_the_data_allow(
 
     if not any(f.truth for f in frames):
         return None
-    if sensor.mount is not None:
-        log.warning(
-            "what the data allow: not computed (the bound takes the bearings from the robot's "
-            "origin; this sensor has a mount)"
-        )
-        return None
     share = float(config.core_share)  # the bearing errors as the tracker weighs them
     if share > 0:
         shares, sds = [share, 1.0 - share], [config.core_sigma, sensor.sigma]
@@ -1171,6 +1165,7 @@ def _what_the_data_allow(
             float(config.localized_probability),
             tol_m=float(config.tolerance_m),
             tol_heading=float(config.tolerance_heading),
+            mount=sensor.mount,
         )
     except OmnilocError as exc:
         log.warning("what the data allow: not computed (%s)", exc)

@@ -58,7 +58,7 @@ from scipy.special import erf
 from ..errors import InputError
 from ..io import finite_number, real_array, shorten
 from ..pose import fisher_information
-from ..track.motion import MotionModel, between, compose_jacobians, integrate
+from ..track.motion import MotionModel, between, compose, compose_jacobians, integrate
 from ..track.tracker import within_tolerance
 
 if TYPE_CHECKING:
@@ -327,18 +327,32 @@ class BoundSteps:
     bearings: NDArray[np.int64]
 
 
-def bound_steps(stream: Stream, motion: MotionModel) -> BoundSteps:
+def bound_steps(
+    stream: Stream, motion: MotionModel, mount: Sequence[float] | None = None
+) -> BoundSteps:
     """The information filter's steps along a stream's true trajectory.
 
     Frames outside the ground truth are left out (the odometry joins their neighbours);
     bearings without a true landmark (clutter) are dropped.
 
+    Parameters
+    ----------
+    stream : Stream
+    motion : MotionModel
+    mount : sequence of 3 floats, optional
+        Where the sensor sits on the robot, ``(x, y, yaw)`` (:attr:`omniloc.SensorModel.
+        mount`): the bearings are taken from the sensor's pose, and their information about
+        it carried to the robot's pose by the mount's Jacobian. None: at the robot's origin.
+
     Raises
     ------
     InputError
         A stream whose frames carry no truth (:attr:`Frame.truth`): the bound needs the
-        correspondences.
+        correspondences; a mount that is not one (as :class:`~omniloc.SensorModel` says).
     """
+    from ..sensor import _mount  # (the sensor's own check of a mount)
+
+    seat = _mount(mount) if mount is not None else None
     if stream.frames and all(f.truth is None for f in stream.frames):
         raise InputError(
             f"{stream.name}: the frames carry no landmark truth (Frame.truth); the bound "
@@ -365,7 +379,12 @@ def bound_steps(stream: Stream, motion: MotionModel) -> BoundSteps:
             N[i] = Jd @ Q @ Jd.T
         rows = [r for r in (f.truth or ()) if r is not None]
         if rows:
-            HtH[i] = fisher_information(xy[rows], poses[i], 1.0)
+            if seat is None:
+                HtH[i] = fisher_information(xy[rows], poses[i], 1.0)
+            else:
+                # d bearing / d robot = d bearing / d sensor . d (robot (+) mount) / d robot.
+                J = compose_jacobians(poses[i], seat)[0]
+                HtH[i] = J.T @ fisher_information(xy[rows], compose(poses[i], seat), 1.0) @ J
             nb[i] = len(rows)
     return BoundSteps(t, F, N, HtH, nb)
 
@@ -501,6 +520,7 @@ def stream_bound(
     *,
     tol_m: float = 0.3,
     tol_heading: float = math.radians(5.0),
+    mount: Sequence[float] | None = None,
 ) -> StreamBound:
     """The bound on one stream, in the terms :func:`~omniloc.evaluate.tracking.score_run`
     scores a localizer by (its time to localize, correct-after share and recovery).
@@ -518,9 +538,13 @@ def stream_bound(
     p_min : float
         How sure a localizer must be to say ``localized`` (a tracker's
         ``localized_probability``).
+    tol_m, tol_heading : float
+        The tolerance of a correct pose, metres and radians (of the robot's pose).
+    mount : sequence of 3 floats, optional
+        Where the sensor sits on the robot (:func:`bound_steps`).
     """
     _check(info, p_min, tol_m, tol_heading)
-    steps = bound_steps(stream, motion)
+    steps = bound_steps(stream, motion, mount)
     jump = stream.jump_t
     j = int(np.searchsorted(steps.t, jump, side="left")) if math.isfinite(jump) else steps.t.size
     ok = confident_frames(
