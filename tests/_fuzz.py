@@ -1850,7 +1850,24 @@ def _tracker_targets() -> list[Target]:
         tr.odometry_poses(kw["t"], kw["x"], kw["y"], kw["theta"])
         return [tr.frame(3.0, omniloc.predict_bearings(room().xy, ROOM_POSE))]
 
+    def set_pose(kw: dict[str, Any]) -> Any:
+        tr = Tracker(room(), omniloc.SensorModel(sigma=math.radians(0.5)))
+        tr.odometry([0.0, 1.0, 2.0], [0.0, 0.0, 0.0], [0.0, 0.0, 0.0])
+        tr.set_pose(**kw)
+        return [tr.frame(1.0, omniloc.predict_bearings(room().xy, ROOM_POSE))]
+
     return [
+        Target(
+            "Tracker.set_pose",
+            set_pose,
+            lambda: {"pose": ROOM_POSE, "covariance": np.diag([1e-3, 1e-3, 1e-4])},
+            {
+                "pose": Arg(("pose",), POSES),
+                "covariance": Arg(("covariance",), MATRICES),
+                "mass": Arg(("mass",), PROBABILITIES),
+            },
+            check=check,
+        ),
         Target("TrackerConfig", lambda kw: run(config=kw), dict, cfg, check=check, limit_s=20.0),
         Target("MotionModel", lambda kw: run(motion=kw), dict, motion, check=check, limit_s=20.0),
         Target(
@@ -2538,6 +2555,15 @@ def cli_targets() -> dict[str, CliTarget]:
             "--preset": (("unknown", "fast"), ("empty", "")),
             **{k: CLI_NUMBERS for k in ("--sigma", "--fov", "--max-range")},
             "--mount": CLI_MOUNTS,
+            "--initial-pose": CLI_MOUNTS,
+            "--initial-sd": (
+                *CLI_NUMBERS,
+                ("valid", "0.1,5"),
+                ("three numbers", "0.1,5,5"),
+                ("negative", "-0.1,5"),
+                ("heading 400", "0.1,400"),
+                ("nan", "nan,5"),
+            ),
             "--config": (
                 *TEXT_FILES,
                 ("json array", file_with("s.json", "[1, 2]")),

@@ -99,19 +99,25 @@ def _nonnegative_list(text: str) -> tuple[float, ...]:
     return tuple(_nonnegative(t) for t in parts)
 
 
-def _mount_deg(text: str) -> tuple[float, float, float]:
-    """``X,Y,YAW``: the sensor's place on the robot, metres and degrees (as radians)."""
+def _xy_angle_deg(text: str, what: str, angle: str, limit: float) -> tuple[float, float, float]:
+    """Three numbers ``X,Y,ANGLE``: metres, metres and degrees (at most ``limit`` either way),
+    the angle returned in radians; ``what`` names them in the error."""
     parts = [t for t in text.replace(" ", "").split(",")]
     if len(parts) != 3 or not all(parts):
         raise argparse.ArgumentTypeError(
-            f"the sensor's X,Y,YAW on the robot (metres, metres, degrees), got {shorten(text, 40)}"
+            f"{what} (metres, metres, degrees), got {shorten(text, 40)}"
         )
-    x, y, yaw = (_number(t) for t in parts)
-    if abs(yaw) > 180:
+    x, y, a = (_number(t) for t in parts)
+    if abs(a) > limit:
         raise argparse.ArgumentTypeError(
-            f"YAW is in degrees, at most 180 either way, got {shorten(text, 40)}"
+            f"{angle} is in degrees, at most {limit:g} either way, got {shorten(text, 40)}"
         )
-    return x, y, math.radians(yaw)
+    return x, y, math.radians(a)
+
+
+def _mount_deg(text: str) -> tuple[float, float, float]:
+    """``X,Y,YAW``: the sensor's place on the robot, metres and degrees (as radians)."""
+    return _xy_angle_deg(text, "the sensor's X,Y,YAW on the robot", "YAW", 180.0)
 
 
 MOUNT_HELP = (
@@ -128,6 +134,30 @@ def _fov_deg(text: str) -> float:
             f"a full field of view in degrees, at most 360, got {text!r}"
         )
     return v
+
+
+def _pose_deg(text: str) -> tuple[float, float, float]:
+    """``X,Y,THETA``: a pose, metres and degrees (as radians)."""
+    return _xy_angle_deg(text, "the robot's X,Y,THETA", "THETA", 360.0)
+
+
+def _sd_deg(text: str) -> tuple[float, float]:
+    """``SD_M,SD_DEG``: a pose's position and heading standard deviations."""
+    parts = [t for t in text.replace(" ", "").split(",")]
+    if len(parts) != 2 or not all(parts):
+        raise argparse.ArgumentTypeError(
+            f"the pose's SD_M,SD_DEG (metres, degrees), got {shorten(text, 40)}"
+        )
+    sd_m, sd_deg = (_positive(t) for t in parts)
+    if sd_deg > 180:
+        raise argparse.ArgumentTypeError(
+            f"SD_DEG is in degrees, at most 180, got {shorten(text, 40)}"
+        )
+    return sd_m, math.radians(sd_deg)
+
+
+#: ``--initial-sd``'s default: AMCL's initial covariance (0.25 m^2, 0.068 rad^2).
+INITIAL_SD = (0.5, math.radians(15.0))
 
 
 def _probability(text: str) -> float:
@@ -473,6 +503,21 @@ def _add_track_parser(sub: Any) -> None:
     t.add_argument("--fov", type=_fov_deg, help="full field of view, deg (overrides the preset)")
     t.add_argument("--max-range", type=_positive, help="sensor range, m (overrides the preset)")
     t.add_argument("--mount", type=_mount_deg, metavar="X,Y,YAW", help=MOUNT_HELP)
+    t.add_argument(
+        "--initial-pose",
+        type=_pose_deg,
+        metavar="X,Y,THETA",
+        help="where the robot is at the first frame (metres, metres, degrees), as ROS's "
+        "/initialpose tells AMCL: tracked from there, called localized once the bearings "
+        "agree; without it the robot is localized globally",
+    )
+    t.add_argument(
+        "--initial-sd",
+        type=_sd_deg,
+        metavar="SD_M,SD_DEG",
+        help="with --initial-pose: its standard deviations, metres (x and y) and degrees "
+        f"(default {INITIAL_SD[0]:g},{math.degrees(INITIAL_SD[1]):g}, AMCL's)",
+    )
     t.add_argument(
         "--groundtruth",
         type=Path,
@@ -1023,6 +1068,15 @@ def _cmd_track(args: argparse.Namespace) -> int:
         changes["mount"] = args.mount
     if changes:
         sensor = sensor.replace(**changes)
+    initial: dict[str, Any] = {}
+    if args.initial_sd is not None and args.initial_pose is None:
+        raise InputError("--initial-sd is the spread of --initial-pose: give the pose too")
+    if args.initial_pose is not None:
+        sd_m, sd_h = args.initial_sd if args.initial_sd is not None else INITIAL_SD
+        initial = {
+            "initial_pose": args.initial_pose,
+            "initial_covariance": np.diag([sd_m**2, sd_m**2, sd_h**2]),
+        }
     bar = progress_bar(len(frames), not args.quiet, "tracking")
     try:
         run = track(
@@ -1033,6 +1087,7 @@ def _cmd_track(args: argparse.Namespace) -> int:
             motion=motion,
             config=config,
             progress=lambda n: bar.update(1),
+            **initial,
         )
     finally:
         bar.close()

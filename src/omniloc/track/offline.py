@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike
 
 from ..errors import InputError
 from ..maps import LandmarkMap, as_landmark_map
+from ..pose import Pose
 from ..sensor import SensorModel
 from .data import Frame, Odometry
 from .motion import MotionModel
@@ -68,6 +69,8 @@ def track(
     motion: MotionModel | None = None,
     config: TrackerConfig | None = None,
     progress: Callable[[int], None] | None = None,
+    initial_pose: Pose | ArrayLike | None = None,
+    initial_covariance: ArrayLike | None = None,
 ) -> TrackRun:
     """Localize a robot over a whole recording.
 
@@ -84,6 +87,10 @@ def track(
         See :class:`~omniloc.track.Tracker` (defaults: its defaults).
     progress : callable, optional
         Called with the number of frames done after each frame (for a progress bar).
+    initial_pose, initial_covariance : optional
+        Where the robot is at the first frame, ``(x, y, theta)`` and its 3 x 3 covariance
+        (both or neither): :meth:`Tracker.set_pose` before the first frame. Without them the
+        tracker localizes globally.
 
     Returns
     -------
@@ -128,7 +135,11 @@ def track(
             f"the frames (t = {f0:.12g} to {f1:.12g} s) and the odometry (t = {o0:.12g} to "
             f"{o1:.12g} s) share no time: are they stamped by one clock, in seconds?"
         )
+    if (initial_pose is None) != (initial_covariance is None):
+        raise InputError("initial_pose and initial_covariance go together: give both or neither")
     tracker = Tracker(lm, sensor, motion, config)
+    if initial_pose is not None and initial_covariance is not None:
+        tracker.set_pose(initial_pose, initial_covariance)
     out: list[TrackEstimate] = []
     k = 0
     c0 = time.process_time()

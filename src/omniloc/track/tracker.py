@@ -85,9 +85,9 @@ from scipy.special import erf
 from .._kernels.track import grid_pairs, merge_kernel, near_pairs, place_kernel, same_of_pairs
 from ..angles import wrap
 from ..errors import InputError
-from ..io import shorten
+from ..io import finite_number, real_array, shorten
 from ..maps import LandmarkMap, as_landmark_map
-from ..pose import Pose, compose_jacobians
+from ..pose import Pose, _poses, compose_jacobians
 from ..sensor import SensorModel
 from .confidence import _interpolate, is_recent, knot_arrays
 from .config import _CONFIDENCE_TABLES, TrackerConfig
@@ -115,6 +115,10 @@ MAX_FRAME_BEARINGS = 1000
 #: count (on MRCLAM robot 5's seconds of other robots alone, 0.26 of 7 against the copy's
 #: 0.24 under one of elsewhere's seeds: a tie, not evidence of another place).
 KIDNAP_MARGIN = 0.5
+
+#: The share of the belief a pose told by :meth:`Tracker.set_pose` takes by default (the rest
+#: stays with elsewhere: a wrong pose told still leaves the robot somewhere to be found).
+SET_POSE_MASS = 0.99
 
 #: Below this many pairs of poses, all pairs are compared directly (building two k-d trees
 #: costs more).
@@ -340,6 +344,97 @@ class Tracker:
         self._watch_mix = 0.0  # ... and the tracker's belief explained (_posterior_explained)
         #: Number of searches run so far (for reports).
         self.searches = 0
+
+    # ---- a pose told ----------------------------------------------------------------------
+    def set_pose(
+        self, pose: Pose | ArrayLike, covariance: ArrayLike, *, mass: float = SET_POSE_MASS
+    ) -> None:
+        """Tell the tracker where the robot is, as ROS's ``/initialpose`` tells AMCL: a
+        robot started at its dock, or put back where an operator says.
+
+        The belief becomes the Gaussian ``N(pose, covariance)`` with ``mass`` of it, and
+        elsewhere (uniform over the region) the rest; every hypothesis before is dropped.
+        The pose holds at the time of the last frame taken (before any frame: at the first
+        one); the odometry moves it from there.
+
+        A pose told as surely as ``localized`` asks (``covariance`` within tolerance with
+        ``localized_probability``: sds of about 0.05 m and 1.5 deg for 0.3 m and 5 deg)
+        counts as found by the searches and as old enough (``min_confirmations``,
+        ``min_age_s``): it is called ``localized`` as soon as it explains the bearings
+        (``fit_explained``). A looser one is a prior: its place must be confirmed by the
+        searches and grow old like any other (a place within a wide prior may be the wrong
+        one of several that fit). Either way a wrong pose told is not reported as right
+        while the bearings disagree, and the searches look for the robot elsewhere.
+
+        Parameters
+        ----------
+        pose : Pose or array_like, shape (3,)
+            The robot's ``(x, y, theta)``, metres and radians (with a mount, the robot's,
+            not the sensor's), inside the tracker's region.
+        covariance : array_like, shape (3, 3)
+            Its uncertainty: symmetric, positive definite; m^2 and rad^2.
+        mass : float
+            The share of the belief on the told pose, in (0, 1).
+
+        Raises
+        ------
+        InputError
+            A pose that is not one, outside the region; a covariance that is not a finite,
+            symmetric, positive-definite 3 x 3 matrix; a mass outside (0, 1). Nothing is
+            changed then.
+        """
+        p = _poses(pose, "pose")
+        if p.shape != (3,):
+            raise InputError(f"pose must be one pose (shape (3,)), got shape {p.shape}")
+        C = real_array(covariance, "covariance", InputError)
+        if C.shape != (3, 3):
+            raise InputError(f"covariance must have shape (3, 3), got {C.shape}")
+        if not np.isfinite(C).all():
+            raise InputError("covariance must be finite (no NaN or inf)")
+        if not np.allclose(C, C.T, rtol=1e-9, atol=1e-12 * max(float(np.abs(C).max()), 1e-300)):
+            raise InputError("covariance must be symmetric")
+        sd = np.sqrt(np.abs(np.diag(C)))
+        if not (np.linalg.eigvalsh(C)[0] > 0.0) or sd[2] > math.pi or max(sd[0], sd[1]) > 1e6:
+            raise InputError(
+                "covariance must be positive definite, with position sds at most 1e6 m and a "
+                f"heading sd at most pi (got sds {sd[0]:.3g} m, {sd[1]:.3g} m, {sd[2]:.3g} rad, "
+                f"smallest eigenvalue {np.linalg.eigvalsh(C)[0]:.3g})"
+            )
+        m = finite_number(mass, "mass")
+        if not 0.0 < m < 1.0:
+            raise InputError(f"mass must lie in (0, 1), got {m!r}")
+        x0, x1, y0, y1 = self.region
+        if not (x0 <= p[0] <= x1 and y0 <= p[1] <= y1):
+            raise InputError(
+                f"pose ({p[0]:.4g}, {p[1]:.4g}) lies outside the tracker's region x {x0:g}..{x1:g}"
+                f", y {y0:g}..{y1:g} m (TrackerConfig.region)"
+            )
+        mu, P = p.copy(), C.copy()
+        if self._mount is not None:
+            # The sensor's pose, the covariance carried by the mount's Jacobian.
+            J = compose_jacobians(p, self._mount)[0]
+            mu, P = compose(p, self._mount), J @ C @ J.T
+        c = self.config
+        trusted = within_tolerance(C, c.tolerance_m, c.tolerance_heading) >= c.localized_probability
+        self._drop_all()
+        self._localized_run = 0
+        self._kept = False
+        self._unvouched_t = None
+        self._mu = mu.reshape(1, 3)
+        self._P = (0.5 * (P + P.T)).reshape(1, 3, 3)
+        self._logw = np.array([math.log(m)])
+        self._log_out = math.log1p(-m)
+        self._ids = np.array([self._next_id], dtype=np.int64)
+        self._next_id += 1
+        # Trusted: old enough and confirmed. A prior: born at the frame it holds at (NaN
+        # before any frame: the first frame sets it) and found by no search yet.
+        born = -math.inf if trusted else (np.nan if self._t is None else self._t)
+        self._born = np.array([born])
+        self._conf = np.array([c.min_confirmations if trusted else 0], dtype=np.int64)
+        self._conf_t = np.array([-math.inf if self._t is None else self._t])
+        self._fit_m = np.zeros(1)
+        self._fit_n = np.zeros(1)
+        self._mem_w = np.zeros((1, 0))
 
     # ---- input ---------------------------------------------------------------------------
     @property
@@ -969,6 +1064,7 @@ class Tracker:
         t_prev = self._t
         delta, Q, gap = self._motion_to(tf)
         self._t = tf
+        self._born[np.isnan(self._born)] = tf  # (a pose told before the first frame)
         reason_gap = ""
         if gap > c.max_odometry_gap_s and not self._after_gap:
             self._after_gap = True
