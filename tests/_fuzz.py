@@ -2562,7 +2562,7 @@ def cli_targets() -> dict[str, CliTarget]:
                 ("three numbers", "0.1,5,5"),
                 ("negative", "-0.1,5"),
                 ("heading 400", "0.1,400"),
-                ("nan", "nan,5"),
+                ("nan position sd", "nan,5"),
             ),
             "--config": (
                 *TEXT_FILES,

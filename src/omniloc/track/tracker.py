@@ -417,6 +417,9 @@ class Tracker:
         c = self.config
         trusted = within_tolerance(C, c.tolerance_m, c.tolerance_heading) >= c.localized_probability
         self._drop_all()
+        # The masses elsewhere held before belong to the belief replaced: a search's candidates
+        # enter from the frames after this one (the window's bearings are still searched).
+        self._history.clear()
         self._localized_run = 0
         self._kept = False
         self._unvouched_t = None
