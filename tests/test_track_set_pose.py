@@ -110,6 +110,9 @@ def test_a_pose_told_between_frames_holds_at_the_last_frame() -> None:
         tracker.frame(0.25 * k, z[:2])  # two bearings: not enough to localize
     tracker.set_pose(truth, TIGHT)
     assert tracker.n_hypotheses == 1
+    # The masses elsewhere held under the belief replaced are not what a search's candidates
+    # enter with: the history of the frames before starts afresh.
+    assert len(tracker._history) == 0
     tracker.odometry([0.75], [0.0], [0.0])
     est = tracker.frame(0.75, z)
     assert est.localized and math.hypot(est.pose.x - 5.6, est.pose.y - 2.1) < 0.01
@@ -124,7 +127,12 @@ def test_a_pose_told_between_frames_holds_at_the_last_frame() -> None:
         ((100.0, 2.0, 0.0), TIGHT, {}, r"outside the tracker's region"),
         ((1.0, 2.0, 0.0), np.eye(2), {}, r"covariance must have shape \(3, 3\)"),
         ((1.0, 2.0, 0.0), np.full((3, 3), np.inf), {}, r"covariance must be finite"),
-        ((1.0, 2.0, 0.0), np.triu(np.ones((3, 3))), {}, r"covariance must be symmetric"),
+        (
+            (1.0, 2.0, 0.0),
+            np.triu(np.ones((3, 3))),
+            {},
+            r"covariance must be a 3 x 3 covariance: symmetric",
+        ),
         ((1.0, 2.0, 0.0), -TIGHT, {}, r"positive definite"),
         ((1.0, 2.0, 0.0), np.diag([1.0, 1.0, 100.0]), {}, r"heading sd at most pi"),
         ((1.0, 2.0, 0.0), "abc", {}, r"covariance must be a numeric array"),
@@ -171,3 +179,15 @@ def test_omniloc_track_takes_an_initial_pose(
     assert "give the pose too" in capsys.readouterr().err
     assert main([*argv, "--initial-pose", "1,2"]) == 1
     assert "X,Y,THETA" in capsys.readouterr().err
+
+
+def test_a_prior_told_before_any_frame_is_as_old_as_the_first_frame() -> None:
+    # (Its age, which min_age_s asks of it, counts from the first frame, whenever that is.)
+    tracker = Tracker(EXAMPLE_MAP, EXAMPLE_SENSOR, EXAMPLE_MOTION)
+    tracker.set_pose((6.0, 4.0, 0.3), WIDE)
+    tracker.odometry([100.0], [0.0], [0.0])
+    tracker.frame(100.0, [0.1])
+    assert tracker._born.tolist() == [100.0] * tracker.n_hypotheses
+    told = Tracker(EXAMPLE_MAP, EXAMPLE_SENSOR, EXAMPLE_MOTION)
+    told.set_pose((6.0, 4.0, 0.3), TIGHT)  # told surely: old enough at once
+    assert told._born.tolist() == [-math.inf]

@@ -633,6 +633,29 @@ def _poses(a: Pose | ArrayLike, name: str) -> FloatArray:
     return p
 
 
+#: Largest magnitude of a pose covariance's entry accepted (beyond it, squares overflow).
+MAX_COVARIANCE_ENTRY = 1e100
+
+
+def _covariance(a: ArrayLike, name: str, *, definite: bool = False) -> FloatArray:
+    """A pose covariance: a finite, symmetric 3 x 3 matrix, positive semi-definite (with
+    ``definite``, positive definite), entries at most :data:`MAX_COVARIANCE_ENTRY`; or an
+    :class:`InputError` naming ``name``."""
+    c = real_array(a, name, InputError)
+    if c.shape != (3, 3):
+        raise InputError(f"{name} must have shape (3, 3), got {c.shape}")
+    if not np.isfinite(c).all() or np.abs(c).max() > MAX_COVARIANCE_ENTRY:
+        raise InputError(f"{name} must be finite, at most {MAX_COVARIANCE_ENTRY:g} in magnitude")
+    scale = max(float(np.abs(c).max()), 1e-300)
+    low = float(np.linalg.eigvalsh(0.5 * (c + c.T))[0])
+    if not (
+        np.abs(c - c.T).max() <= 1e-9 * scale and (low > 0.0 if definite else low >= -1e-12 * scale)
+    ):
+        kind = "definite" if definite else "semi-definite"
+        raise InputError(f"{name} must be a 3 x 3 covariance: symmetric, positive {kind}")
+    return c
+
+
 def _pair_shape(a: FloatArray, b: FloatArray, names: str) -> tuple[int, ...]:
     """The broadcast shape of two pose arrays, or an error naming both shapes."""
     try:

@@ -57,7 +57,7 @@ from scipy.special import erf
 
 from ..errors import InputError
 from ..io import finite_number, real_array, shorten
-from ..pose import fisher_information
+from ..pose import _covariance, fisher_information
 from ..track.motion import MotionModel, between, compose, compose_jacobians, integrate
 from ..track.tracker import within_tolerance
 
@@ -256,11 +256,7 @@ def tolerance_probability(
     """
     _positive("tol_m", tol_m, MAX_TOL_M)
     _positive("tol_heading", tol_heading, math.pi)
-    c = _matrices("cov", cov, (3, 3))
-    ev = np.linalg.eigvalsh(0.5 * (c + c.T))
-    scale = max(float(np.abs(c).max()), 1e-300)
-    if not (np.abs(c - c.T).max() <= 1e-9 * scale and ev[0] >= -1e-12 * scale):
-        raise InputError("cov must be a 3 x 3 covariance: symmetric, positive semi-definite")
+    c = _covariance(cov, "cov")
     if draws is not None:
         draws = _matrices("draws", draws, (..., 3))
         if draws.ndim != 2 or draws.shape[0] == 0:

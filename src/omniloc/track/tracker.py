@@ -85,9 +85,9 @@ from scipy.special import erf
 from .._kernels.track import grid_pairs, merge_kernel, near_pairs, place_kernel, same_of_pairs
 from ..angles import wrap
 from ..errors import InputError
-from ..io import finite_number, real_array, shorten
+from ..io import finite_number, shorten
 from ..maps import LandmarkMap, as_landmark_map
-from ..pose import Pose, _poses, compose_jacobians
+from ..pose import Pose, _covariance, _poses, compose_jacobians
 from ..sensor import SensorModel
 from .confidence import _interpolate, is_recent, knot_arrays
 from .config import _CONFIDENCE_TABLES, TrackerConfig
@@ -344,6 +344,8 @@ class Tracker:
         self._watch_mix = 0.0  # ... and the tracker's belief explained (_posterior_explained)
         #: Number of searches run so far (for reports).
         self.searches = 0
+        # A prior told by set_pose before any frame: born at the first frame.
+        self._born_at_first_frame = False
 
     # ---- a pose told ----------------------------------------------------------------------
     def set_pose(
@@ -386,19 +388,12 @@ class Tracker:
         p = _poses(pose, "pose")
         if p.shape != (3,):
             raise InputError(f"pose must be one pose (shape (3,)), got shape {p.shape}")
-        C = real_array(covariance, "covariance", InputError)
-        if C.shape != (3, 3):
-            raise InputError(f"covariance must have shape (3, 3), got {C.shape}")
-        if not np.isfinite(C).all():
-            raise InputError("covariance must be finite (no NaN or inf)")
-        if not np.allclose(C, C.T, rtol=1e-9, atol=1e-12 * max(float(np.abs(C).max()), 1e-300)):
-            raise InputError("covariance must be symmetric")
-        sd = np.sqrt(np.abs(np.diag(C)))
-        if not (np.linalg.eigvalsh(C)[0] > 0.0) or sd[2] > math.pi or max(sd[0], sd[1]) > 1e6:
+        C = _covariance(covariance, "covariance", definite=True)
+        sd = np.sqrt(np.diag(C))
+        if sd[2] > math.pi or max(sd[0], sd[1]) > 1e6:
             raise InputError(
-                "covariance must be positive definite, with position sds at most 1e6 m and a "
-                f"heading sd at most pi (got sds {sd[0]:.3g} m, {sd[1]:.3g} m, {sd[2]:.3g} rad, "
-                f"smallest eigenvalue {np.linalg.eigvalsh(C)[0]:.3g})"
+                "covariance must have position sds at most 1e6 m and a heading sd at most pi "
+                f"(got {sd[0]:.3g} m, {sd[1]:.3g} m, {sd[2]:.3g} rad)"
             )
         m = finite_number(mass, "mass")
         if not 0.0 < m < 1.0:
@@ -429,10 +424,11 @@ class Tracker:
         self._log_out = math.log1p(-m)
         self._ids = np.array([self._next_id], dtype=np.int64)
         self._next_id += 1
-        # Trusted: old enough and confirmed. A prior: born at the frame it holds at (NaN
-        # before any frame: the first frame sets it) and found by no search yet.
-        born = -math.inf if trusted else (np.nan if self._t is None else self._t)
-        self._born = np.array([born])
+        # Trusted: old enough and confirmed. A prior: born at the frame it holds at and found
+        # by no search yet.
+        # (before any frame the first frame sets it: _born_at_first_frame)
+        self._born_at_first_frame = not trusted and self._t is None
+        self._born = np.array([-math.inf if trusted else (0.0 if self._t is None else self._t)])
         self._conf = np.array([c.min_confirmations if trusted else 0], dtype=np.int64)
         self._conf_t = np.array([-math.inf if self._t is None else self._t])
         self._fit_m = np.zeros(1)
@@ -1067,7 +1063,9 @@ class Tracker:
         t_prev = self._t
         delta, Q, gap = self._motion_to(tf)
         self._t = tf
-        self._born[np.isnan(self._born)] = tf  # (a pose told before the first frame)
+        if self._born_at_first_frame:  # (a prior told before the first frame)
+            self._born[:] = tf
+            self._born_at_first_frame = False
         reason_gap = ""
         if gap > c.max_odometry_gap_s and not self._after_gap:
             self._after_gap = True
