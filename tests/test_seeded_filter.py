@@ -38,6 +38,7 @@ def test_the_merge_keeps_the_heaviest_and_adds_the_masses() -> None:
 
 
 def test_robot_3_is_sure_of_its_true_place(shared_data: Path) -> None:
-    row = sf.run(3, 40.0)
-    assert 30.0 < row["sure_right_s"] < 40.0  # type: ignore[operator]
+    # 39.7 s with the preset's 7.5 m range (35.6 s with 7 m: results_seeded_filter.md)
+    row = sf.run(3, 50.0)
+    assert 35.0 < row["sure_right_s"] < 45.0  # type: ignore[operator]
     assert row["right_after"] == 1.0
