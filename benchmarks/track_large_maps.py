@@ -4,7 +4,7 @@ whole frame takes, on maps of 1,000 and 10,000 landmarks, with a range.
 Run:  python benchmarks/track_large_maps.py [--frames N] [--repeat N] [--out PATH]
 
 Each map is landmarks uniform over 100 m x 100 m; the sensor is the ``mrclam`` preset's
-(67 deg field of view, 7 m range, 1 deg), the tracker's settings the preset's but for the
+(67 deg field of view, 7.5 m range, 1 deg), the tracker's settings the preset's but for the
 region (the map's bounding box). Two figures per map, each the median over ``--frames``
 frames:
 
@@ -185,7 +185,8 @@ def main(argv: list[str] | None = None) -> int:
         "# The tracker's frame on large maps (`benchmarks/track_large_maps.py`)",
         "",
         f"{meta['date']}, {meta['machine']}; `{meta['command']}`. Landmarks uniform over "
-        f"100 m x 100 m, the `mrclam` preset's sensor (7 m range); elsewhere's {PARTICLES:,} "
+        f"100 m x 100 m, the `mrclam` preset's sensor ({preset('mrclam')[0].max_range:g} m "
+        f"range); elsewhere's {PARTICLES:,} "
         "particles weighed against two bearings (median over the frames), and a whole frame "
         "of a tracker that is not localized; the search's neighbour lists, built once per map "
         "(at twice the range, by the first search), fastest of `--repeat`.",
