@@ -43,6 +43,35 @@ def test_straight_line_and_turn_in_place() -> None:
     assert d == pytest.approx([0.0, 0.0, -1.0], abs=1e-15)
 
 
+def test_scales_and_the_slowdown_in_turns() -> None:
+    # v = 0.5 m/s, w = 0.25 rad/s for 4 s, the turn scaled by 0.8 and the velocity by 1.1
+    # less 40 % per rad/s of turn (10 % at 0.25 rad/s): an arc of 0.8 rad at 0.495 m/s.
+    model = MotionModel(v_scale=1.1, w_scale=0.8, turn_slowdown=0.4)
+    for pieces in (1, 9):
+        d, _ = integrate(
+            np.full(pieces, 4.0 / pieces), np.full(pieces, 0.5), np.full(pieces, 0.25), model
+        )
+        r = 0.495 / 0.2
+        assert d == pytest.approx([r * np.sin(0.8), r * (1.0 - np.cos(0.8)), 0.8], abs=1e-12)
+    # The turn's noise is of the turn made (0.8 rad), not of the one the odometry says.
+    plain = MotionModel(turn_per_rad=0.02, turn_per_m=0.0, turn_per_s=0.0)
+    scaled = MotionModel(turn_per_rad=0.02, turn_per_m=0.0, turn_per_s=0.0, w_scale=0.8)
+    assert integrate([4.0], [0.0], [0.25], scaled)[1][2, 2] == pytest.approx(0.02 * 0.8)
+    assert integrate([4.0], [0.0], [0.25], plain)[1][2, 2] == pytest.approx(0.02 * 1.0)
+    # Beyond 1 / turn_slowdown rad/s the robot turns in place; straight ahead it goes at
+    # v * v_scale; the sideways velocity takes the same factor.
+    d, _ = integrate([2.0], [0.5], [-3.0], model)
+    assert d == pytest.approx([0.0, 0.0, -4.8], abs=1e-12)
+    d, _ = integrate([2.0], [0.5], [0.0], model)
+    assert d == pytest.approx([1.1, 0.0, 0.0], abs=1e-12)
+    d, _ = integrate([2.0], [0.0], [0.0], model, vy=[0.5])
+    assert d == pytest.approx([0.0, 1.1, 0.0], abs=1e-12)
+    # The defaults change nothing.
+    assert integrate([4.0], [0.5], [0.25], MotionModel(w_scale=1.0, turn_slowdown=0.0))[0] == (
+        pytest.approx(integrate([4.0], [0.5], [0.25], MotionModel())[0], abs=0)
+    )
+
+
 def test_sideways_twist_of_an_increment_round_trips() -> None:
     delta = np.array([0.4, -0.2, 0.7])
     tw = twist_of(delta, 2.0)
@@ -126,6 +155,12 @@ def test_bad_input() -> None:
     with pytest.raises(InputError, match="positive duration"):
         twist_of([1.0, 0.0, 0.0], 0.0)
     assert MotionModel(delay_s=-0.1).delay_s == -0.1  # odometry stamped late
+    with pytest.raises(InputError, match="w_scale must be finite and > 0"):
+        MotionModel(w_scale=0.0)
+    with pytest.raises(InputError, match="turn_slowdown must be finite and >= 0"):
+        MotionModel(turn_slowdown=-0.5)
+    with pytest.raises(InputError, match="turn_slowdown=1e\\+03 is implausibly large"):
+        MotionModel(turn_slowdown=1e3)
 
 
 @pytest.mark.parametrize(
