@@ -1268,9 +1268,15 @@ def _cmd_fit_motion(args: argparse.Namespace) -> int:
         f"fitted on {fit.stretches} stretches ({fit.left_out} left out as outliers): "
         f"the odometry's rows describe the motion {values['delay_s']:+.2f} s after their time "
         f"stamps, its velocities x {values['v_scale']:.3f}"
+        + (
+            f" less {100 * values['turn_slowdown']:.0f} % per rad/s of turn"
+            if values["turn_slowdown"]
+            else ""
+        )
+        + f", its turn rates x {values['w_scale']:.3f}"
     )
     for name, v in values.items():
-        if name not in ("delay_s", "v_scale"):
+        if name not in ("delay_s", "v_scale", "w_scale", "turn_slowdown"):
             print(f"  {name:<13} {v:.3g}")
     if any(v == 0.0 for v in values.values()):
         print(

@@ -10,9 +10,13 @@ were fitted by hand before this existed; ``docs/tracking.md`` compares the two).
    recording, the relative motion the odometry predicts (its rows shifted by each delay of
    the grid) against the truth's; the delay with the smallest squared error (metres and
    radians alike) wins.
-2. **Scale** (``v_scale``): at that delay, the least-squares factor between the odometry's
-   displacements over the same stretches and the truth's (projected on the odometry's). The
-   delay is then found again at that scale.
+2. **Scale** (``w_scale``, ``v_scale``, ``turn_slowdown``): at that delay, the
+   least-squares factor between the odometry's turns over the same stretches and the truth's;
+   then, at that turn scale, the least-squares factors of the truth's displacements on the
+   odometry's, split in two parts -- its velocities, and its velocities times the absolute
+   turn rate (a robot that goes less far while it turns: :class:`MotionModel`'s
+   ``turn_slowdown``; kept at 0 unless the fit finds it). The delay is then found again at
+   those scales.
 3. **Noise**: over non-overlapping stretches of each length in ``stretch_s``, the error of
    the predicted relative motion against the truth's; the six noise values are the maximum
    of the Gaussian likelihood of those errors under the covariance the model propagates
@@ -54,7 +58,7 @@ from ..maps import LandmarkMap, as_landmark_map
 from ..pose import compose
 from ..sensor import SensorModel, chi2_quantile, clutter_by_detections
 from .data import Frame, GroundTruth, Odometry
-from .motion import MotionModel, between, integrate
+from .motion import MOTION_MAX, MotionModel, between, integrate
 
 log = logging.getLogger(__name__)
 
@@ -206,6 +210,71 @@ def _delay_costs(
     return cost
 
 
+#: Least total angle (rad) the odometry must turn over the stretches for ``w_scale`` to be
+#: fitted (a robot that hardly turns keeps 1).
+MIN_TURN_FOR_SCALE = 2 * math.pi
+#: Largest condition number of the two-factor fit of the velocity (``v_scale`` and
+#: ``turn_slowdown``) before it falls back to ``v_scale`` alone (a robot that never turns
+#: while moving, or only ever turns at one rate, cannot tell the two apart).
+MAX_SCALE_CONDITION = 1e6
+#: ``turn_slowdown`` is kept only when its fit lies this many standard errors above zero.
+SLOWDOWN_SIGMAS = 4.0
+
+
+def _fit_scales(
+    runs: list[tuple[Odometry, FloatArray, FloatArray]],
+    length: float,
+    model: MotionModel,
+    turn_scales: bool = True,
+) -> MotionModel:
+    """``w_scale``, ``v_scale`` and ``turn_slowdown`` at ``model``'s latency, by least squares
+    over every run's stretches ``[a, a + length]`` (each run as ``(odometry, a, true
+    motion)``): the true turns against the odometry's, then, at that turn scale, the true
+    displacements against the odometry's two parts -- its velocities, and its velocities
+    times the absolute turn rate -- which the displacement is linear in (the positions are
+    integrals of the velocity along headings that the turn rates alone set). Without
+    ``turn_scales``, ``v_scale`` alone."""
+    unit = replace(model, v_scale=1.0, w_scale=1.0, turn_slowdown=0.0)
+    true = np.concatenate([t for _, _, t in runs])
+    turns, parts = [], []
+    for odometry, a, _ in runs:
+        for s, e in zip(a, a + length, strict=True):
+            dt, v, w = odometry.between(s - model.delay_s, e - model.delay_s)
+            turns.append(float(np.sum(w * dt)))
+            parts.append((dt, v, w))
+    turn = np.asarray(turns)
+    w_scale = 1.0
+    if turn_scales and float(np.abs(turn).sum()) >= MIN_TURN_FOR_SCALE:
+        w_scale = float(np.sum(true[:, 2] * turn) / np.sum(turn * turn))
+        if not 0.0 < w_scale <= MOTION_MAX["w_scale"]:
+            w_scale = 1.0
+    at = replace(unit, w_scale=w_scale)
+    p0 = np.stack([integrate(dt, v, w, at)[0][:2] for dt, v, w in parts])
+    p1 = np.stack([integrate(dt, v * np.abs(w), w, at)[0][:2] for dt, v, w in parts])
+    if not float(np.sum(p0**2)) > 0:
+        raise InputError("the odometry never moves in the span it shares with the truth")
+    # true ~ v_scale * p0 - (v_scale * turn_slowdown) * p1 (the true displacement along the
+    # predicted one: its length would be biased upwards by the noise across it).
+    A = np.stack([p0.ravel(), -p1.ravel()], axis=1)
+    b = true[:, :2].ravel()
+    v_scale, slowdown = float(np.sum(b * A[:, 0]) / np.sum(A[:, 0] ** 2)), 0.0
+    if turn_scales and np.linalg.cond(A) <= MAX_SCALE_CONDITION:
+        both, rss, _, _ = np.linalg.lstsq(A, b, rcond=None)
+        # Kept only where the recording tells it from none: at least SLOWDOWN_SIGMAS
+        # standard errors above zero (a noisy run fits a small one of either sign).
+        var = float(rss[0]) / max(b.size - 2, 1) if rss.size else 0.0
+        se = math.sqrt(var * float(np.linalg.inv(A.T @ A)[1, 1]))
+        if both[0] > 0 and both[1] > SLOWDOWN_SIGMAS * se:
+            v_scale, slowdown = float(both[0]), float(both[1] / both[0])
+    if not 0.0 < v_scale <= MOTION_MAX["v_scale"]:
+        raise InputError(
+            f"the odometry's velocities and the truth's motion do not agree (a scale of "
+            f"{v_scale:.3g} between them): are they of the same run?"
+        )
+    slowdown = min(slowdown, MOTION_MAX["turn_slowdown"])
+    return replace(model, v_scale=v_scale, w_scale=w_scale, turn_slowdown=slowdown)
+
+
 def _paired(
     first: object, truth: object, one: Callable[[object, str], _T], name: str, run: str
 ) -> list[tuple[_T, GroundTruth]]:
@@ -263,6 +332,7 @@ def estimate_motion(
     delays: ArrayLike | None = None,
     delay_stretch_s: float = 2.0,
     max_gap_s: float = 0.5,
+    turn_scales: bool = True,
 ) -> MotionFit:
     """Fit a :class:`~omniloc.track.MotionModel` to odometry and a ground-truth track of the
     same run, or to several runs of one robot together (see the module's documentation for
@@ -286,6 +356,9 @@ def estimate_motion(
         Length (s) of the stretches the latency and scale are fitted on (half overlapping).
     max_gap_s : float
         Stretches whose ends fall where the truth has a gap longer than this are left out.
+    turn_scales : bool
+        Fit ``w_scale`` and ``turn_slowdown`` too (the default); False: ``v_scale`` alone,
+        the others left at 1 and 0 (the fit before 2026-12-05).
 
     Returns
     -------
@@ -335,6 +408,8 @@ def estimate_motion(
     )
     if float(np.abs(grid).max()) > MAX_DELAY_S:
         raise InputError(f"delays must lie within {MAX_DELAY_S} s, got {shorten(delays)}")
+    if not isinstance(turn_scales, bool):
+        raise InputError(f"turn_scales must be True or False, got {shorten(turn_scales)}")
     _positive("delay_stretch_s", delay_stretch_s, MAX_STRETCH_S)
     _positive("max_gap_s", max_gap_s, MAX_STRETCH_S)
     if float(lengths.max()) > MAX_STRETCH_S:
@@ -383,16 +458,7 @@ def estimate_motion(
 
     tried, cost = best_delay(model)
     model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
-    # Scale: the truth's displacements against the odometry's (at scale 1).
-    true = np.concatenate([t for _, _, t in runs])
-    pred = np.concatenate([_predicted(o, a, a + delay_stretch_s, model)[0] for o, a, _ in runs])
-    # The true displacement along the predicted one (its length would be biased upwards
-    # by the noise across it).
-    along = float(np.sum(true[:, :2] * pred[:, :2]))
-    squared = float(np.sum(pred[:, :2] ** 2))
-    if not squared > 0:
-        raise InputError("the odometry never moves in the span it shares with the truth")
-    model = replace(model, v_scale=along / squared)
+    model = _fit_scales(runs, delay_stretch_s, model, turn_scales)
     tried, cost = best_delay(model)
     model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
     # Noise: errors over each run's stretches of each length, and the covariance of each
