@@ -166,8 +166,8 @@ def test_on_mrclam_the_fit_finds_the_turns_and_the_presets_scale() -> None:
         load_odometry(MRCLAM / "robot3_odometry.csv"),
         load_groundtruth(MRCLAM / "robot3_groundtruth_10hz.csv"),
     )
-    # Robot 3 alone: its odometry is the set values, which it exceeds driving straight and
-    # falls short of in turns (its speed 1.05 s/rad less, its turn rate 6 % less); the
+    # Robot 3 alone: it goes farther than its odometry says driving straight and less far in
+    # turns (its speed 1.05 s/rad less, its turn rate 6 % less); the
     # preset keeps the one scale it had, which the fit without the turn scales gives back.
     preset = MotionModel.mrclam()
     assert fit.model.delay_s == pytest.approx(preset.delay_s, abs=0.05)

@@ -26,8 +26,8 @@ Scale
 -----
 The odometry's velocities may be off by a factor: ``v_scale`` on the forward (and sideways)
 velocity, ``w_scale`` on the turn rate. A robot whose odometry reports what it was told to do
-(MRCLAM's: set values of 0.086 m/s and 0.408 or 0.561 rad/s) or whose wheels slip in turns
-also goes less far forward while it turns than its odometry says: ``turn_slowdown`` (s/rad)
+(speeds its motors do not reach in turns) or whose wheels slip in turns also goes less far
+forward while it turns than its odometry says, as MRCLAM's robots do: ``turn_slowdown`` (s/rad)
 takes that share off the velocity per rad/s of the odometry's turn rate. A piece moves at
 
     vx * v_scale * max(0, 1 - turn_slowdown * |w|),   w * w_scale.
@@ -159,8 +159,8 @@ class MotionModel:
         stretches of all five robots; ``docs/tracking.md``): the recorded velocities are 7 %
         too large and lead the motion by ~0.25 s; the heading wanders by ~1.6 deg/sqrt(s).
 
-        The velocities are the robots' set values: a robot goes 4.3 % farther than they say
-        driving straight, 1.08 s/rad less far in turns, and turns 5.8 % less than they say
+        One scale is not what the robots do: a robot goes 4.3 % farther than its odometry
+        says driving straight, 1.08 s/rad less far in turns, and turns 5.8 % less than it says
         (:func:`~omniloc.track.estimate_motion` on the five runs: ``v_scale`` 1.043,
         ``turn_slowdown`` 1.08, ``w_scale`` 0.942). Those three halve the odometry's error
         over 2 s, but the tracker with them is wrong more often (0.06-0.56 % of the whole
