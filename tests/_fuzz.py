@@ -1722,8 +1722,16 @@ def _settings_targets() -> list[Target]:
                 "delay_stretch_s": Arg(
                     ("delay_stretch_s", "overlap"), (("huge", 1e300), ("negative", -1.0))
                 ),
+                "turn_scales": Arg(
+                    ("turn_scales",), (("a string", "yes"), ("an int", 1), ("None", None))
+                ),
             },
-            check=lambda kw, v: _finite(np.array([v.model.delay_s, v.model.v_scale]), "model"),
+            check=lambda kw, v: _finite(
+                np.array(
+                    [v.model.delay_s, v.model.v_scale, v.model.w_scale, v.model.turn_slowdown]
+                ),
+                "model",
+            ),
             limit_s=60.0,
         ),
         Target(
