@@ -37,7 +37,7 @@ TRUE = MotionModel(
 
 @cache
 def _recording(
-    seconds: float = 900.0, seed: int = 3, model: MotionModel = TRUE
+    seconds: float = 900.0, seed: int = 3, model: MotionModel = TRUE, turn_rate: float = 0.5
 ) -> tuple[Odometry, GroundTruth]:
     """Odometry rows at 10 Hz (stamped ``delay_s`` early, velocities 1 / ``v_scale`` too
     large, and so on for ``model``'s other scales) and the true track, which gathers the
@@ -47,7 +47,7 @@ def _recording(
     n = int(seconds / dt)
     t = np.arange(n) * dt
     v = np.repeat(rng.uniform(0.0, 0.4, n // 20 + 1), 20)[:n]
-    w = np.repeat(rng.uniform(-0.5, 0.5, n // 20 + 1), 20)[:n]
+    w = np.repeat(rng.uniform(-turn_rate, turn_rate, n // 20 + 1), 20)[:n]
     poses = np.zeros((n + 1, 3))
     for k in range(n):
         d, _ = integrate([dt], [v[k]], [w[k]], model)
@@ -92,6 +92,14 @@ def test_a_robot_that_turns_less_and_slows_in_turns() -> None:
     assert fit.model.turn_slowdown == pytest.approx(1.08, abs=0.05)
     assert fit.model.v_scale == pytest.approx(TRUE.v_scale, rel=0.01)
     assert fit.model.delay_s == pytest.approx(TRUE.delay_s, abs=0.011)
+
+
+def test_the_turn_scale_of_a_robot_that_spins_fast() -> None:
+    # Turning at up to 3 rad/s, some 2-s stretches turn more than a half turn, where the true
+    # turn (a relative heading) wraps: the fit leaves them out.
+    model = replace(TRUE, w_scale=0.9)
+    fit = estimate_motion(*_recording(model=model, turn_rate=3.0))
+    assert fit.model.w_scale == pytest.approx(0.9, abs=0.005)
 
 
 def test_too_little_overlap_is_refused() -> None:

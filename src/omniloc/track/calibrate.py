@@ -213,6 +213,9 @@ def _delay_costs(
 #: Least total angle (rad) the odometry must turn over the stretches for ``w_scale`` to be
 #: fitted (a robot that hardly turns keeps 1).
 MIN_TURN_FOR_SCALE = 2 * math.pi
+#: Stretches on which the odometry turns more than this (rad) do not count for ``w_scale``:
+#: the true turn, a relative heading, is known only within a half turn either way.
+MAX_TURN_FOR_SCALE = 2.5
 #: Largest condition number of the two-factor fit of the velocity (``v_scale`` and
 #: ``turn_slowdown``) before it falls back to ``v_scale`` alone (a robot that never turns
 #: while moving, or only ever turns at one rate, cannot tell the two apart).
@@ -244,8 +247,9 @@ def _fit_scales(
             parts.append((dt, v, w))
     turn = np.asarray(turns)
     w_scale = 1.0
-    if turn_scales and float(np.abs(turn).sum()) >= MIN_TURN_FOR_SCALE:
-        w_scale = float(np.sum(true[:, 2] * turn) / np.sum(turn * turn))
+    fair = np.abs(turn) <= MAX_TURN_FOR_SCALE
+    if turn_scales and float(np.abs(turn[fair]).sum()) >= MIN_TURN_FOR_SCALE:
+        w_scale = float(np.sum(true[fair, 2] * turn[fair]) / np.sum(turn[fair] ** 2))
         if not 0.0 < w_scale <= MOTION_MAX["w_scale"]:
             w_scale = 1.0
     at = replace(unit, w_scale=w_scale)

@@ -255,11 +255,11 @@ def integrate(
         )
     if t.size and (not np.isfinite(t).all() or (t < 0).any()):
         raise InputError("piece durations must be finite and >= 0")
-    f = speed_factor(om, model)
+    f = _speed_factor(om, model)
     return _kernels.integrate_pieces(t, v * f, s * f, om * model.w_scale, model.noise)
 
 
-def speed_factor(w: FloatArray, model: MotionModel) -> FloatArray:
+def _speed_factor(w: FloatArray, model: MotionModel) -> FloatArray:
     """The factor on the odometry's velocities at its turn rates ``w`` (rad/s):
     ``v_scale * max(0, 1 - turn_slowdown * |w|)``."""
     if model.turn_slowdown == 0.0:
