@@ -85,7 +85,7 @@ def test_a_simulated_run_gives_back_its_model() -> None:
 
 def test_a_robot_that_turns_less_and_slows_in_turns() -> None:
     # As MRCLAM's robots: turns 6 % short of the odometry's, and 1.08 s/rad slower in turns
-    # (at 0.5 rad/s the robot goes 54 % as far as the odometry says, before v_scale).
+    # (at 0.5 rad/s the robot goes 46 % as far as the odometry says, before v_scale).
     model = replace(TRUE, w_scale=0.94, turn_slowdown=1.08)
     fit = estimate_motion(*_recording(model=model))
     assert fit.model.w_scale == pytest.approx(0.94, abs=0.005)
@@ -175,8 +175,8 @@ def test_on_mrclam_the_fit_finds_the_turns_and_the_presets_scale() -> None:
         load_groundtruth(MRCLAM / "robot3_groundtruth_10hz.csv"),
     )
     # Robot 3 alone: it goes farther than its odometry says driving straight and less far in
-    # turns (its speed 1.05 s/rad less, its turn rate 6 % less); the
-    # preset keeps the one scale it had, which the fit without the turn scales gives back.
+    # turns (its speed 1.05 s/rad less, its turn rate 6 % less); the preset keeps the one
+    # scale it had, which the fit without the turn scales gives back.
     preset = MotionModel.mrclam()
     assert fit.model.delay_s == pytest.approx(preset.delay_s, abs=0.05)
     assert fit.model.v_scale == pytest.approx(1.043, abs=0.01)

@@ -66,10 +66,10 @@ def test_scales_and_the_slowdown_in_turns() -> None:
     assert d == pytest.approx([1.1, 0.0, 0.0], abs=1e-12)
     d, _ = integrate([2.0], [0.0], [0.0], model, vy=[0.5])
     assert d == pytest.approx([0.0, 1.1, 0.0], abs=1e-12)
-    # The defaults change nothing.
-    assert integrate([4.0], [0.5], [0.25], MotionModel(w_scale=1.0, turn_slowdown=0.0))[0] == (
-        pytest.approx(integrate([4.0], [0.5], [0.25], MotionModel())[0], abs=0)
-    )
+    # Without a slowdown the velocity takes v_scale alone, at any turn rate.
+    d, _ = integrate([4.0], [0.5], [0.25], MotionModel(v_scale=1.1))
+    r = 0.55 / 0.25
+    assert d == pytest.approx([r * np.sin(1.0), r * (1.0 - np.cos(1.0)), 1.0], abs=1e-12)
 
 
 def test_sideways_twist_of_an_increment_round_trips() -> None:
