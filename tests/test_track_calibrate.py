@@ -102,6 +102,23 @@ def test_the_turn_scale_of_a_robot_that_spins_fast() -> None:
     assert fit.model.w_scale == pytest.approx(0.9, abs=0.005)
 
 
+def test_a_robot_that_never_turns_keeps_its_turn_scale_and_no_slowdown() -> None:
+    # Its odometry never turns: nothing tells a turn scale or a slowdown (the two-factor fit
+    # would be singular), and the velocity's scale is fitted alone.
+    fit = estimate_motion(*_recording(model=replace(TRUE, w_scale=0.9), turn_rate=0.0))
+    assert (fit.model.w_scale, fit.model.turn_slowdown) == (1.0, 0.0)
+    assert fit.model.v_scale == pytest.approx(TRUE.v_scale, rel=0.01)
+
+
+def test_turns_the_other_way_round_are_refused() -> None:
+    # A turn rate that is clockwise positive fits a negative turn scale: an error, not 1.
+    odometry, truth = _recording()
+    flipped = Odometry(odometry.t, odometry.v, -odometry.w)
+    with pytest.raises(InputError, match=r"turns and the truth's do not agree .*counter-clockwise"):
+        estimate_motion(flipped, truth)
+    assert estimate_motion(flipped, truth, turn_scales=False).model.w_scale == 1.0
+
+
 def test_too_little_overlap_is_refused() -> None:
     odometry, truth = _recording()
     short = GroundTruth(truth.t[:50], truth.x[:50], truth.y[:50], truth.theta[:50])

@@ -15,8 +15,9 @@ were fitted by hand before this existed; ``docs/tracking.md`` compares the two).
    then, at that turn scale, the least-squares factors of the truth's displacements on the
    odometry's, split in two parts -- its velocities, and its velocities times the absolute
    turn rate (a robot that goes less far while it turns: :class:`MotionModel`'s
-   ``turn_slowdown``; kept at 0 unless the fit finds it). The delay is then found again at
-   those scales.
+   ``turn_slowdown``; kept at 0 unless the fit finds it). A scale that is not positive (a
+   turn rate clockwise positive, another run's truth) is refused. The delay is then found
+   again at those scales.
 3. **Noise**: over non-overlapping stretches of each length in ``stretch_s``, the error of
    the predicted relative motion against the truth's; the six noise values are the maximum
    of the Gaussian likelihood of those errors under the covariance the model propagates
@@ -239,19 +240,21 @@ def _fit_scales(
     ``turn_scales``, ``v_scale`` alone."""
     unit = replace(model, v_scale=1.0, w_scale=1.0, turn_slowdown=0.0)
     true = np.concatenate([t for _, _, t in runs])
-    turns, parts = [], []
+    turn, parts = np.zeros(0), []
     for odometry, a, _ in runs:
-        for s, e in zip(a, a + length, strict=True):
-            dt, v, w = odometry.between(s - model.delay_s, e - model.delay_s)
-            turns.append(float(np.sum(w * dt)))
-            parts.append((dt, v, w))
-    turn = np.asarray(turns)
+        pred, pieces = _predicted(odometry, a, a + length, unit)
+        turn = np.concatenate([turn, pred[:, 2]])  # (the angle turned, not wrapped)
+        parts += pieces
     w_scale = 1.0
     fair = np.abs(turn) <= MAX_TURN_FOR_SCALE
     if turn_scales and float(np.abs(turn[fair]).sum()) >= MIN_TURN_FOR_SCALE:
         w_scale = float(np.sum(true[fair, 2] * turn[fair]) / np.sum(turn[fair] ** 2))
         if not 0.0 < w_scale <= MOTION_MAX["w_scale"]:
-            w_scale = 1.0
+            raise InputError(
+                f"the odometry's turns and the truth's do not agree (a scale of "
+                f"{w_scale:.3g} between them): are they of the same run, and is the turn "
+                "rate counter-clockwise positive?"
+            )
     at = replace(unit, w_scale=w_scale)
     p0 = np.stack([integrate(dt, v, w, at)[0][:2] for dt, v, w in parts])
     p1 = np.stack([integrate(dt, v * np.abs(w), w, at)[0][:2] for dt, v, w in parts])

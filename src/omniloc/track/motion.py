@@ -256,14 +256,16 @@ def integrate(
     if t.size and (not np.isfinite(t).all() or (t < 0).any()):
         raise InputError("piece durations must be finite and >= 0")
     f = _speed_factor(om, model)
-    return _kernels.integrate_pieces(t, v * f, s * f, om * model.w_scale, model.noise)
+    if model.w_scale != 1.0:
+        om = om * model.w_scale
+    return _kernels.integrate_pieces(t, v * f, s * f, om, model.noise)
 
 
-def _speed_factor(w: FloatArray, model: MotionModel) -> FloatArray:
+def _speed_factor(w: FloatArray, model: MotionModel) -> FloatArray | float:
     """The factor on the odometry's velocities at its turn rates ``w`` (rad/s):
-    ``v_scale * max(0, 1 - turn_slowdown * |w|)``."""
+    ``v_scale * max(0, 1 - turn_slowdown * |w|)`` (``v_scale`` alone without a slowdown)."""
     if model.turn_slowdown == 0.0:
-        return np.full(np.shape(w), model.v_scale)
+        return model.v_scale
     return np.asarray(model.v_scale * np.maximum(0.0, 1.0 - model.turn_slowdown * np.abs(w)))
 
 
