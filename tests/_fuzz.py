@@ -1823,7 +1823,7 @@ def _tracker_targets() -> list[Target]:
             pool = regions
         elif f.name.startswith("confidence_") and f.name != "confidence_recent_s":
             pool = tables
-        elif f.name in _INTS:
+        elif f.name in _INTS or f.name == "min_landmarks":
             pool = COUNTS
         elif f.name in _PROBABILITIES or f.name in _SHARES or f.name == "search_miss":
             pool = PROBABILITIES

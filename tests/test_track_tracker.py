@@ -26,7 +26,7 @@ from omniloc.track import (
     simulate_run,
     track,
 )
-from omniloc.track.motion import MotionModel
+from omniloc.track.motion import MotionModel, compose, inverse
 from omniloc.track.tracker import Tracker
 
 #: A 4 x 3 grid (symmetric under a half turn about its centre) and one landmark that breaks
@@ -1199,3 +1199,105 @@ def test_the_belief_explains_a_frame_as_its_masses_weigh_each_count() -> None:
     assert _posterior_explained(hyp, np.array([1.0, 2.0]), np.log(4.0), 0.0) == pytest.approx(0.875)
     assert _posterior_explained(np.zeros(0), np.zeros(0), 0.3, 2.5) == pytest.approx(2.5)
     assert _posterior_explained(np.zeros(0), np.zeros(0), -np.inf, 2.5) == 0.0
+
+
+# ---- min_landmarks: a place is checked by the landmarks its recent bearings name ------------
+def _seen_by(
+    config: TrackerConfig, sightings: list[list[int]], clutter: float | None = None
+) -> tuple[Tracker, np.ndarray]:
+    """A tracker of ``_one_place`` whose window holds one frame per entry of ``sightings``
+    (the landmarks of GRID each frame reports, plus a bearing at ``clutter`` radians from
+    the first, far from any landmark, when given), taken 0.5 s apart along a path that
+    drives 0.1 m and turns 0.05 rad between frames and ends at the one place's pose, moved
+    to (5, 3, 0.1): landmarks 1, 2, 5 and 6 are in view there, none behind another.
+    Returns the tracker and that pose."""
+    tr = _one_place(config, 0.999, 0, False)
+    tr._mu[0] = end = np.array([5.0, 3.0, 0.1])
+    step = np.array([0.1, 0.0, 0.05])
+    poses = [end]
+    for _ in sightings[1:]:
+        poses.insert(0, compose(poses[0], inverse(step)))
+    for k, (pose, seen) in enumerate(zip(poses, sightings, strict=True)):
+        d = GRID.xy[seen] - pose[:2]
+        b = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - pose[2]))
+        if clutter is not None:
+            b = np.append(b, wrap(b[0] + clutter) if b.size else clutter)
+        tr._window.append(0.5 * k, b, step if k else np.zeros(3), np.zeros((3, 3)))
+    tr._t = 0.5 * (len(sightings) - 1)
+    return tr, end
+
+
+def test_the_landmarks_seen_are_the_distinct_ones_named_along_the_odometry() -> None:
+    cfg = replace(CONFIG, min_landmarks=4, landmarks_window_s=20.0)
+    P = np.diag([0.01**2, 0.01**2, np.deg2rad(0.2) ** 2])
+    # Four landmarks in view of the path, one or two a frame: each is found only where the
+    # odometry puts the place at that frame.
+    tr, end = _seen_by(cfg, [[1], [5], [5, 6], [2], [1, 2]])
+    assert tr._landmarks_seen(tr._t, end, P) == 4
+    # One landmark seen again and again, and bearings no landmark is near, count once.
+    tr, end = _seen_by(cfg, [[5]] * 8, clutter=np.deg2rad(17.0))
+    assert tr._landmarks_seen(tr._t, end, P) == 1
+    # From a place turned 10 deg, the bearings name none of the landmarks.
+    tr, end = _seen_by(cfg, [[1], [5], [5, 6], [2], [1, 2]])
+    assert tr._landmarks_seen(tr._t, end + np.array([0.0, 0.0, np.deg2rad(10.0)]), P) == 0
+    # Only the frames of the last landmarks_window_s count (here the last 1.0 s: 3 frames).
+    short = replace(cfg, landmarks_window_s=1.0)
+    tr, end = _seen_by(short, [[1], [5], [5, 6], [2], [6, 2]])
+    assert tr._landmarks_seen(tr._t, end, P) == 3
+
+
+def test_a_place_named_by_too_few_landmarks_is_held_back(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("omniloc.track.tracker.within_tolerance", lambda *a: 1.0)
+    cfg = replace(CONFIG, min_landmarks=4, fit_explained=0.0, min_age_s=1.0)
+    tr, _ = _seen_by(cfg, [[5], [5, 6], [6], [5, 6]])
+    state, reason, best = tr._decide(tr._t)
+    assert state is TrackState.AMBIGUOUS and best == 0
+    assert reason.startswith("the best place's bearings of the last 20 s are explained by 2 ")
+    assert "4 needed (within tolerance with probability 0.9990)" in reason
+    # With a fourth landmark, or without the test, the place is localized.
+    tr, _ = _seen_by(cfg, [[5], [5, 6], [1, 6], [2]])
+    assert tr._decide(tr._t)[0] is TrackState.LOCALIZED
+    tr, _ = _seen_by(replace(cfg, min_landmarks=0), [[5], [5, 6], [6], [5, 6]])
+    assert tr._decide(tr._t)[0] is TrackState.LOCALIZED
+
+
+def test_min_landmarks_on_a_run_holds_back_only_what_the_view_cannot_check() -> None:
+    run, plain = _scenario()
+    # The grid shows the robot four landmarks and more: with the test, every state is as
+    # without it (and never wrong); asking for more landmarks than it ever sees in 20 s holds
+    # every place back, with that reason.
+    for n, localizes in ((4, True), (14, False)):
+        res = track(
+            GRID,
+            run.odometry,
+            run.frames,
+            sensor=SENSOR,
+            motion=MOTION,
+            config=replace(CONFIG, min_landmarks=n),
+        )
+        d, h = _errors(run, res)
+        loc = np.array([e.localized for e in res.estimates])
+        t = np.array([e.t for e in res.estimates])
+        before = t < KIDNAP[0]
+        assert bool(loc[before].any()) is localizes
+        assert (d[loc & before] < 0.1).all() and (h[loc & before] < 1.0).all()
+        if localizes:
+            assert [e.state for e in res.estimates] == [e.state for e in plain.estimates]
+        else:
+            assert any("landmarks, 14 needed" in e.reason for e in res.estimates)
+
+
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"min_landmarks": -1}, "min_landmarks must be an integer from 0"),
+        ({"min_landmarks": 2.0}, "min_landmarks must be an integer from 0"),
+        ({"min_landmarks": True}, "min_landmarks must be an integer from 0"),
+        ({"min_landmarks": 1001}, "min_landmarks must be an integer from 0"),
+        ({"landmarks_window_s": 0.0}, "landmarks_window_s must be > 0"),
+        ({"landmarks_window_s": math.nan}, "landmarks_window_s"),
+    ],
+)
+def test_min_landmarks_settings_are_checked(kw: dict[str, object], match: str) -> None:
+    with pytest.raises(InputError, match=match):
+        TrackerConfig(**kw)  # type: ignore[arg-type]

@@ -67,6 +67,10 @@ VALUE_MAX = 1e6
 INT_MAX = 10**9
 _INT_MAX = {"elsewhere_samples": 100_000, "max_hypotheses": 10_000, "max_candidates": 1_000_000}
 
+#: Largest ``min_landmarks``: the landmarks named by some seconds of frames of a few bearings
+#: each; a thousand or more is a typo.
+MIN_LANDMARKS_MAX = 1000
+
 #: Largest seed of elsewhere's random generator.
 SEED_MAX = 2**63 - 1
 
@@ -130,6 +134,17 @@ class TrackerConfig:
     min_age_s : float
         A hypothesis must have been tracked this long (s) before its place can be
         localized (a new one has been weighed only on its replay).
+    min_landmarks : int
+        ``localized`` (by the full tests, not the hysteresis of ``keep_probability``) needs
+        the bearings of the last ``landmarks_window_s`` seconds to be explained, from the
+        best place carried back along the odometry, by at least this many distinct
+        landmarks (each bearing by the nearest landmark in view within the sensor's gate,
+        widened by the place's heading variance). Three landmarks fix a pose from bearings
+        and a fourth checks it (the interpretation tree's test at depth > 3): a place that
+        takes one moving object for a landmark frame after frame explains its bearings as
+        well as the truth does. 0: no such test.
+    landmarks_window_s : float
+        The seconds of frames ``min_landmarks`` counts over.
     search_window_s : float
         Frames of the last this many seconds are stacked for a search.
     search_interval_s : float
@@ -344,6 +359,8 @@ class TrackerConfig:
     elsewhere_inject: float = 0.02
     min_age_s: float = 3.0
     min_confirmations: int = 2
+    min_landmarks: int = 0
+    landmarks_window_s: float = 20.0
     search_window_s: float = 1.5
     search_interval_s: float = 1.0
     search_min_bearings: int = 4
@@ -415,6 +432,15 @@ class TrackerConfig:
                     raise InputError(f"{f.name} must lie strictly between 0 and 1, got {v!r}")
                 object.__setattr__(self, f.name, prob)
                 continue
+            if f.name == "min_landmarks":
+                whole = isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+                if not (whole and 0 <= v <= MIN_LANDMARKS_MAX):
+                    raise InputError(
+                        f"min_landmarks must be an integer from 0 (no such test) to "
+                        f"{MIN_LANDMARKS_MAX}, got {shorten(v)}"
+                    )
+                object.__setattr__(self, f.name, int(v))
+                continue
             if f.name in _BOOLS:
                 if not isinstance(v, (bool, np.bool_)):
                     raise InputError(f"{f.name} must be true or false, got {shorten(v)}")
@@ -469,6 +495,7 @@ class TrackerConfig:
             "evidence_weight",
             "covariance_inflation",
             "search_window_s",
+            "landmarks_window_s",
         ):
             if getattr(self, name) <= 0:
                 raise InputError(f"{name} must be > 0, got {getattr(self, name)!r}")

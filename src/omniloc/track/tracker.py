@@ -275,7 +275,10 @@ class Tracker:
             c.elsewhere_inject,
             seed=c.seed,
         )
-        self._window = Window(max(c.replay_s, c.search_window_s) + 1e-9)
+        self._window = Window(
+            max(c.replay_s, c.search_window_s, c.landmarks_window_s if c.min_landmarks else 0.0)
+            + 1e-9
+        )
         # (t, ln elsewhere mass, cumulative normaliser) before each frame of the window.
         self._history: deque[tuple[float, float, float]] = deque()
         # Odometry: rows (t, vx, vy, w) not yet integrated, and the twist holding now.
@@ -1327,6 +1330,59 @@ class Tracker:
             P = P * self.config.covariance_inflation
         return mu, P, float(w.sum())
 
+    def _landmarks_seen(self, t: float, mu: FloatArray, P: FloatArray) -> int:
+        """How many distinct landmarks explain the bearings of the last
+        ``landmarks_window_s`` seconds from the place ``mu`` (a sensor pose, covariance
+        ``P``, at the newest frame): the place is carried back to each frame by the
+        odometry, and each bearing is explained by the nearest landmark in view whose
+        predicted bearing lies within the sensor's gate, widened by the place's heading
+        variance (``min_landmarks``)."""
+        c = self.config
+        frames = [f for f in self._window.since(t - c.landmarks_window_s) if f.bearings.size]
+        if not frames:
+            return 0
+        # The place at each frame: mu (+) between(now, odom), written out (no checks).
+        now = self._window[len(self._window) - 1].odom
+        odom = np.array([f.odom for f in frames])
+        cn, sn = math.cos(now[2]), math.sin(now[2])
+        dx, dy = odom[:, 0] - now[0], odom[:, 1] - now[1]
+        rx, ry = cn * dx + sn * dy, -sn * dx + cn * dy
+        cm, sm = math.cos(mu[2]), math.sin(mu[2])
+        poses = np.empty_like(odom)
+        poses[:, 0] = mu[0] + cm * rx - sm * ry
+        poses[:, 1] = mu[1] + sm * rx + cm * ry
+        poses[:, 2] = mu[2] + (odom[:, 2] - now[2])
+        sensor = self.sensor
+        if sensor.max_range is None:
+            idx = np.arange(self.landmarks.n)
+        else:
+            reach = sensor.max_range + float(
+                np.max(np.hypot(poses[:, 0] - mu[0], poses[:, 1] - mu[1]))
+            )
+            idx = np.asarray(self.landmarks.kdtree.query_ball_point(mu[:2], reach), dtype=np.int64)
+        if idx.size == 0:
+            return 0
+        # (What SensorModel.visible says, on arrays already at hand.)
+        d = self._L[idx][None, :, :] - poses[:, None, :2]
+        r2 = d[..., 0] ** 2 + d[..., 1] ** 2
+        pred = np.asarray(wrap(np.arctan2(d[..., 1], d[..., 0]) - poses[:, None, 2]))
+        view = r2 > 1e-18
+        if sensor.max_range is not None:
+            view &= r2 <= sensor.max_range**2
+        if sensor.min_range is not None:
+            view &= r2 >= sensor.min_range**2
+        if sensor.half_fov is not None:
+            view &= np.abs(pred) <= sensor.half_fov
+        gate = math.sqrt(self.sensor.gate_chi2 * (self.sensor.noise**2 + max(float(P[2, 2]), 0.0)))
+        fidx = np.repeat(np.arange(len(frames)), [f.bearings.size for f in frames])
+        b = np.concatenate([f.bearings for f in frames])
+        diff = np.abs(np.asarray(wrap(b[:, None] - pred[fidx])))
+        diff[~view[fidx]] = np.inf
+        j = np.argmin(diff, axis=1)
+        seen = np.zeros(idx.size, dtype=bool)
+        seen[j[diff[np.arange(j.size), j] <= gate]] = True
+        return int(seen.sum())
+
     def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
         """(state, reason, index of the best hypothesis)."""
         c = self.config
@@ -1375,6 +1431,12 @@ class Tracker:
                 held = (
                     f"the best place is new (tracked {age:.1f} s; within tolerance with "
                     f"probability {p:.4f})"
+                )
+            elif c.min_landmarks and (n_lm := self._landmarks_seen(t, mu_i, P)) < c.min_landmarks:
+                held = (
+                    f"the best place's bearings of the last {c.landmarks_window_s:g} s are "
+                    f"explained by {n_lm} landmark{'s' if n_lm != 1 else ''}, "
+                    f"{c.min_landmarks} needed (within tolerance with probability {p:.4f})"
                 )
         full = p >= c.localized_probability and held is None
         if (
