@@ -163,9 +163,11 @@ class MotionModel:
         says driving straight, 1.08 s/rad less far in turns, and turns 5.8 % less than it says
         (:func:`~omniloc.track.estimate_motion` on the five runs: ``v_scale`` 1.043,
         ``turn_slowdown`` 1.08, ``w_scale`` 0.942). Those three halve the odometry's error
-        over 2 s, but the tracker with them is wrong more often (0.06-0.56 % of the whole
-        runs' frames over elsewhere's seeds 0-4, against 0.01-0.13 %), so the preset keeps
-        the one scale it had (docs/tracking-notebook.md, "The odometry's scale in turns")."""
+        over 2 s, but the tracker with them is wrong more often (0.04-0.32 % of the whole
+        runs' frames over elsewhere's seeds 0-4, against 0.02-0.11 %; 180 frames of the
+        whole runs and seeded streams against 69, near misses), so the preset keeps the one
+        scale it had (docs/tracking-notebook.md, "The odometry's scale in turns", "Four
+        landmarks to localize")."""
         return cls(
             along_per_m=0.004,
             across_per_m=0.0002,
