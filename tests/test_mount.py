@@ -191,6 +191,27 @@ def test_the_tracker_reports_the_robot_of_a_mounted_sensor() -> None:
     assert len(wrong) == 0 or np.median(wrong[:, 0]) > 0.2
 
 
+def test_the_landmarks_a_place_names_are_seen_from_the_sensor() -> None:
+    # min_landmarks carries the place back in the sensor's frame and names the landmarks from
+    # there: with the mount, the run localizes as without the test (taken from the robot's
+    # pose, 0.3 m and 29 deg off the sensor's, the bearings would name no landmark).
+    from omniloc.track import TrackerConfig
+
+    run = _run(MOUNT)
+    sensor = EXAMPLE_SENSOR.replace(mount=MOUNT)
+    plain = track(EXAMPLE_MAP, run.odometry, run.frames, sensor=sensor, motion=EXAMPLE_MOTION)
+    checked = track(
+        EXAMPLE_MAP,
+        run.odometry,
+        run.frames,
+        sensor=sensor,
+        motion=EXAMPLE_MOTION,
+        config=TrackerConfig(min_landmarks=4),
+    )
+    assert sum(e.localized for e in plain.estimates) > 80
+    assert [e.state for e in checked.estimates] == [e.state for e in plain.estimates]
+
+
 def test_a_mount_equals_the_sensor_frames_own_odometry() -> None:
     # The workaround before the mount: the odometry of the sensor's frame (TF odom ->
     # camera_link); the tracker then tracks the sensor. Carried to the robot, the same.
