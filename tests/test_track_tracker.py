@@ -1266,7 +1266,7 @@ def test_min_landmarks_on_a_run_holds_back_only_what_the_view_cannot_check() -> 
     # The grid shows the robot four landmarks and more: with the test, every state is as
     # without it (and never wrong); asking for more landmarks than it ever sees in 20 s holds
     # every place back, with that reason.
-    for n, localizes in ((4, True), (14, False)):
+    for n, localizes in ((4, True), (13, False)):
         res = track(
             GRID,
             run.odometry,
@@ -1284,7 +1284,7 @@ def test_min_landmarks_on_a_run_holds_back_only_what_the_view_cannot_check() -> 
         if localizes:
             assert [e.state for e in res.estimates] == [e.state for e in plain.estimates]
         else:
-            assert any("landmarks, 14 needed" in e.reason for e in res.estimates)
+            assert any("landmarks, 13 needed" in e.reason for e in res.estimates)
 
 
 @pytest.mark.parametrize(
@@ -1301,3 +1301,9 @@ def test_min_landmarks_on_a_run_holds_back_only_what_the_view_cannot_check() -> 
 def test_min_landmarks_settings_are_checked(kw: dict[str, object], match: str) -> None:
     with pytest.raises(InputError, match=match):
         TrackerConfig(**kw)  # type: ignore[arg-type]
+
+
+def test_min_landmarks_beyond_the_map_is_refused_by_name() -> None:
+    with pytest.raises(InputError, match="min_landmarks=14 but the map has 13 landmarks"):
+        Tracker(GRID, SENSOR, MOTION, replace(CONFIG, min_landmarks=14))
+    Tracker(GRID, SENSOR, MOTION, replace(CONFIG, min_landmarks=13))

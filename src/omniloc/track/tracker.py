@@ -233,6 +233,11 @@ class Tracker:
         if not isinstance(self.config, TrackerConfig):
             raise InputError(f"config must be a TrackerConfig, got {type(config).__name__}")
         c = self.config
+        if c.min_landmarks > self.landmarks.n:
+            raise InputError(
+                f"min_landmarks={c.min_landmarks} but the map has {self.landmarks.n} landmarks: "
+                "no place could ever be localized (0 turns the test off)"
+            )
         self._L = np.ascontiguousarray(self.landmarks.xy, dtype=np.float64)
         self._mount = None if self.sensor.mount is None else np.array(self.sensor.mount)
         self._model = FrameModel.of(self.sensor)
