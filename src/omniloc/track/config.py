@@ -142,7 +142,8 @@ class TrackerConfig:
         widened by the place's heading variance). Three landmarks fix a pose from bearings
         and a fourth checks it (the interpretation tree's test at depth > 3): a place that
         takes one moving object for a landmark frame after frame explains its bearings as
-        well as the truth does. 0: no such test. It checks something only where the
+        well as the truth does. 0: no such test; more than the map's landmarks is refused
+        when the tracker is built. It checks something only where the
         landmarks in view are sparser than the gate (among thousands in view any bearing
         names one), and it costs the window's frames times the landmarks within reach at
         each decision that gets that far (about 0.3 ms on MRCLAM; 2 ms on 10,000 landmarks
