@@ -54,7 +54,12 @@ def _scenario() -> tuple[SimulatedRun, TrackRun]:
         kidnap=KIDNAP,
         rng=3,
     )
-    return run, track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=CONFIG)
+    return run, _on_grid(run)
+
+
+def _on_grid(run: SimulatedRun, config: TrackerConfig = CONFIG) -> TrackRun:
+    """``track`` on GRID with the tests' sensor and motion models."""
+    return track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=config)
 
 
 def _errors(run: SimulatedRun, res: TrackRun) -> tuple[np.ndarray, np.ndarray]:
@@ -379,14 +384,7 @@ def test_hypotheses_stay_in_the_region() -> None:
         GRID, SENSOR, Pose(5.0, 4.2, 0.0), duration_s=8.0, speed=0.25, turn_rate=0.0, rng=3
     )
     region = (2.0, 8.0, 1.0, 7.0)
-    res = track(
-        GRID,
-        run.odometry,
-        run.frames,
-        sensor=SENSOR,
-        motion=MOTION,
-        config=TrackerConfig(search_interval_s=2.0, region=region),
-    )
+    res = _on_grid(run, TrackerConfig(search_interval_s=2.0, region=region))
     poses = np.array([h.pose.as_array() for e in res.estimates for h in e.hypotheses])
     assert poses.shape[0] > 0
     m = CONFIG.tolerance_m
@@ -594,10 +592,10 @@ def test_searches_stop_on_their_node_budget_not_the_clock(monkeypatch: pytest.Mo
     monkeypatch.setattr(relocalize, "localize", spy)
     run, _ = _scenario()
     tight = TrackerConfig(search_interval_s=2.0, search_max_nodes=60, search_timeout_s=60.0)
-    a = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=tight)
+    a = _on_grid(run, tight)
     assert seen and all(n == 60 and t == 60.0 for n, t, _ in seen)
     assert not all(done for _, _, done in seen)  # the node budget stopped some searches
-    b = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=tight)
+    b = _on_grid(run, tight)
     assert [(e.state, e.pose) for e in a.estimates] == [(e.state, e.pose) for e in b.estimates]
     with pytest.raises(InputError, match="search_max_nodes"):
         TrackerConfig(search_max_nodes=0)
@@ -609,7 +607,7 @@ def test_clutter_with_memory_still_localizes_and_is_never_confidently_wrong() ->
     # hypotheses through merges, prunes and new searches without a shape error.
     run, plain = _scenario()
     config = TrackerConfig(search_interval_s=2.0, clutter_persistence=0.5)
-    res = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=config)
+    res = _on_grid(run, config)
     d, h = _errors(run, res)
     t = np.array([e.t for e in res.estimates])
     loc = np.array([e.localized for e in res.estimates])
@@ -928,10 +926,8 @@ def test_near_pairs_is_the_numpy_brute_force(n_a: int, n_b: int, rng: np.random.
 
 def test_the_seed_of_elsewhere_reproduces_a_run_and_another_seed_draws_another() -> None:
     run, res = _scenario()
-    again = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=CONFIG)
-    other = track(
-        GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=replace(CONFIG, seed=7)
-    )
+    again = _on_grid(run, CONFIG)
+    other = _on_grid(run, replace(CONFIG, seed=7))
 
     def states(r: TrackRun) -> list[tuple[float, str, tuple[float, ...] | None]]:
         return [(e.t, e.state.value, e.pose.as_tuple() if e.pose else None) for e in r.estimates]
@@ -1032,10 +1028,10 @@ def test_kept_frames_follow_enough_frames_localized_by_the_full_tests(
         return search(self, t)
 
     monkeypatch.setattr(Tracker, "_search", logged)
-    res = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=tight)
+    res = _on_grid(run, tight)
     searched = [t for t, _ in searches]
     searches.clear()
-    kept = track(GRID, run.odometry, run.frames, sensor=SENSOR, motion=MOTION, config=keep)
+    kept = _on_grid(run, keep)
     # Searches go on in kept frames: the same searches at the same times, one in a kept frame.
     assert [t for t, _ in searches] == searched and any(k for _, k in searches)
     states = [e.state for e in kept.estimates]
@@ -1240,6 +1236,12 @@ def test_the_landmarks_seen_are_the_distinct_ones_named_along_the_odometry() -> 
     # From a place turned 10 deg, the bearings name none of the landmarks.
     tr, end = _seen_by(cfg, [[1], [5], [5, 6], [2], [1, 2]])
     assert tr._landmarks_seen(tr._t, end + np.array([0.0, 0.0, np.deg2rad(10.0)]), P) == 0
+    # The gate widens with the place's heading variance: turned 4 deg, a place sure of its
+    # heading to 0.2 deg names none, one unsure by 3 deg names all four.
+    turned = end + np.array([0.0, 0.0, np.deg2rad(4.0)])
+    assert tr._landmarks_seen(tr._t, turned, P) == 0
+    wide = np.diag([0.01**2, 0.01**2, np.deg2rad(3.0) ** 2])
+    assert tr._landmarks_seen(tr._t, turned, wide) == 4
     # Only the frames of the last landmarks_window_s count (here the last 1.0 s: 3 frames).
     short = replace(cfg, landmarks_window_s=1.0)
     tr, end = _seen_by(short, [[1], [5], [5, 6], [2], [6, 2]])
@@ -1267,14 +1269,7 @@ def test_min_landmarks_on_a_run_holds_back_only_what_the_view_cannot_check() -> 
     # without it (and never wrong); asking for more landmarks than it ever sees in 20 s holds
     # every place back, with that reason.
     for n, localizes in ((4, True), (13, False)):
-        res = track(
-            GRID,
-            run.odometry,
-            run.frames,
-            sensor=SENSOR,
-            motion=MOTION,
-            config=replace(CONFIG, min_landmarks=n),
-        )
+        res = _on_grid(run, replace(CONFIG, min_landmarks=n))
         d, h = _errors(run, res)
         loc = np.array([e.localized for e in res.estimates])
         t = np.array([e.t for e in res.estimates])

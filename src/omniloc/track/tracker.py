@@ -1346,17 +1346,9 @@ class Tracker:
         frames = [f for f in self._window.since(t - c.landmarks_window_s) if f.bearings.size]
         if not frames:
             return 0
-        # The place at each frame: mu (+) between(now, odom), written out (no checks).
+        # The place at each frame, and the landmarks in reach of the window's poses.
         now = self._window[len(self._window) - 1].odom
-        odom = np.array([f.odom for f in frames])
-        cn, sn = math.cos(now[2]), math.sin(now[2])
-        dx, dy = odom[:, 0] - now[0], odom[:, 1] - now[1]
-        rx, ry = cn * dx + sn * dy, -sn * dx + cn * dy
-        cm, sm = math.cos(mu[2]), math.sin(mu[2])
-        poses = np.empty_like(odom)
-        poses[:, 0] = mu[0] + cm * rx - sm * ry
-        poses[:, 1] = mu[1] + sm * rx + cm * ry
-        poses[:, 2] = mu[2] + (odom[:, 2] - now[2])
+        poses = compose(mu, between(now, np.array([f.odom for f in frames])))
         sensor = self.sensor
         if sensor.max_range is None:
             idx = np.arange(self.landmarks.n)
@@ -1367,18 +1359,11 @@ class Tracker:
             idx = np.asarray(self.landmarks.kdtree.query_ball_point(mu[:2], reach), dtype=np.int64)
         if idx.size == 0:
             return 0
-        # (What SensorModel.visible says, on arrays already at hand.)
-        d = self._L[idx][None, :, :] - poses[:, None, :2]
-        r2 = d[..., 0] ** 2 + d[..., 1] ** 2
+        L = self._L[idx]
+        view = sensor.visible(np.broadcast_to(L, (poses.shape[0], *L.shape)), poses)
+        d = L[None, :, :] - poses[:, None, :2]
         pred = np.asarray(wrap(np.arctan2(d[..., 1], d[..., 0]) - poses[:, None, 2]))
-        view = r2 > 1e-18
-        if sensor.max_range is not None:
-            view &= r2 <= sensor.max_range**2
-        if sensor.min_range is not None:
-            view &= r2 >= sensor.min_range**2
-        if sensor.half_fov is not None:
-            view &= np.abs(pred) <= sensor.half_fov
-        gate = math.sqrt(self.sensor.gate_chi2 * (self.sensor.noise**2 + max(float(P[2, 2]), 0.0)))
+        gate = math.sqrt(sensor.gate_chi2 * (sensor.noise**2 + max(float(P[2, 2]), 0.0)))
         fidx = np.repeat(np.arange(len(frames)), [f.bearings.size for f in frames])
         b = np.concatenate([f.bearings for f in frames])
         diff = np.abs(np.asarray(wrap(b[:, None] - pred[fidx])))
