@@ -1302,3 +1302,95 @@ def test_min_landmarks_beyond_the_map_is_refused_by_name() -> None:
     with pytest.raises(InputError, match="min_landmarks=14 but the map has 13 landmarks"):
         Tracker(GRID, SENSOR, MOTION, replace(CONFIG, min_landmarks=14))
     Tracker(GRID, SENSOR, MOTION, replace(CONFIG, min_landmarks=13))
+
+
+# ---- min_best_s: a place must lead for a while before the full tests pass ----------------------
+def _two_places(config: TrackerConfig, first: float, ids: tuple[int, int] = (7, 8)) -> Tracker:
+    """``_one_place`` (id 7, at (5, 4)) with a second old, confirmed hypothesis at (9, 2):
+    the first holds ``first`` of the mass, the second the rest; ``ids`` names them."""
+    tr = _one_place(config, first, 0, False)
+    tr._mu = np.array([[5.0, 4.0, 0.1], [9.0, 2.0, 2.0]])
+    tr._P = np.repeat(tr._P, 2, axis=0)
+    tr._logw = np.log([first, 1.0 - first])
+    tr._log_out = -math.inf
+    tr._ids = np.array(ids)
+    tr._born = np.array([-100.0, -100.0])
+    tr._conf = np.array([2, 2])
+    tr._conf_t = np.zeros(2)
+    tr._fit_m = np.ones(2)
+    tr._fit_n = np.ones(2)
+    tr._mem_w = np.zeros((2, 0))
+    return tr
+
+
+def test_a_place_must_lead_for_min_best_s(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr("omniloc.track.tracker.within_tolerance", lambda *a: 1.0)
+    cfg = replace(CONFIG, min_best_s=1.0)
+    tr = _two_places(cfg, 0.9999)
+
+    def at(t: float, first: float, ids: tuple[int, int] = (7, 8)) -> tuple[TrackState, str]:
+        tr._logw = np.log([first, 1.0 - first])
+        tr._ids = np.array(ids)
+        state, reason, _ = tr._decide(t)
+        return state, reason
+
+    # The first place leads from the first decision on: held until it has led for 1 s.
+    state, reason = at(10.0, 0.9999)
+    assert state is TrackState.AMBIGUOUS
+    assert reason == (
+        "the best place has led for 0.0 s, 1 s needed (within tolerance with probability 0.9999)"
+    )
+    assert at(10.5, 0.9999)[1].startswith("the best place has led for 0.5 s")
+    # A second decision of the same frame (after a search) counts from the frame before,
+    # whatever led at the first.
+    assert at(10.5, 0.9999)[1].startswith("the best place has led for 0.5 s")
+    assert at(11.0, 0.0001)[1].startswith("the best place has led for 0.0 s")
+    assert at(11.0, 0.9999)[0] is TrackState.LOCALIZED
+    # The second place takes the mass in one frame: it has led for no time at all.
+    assert at(11.2, 0.0001)[1].startswith("the best place has led for 0.0 s")
+    # ... and the first, back in front, starts again.
+    assert at(11.4, 0.9999)[1].startswith("the best place has led for 0.0 s")
+    # The place keeps its count whatever becomes of its hypotheses (a merge may keep a
+    # search's new one): the last lead, carried by the odometry, must lie at the new best.
+    assert at(12.0, 0.9999, (10, 11))[1].startswith("the best place has led for 0.6 s")
+    step = np.array([0.5, 0.0, 0.2])
+    tr._window.append(12.0, np.zeros(0), np.zeros(3), np.zeros((3, 3)))
+    tr._window.append(12.5, np.zeros(0), step, np.zeros((3, 3)))
+    tr._mu[0] = compose(tr._mu[0], step)
+    assert at(12.5, 0.9999, (12, 13))[0] is TrackState.LOCALIZED
+    tr._window.append(12.7, np.zeros(0), step, np.zeros((3, 3)))
+    assert at(12.7, 0.9999)[1].startswith("the best place has led for 0.0 s")  # (not moved)
+    # No hypothesis at all ends the lead.
+    tr2 = _two_places(cfg, 0.9999)
+    assert tr2._decide(20.0)[0] is TrackState.AMBIGUOUS
+    tr2._keep(np.zeros(0, dtype=np.int64))
+    assert tr2._decide(20.5)[0] is TrackState.LOST
+    back = _two_places(cfg, 0.9999)
+    back._lead_last, back._lead_now, back._lead_t = tr2._lead_last, tr2._lead_now, tr2._lead_t
+    assert back._decide(21.5)[1].startswith("the best place has led for 0.0 s")
+    # Without the test (the default), the place is localized at once.
+    assert _two_places(CONFIG, 0.9999)._decide(10.0)[0] is TrackState.LOCALIZED
+
+
+def test_min_best_s_on_a_run_only_holds_places_back() -> None:
+    run, plain = _scenario()
+    res = _on_grid(run, replace(CONFIG, min_best_s=1e5))
+    assert not any(e.localized for e in res.estimates)
+    assert any("100000 s needed" in e.reason for e in res.estimates)
+    # A short wait: the first localized frame comes no sooner, and none is wrong.
+    res = _on_grid(run, replace(CONFIG, min_best_s=2.0))
+    first = min(e.t for e in res.estimates if e.localized)
+    assert first >= min(e.t for e in plain.estimates if e.localized)
+    d, h = _errors(run, res)
+    loc = np.array([e.localized for e in res.estimates])
+    before = np.array([e.t for e in res.estimates]) < KIDNAP[0]
+    assert (d[loc & before] < 0.1).all() and (h[loc & before] < 1.0).all()
+
+
+@pytest.mark.parametrize(
+    "v, match",
+    [(-1.0, "min_best_s must be finite and >= 0"), (math.nan, "min_best_s"), (1e7, "min_best_s")],
+)
+def test_min_best_s_settings_are_checked(v: float, match: str) -> None:
+    with pytest.raises(InputError, match=match):
+        TrackerConfig(min_best_s=v)

@@ -134,6 +134,14 @@ class TrackerConfig:
     min_age_s : float
         A hypothesis must have been tracked this long (s) before its place can be
         localized (a new one has been weighed only on its replay).
+    min_best_s : float
+        ``localized`` (by the full tests) needs the best place to have been the best for
+        this long (s), frame after frame (0: no such test). ``min_age_s`` counts from when a
+        place was found, and a place is often found long before it leads: a rival tracked
+        for minutes at a few per cent that takes the mass in one frame of many bearings
+        would otherwise be called localized in that frame. A place stays the same place
+        through merges and splits (it keeps a hypothesis of the last frame's best place);
+        another place leading for one frame starts the count again.
     min_landmarks : int
         ``localized`` (by the full tests, not the hysteresis of ``keep_probability``) needs
         the bearings of the last ``landmarks_window_s`` seconds to be explained, from the
@@ -364,6 +372,7 @@ class TrackerConfig:
     elsewhere_inject: float = 0.02
     min_age_s: float = 3.0
     min_confirmations: int = 2
+    min_best_s: float = 0.0
     min_landmarks: int = 0
     landmarks_window_s: float = 20.0
     search_window_s: float = 1.5

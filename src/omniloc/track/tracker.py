@@ -324,6 +324,12 @@ class Tracker:
         # by the full tests), and whether the last decision kept a frame.
         self._localized_run = 0
         self._kept = False
+        # min_best_s: the best hypothesis's pose, the window's odometry there and since when
+        # its place has been the best, as the last frame's decision left them, and as this
+        # frame's makes them (a frame may decide twice: before and after a search).
+        self._lead_last: tuple[FloatArray, FloatArray, float] | None = None
+        self._lead_now: tuple[FloatArray, FloatArray, float] | None = None
+        self._lead_t = -math.inf
         # The best place's estimate as the last decision made it (index, mean, covariance).
         #: (best hypothesis, its place's pose, covariance and probability within tolerance)
         self._best_place: tuple[int, FloatArray, FloatArray, float] | None = None
@@ -726,6 +732,8 @@ class Tracker:
 
     def _drop_all(self) -> None:
         self._keep(np.zeros(0, dtype=np.int64))
+        # (The window's odometry starts again: no lead is carried across.)
+        self._lead_last = self._lead_now = None
         self._localized_t = None
         self._mem_b = np.zeros(0)
         self._mem_w = np.zeros((0, 0))
@@ -1373,6 +1381,34 @@ class Tracker:
         seen[j[diff[np.arange(j.size), j] <= gate]] = True
         return int(seen.sum())
 
+    def _lead_since(self, t: float, i: int | None) -> float:
+        """Since when the best place, that of hypothesis ``i``, has been the best, frame after
+        frame, at the decision of frame ``t`` (None: no hypothesis leads). The last frame's
+        best hypothesis, carried by the odometry since, must lie at this place (within the
+        tolerances) for the count to go on: a place stays itself whatever becomes of its
+        hypotheses (a merge may keep a search's new one), and another place that leads
+        for one frame starts it again (``min_best_s``)."""
+        if t != self._lead_t:
+            self._lead_last, self._lead_t = self._lead_now, t
+        if i is None:
+            self._lead_now = None
+            return t
+        odom = self._window[len(self._window) - 1].odom if len(self._window) else np.zeros(3)
+        last = self._lead_last
+        since = t
+        if last is not None:
+            carried = compose(last[0], between(last[1], odom))
+            pair = np.vstack([carried, self._mu[i]])
+            if self._mount is not None:
+                pair = self.sensor.robot_poses(pair)
+            d = pair[1] - pair[0]
+            c = self.config
+            turn = abs(float(wrap(float(d[2]))))
+            if math.hypot(d[0], d[1]) <= c.tolerance_m and turn <= c.tolerance_heading:
+                since = last[2]
+        self._lead_now = (self._mu[i].copy(), np.array(odom, dtype=float), since)
+        return since
+
     def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
         """(state, reason, index of the best hypothesis)."""
         c = self.config
@@ -1381,8 +1417,11 @@ class Tracker:
         out = math.exp(self._log_out)
         H = self.n_hypotheses
         if H == 0:
+            self._lead_since(t, None)
             return TrackState.LOST, "no hypothesis explains the recent bearings yet", None
         i = int(np.argmax(self._logw))
+        place = self._place(i)
+        lead = self._lead_since(t, i)
         mu_i, P, mass = self._place_estimate(i)
         p_tol = within_tolerance(
             self._robot(mu_i[None], P[None])[1][0], c.tolerance_m, c.tolerance_heading
@@ -1390,7 +1429,6 @@ class Tracker:
         p = mass * p_tol
         # (kept for the estimate of this frame: nothing moves the hypotheses in between)
         self._best_place = (i, mu_i, P, p)
-        place = self._place(i)
         rivals = H - int(place.sum())
         if out >= c.lost_share:
             return (
@@ -1421,6 +1459,11 @@ class Tracker:
                 held = (
                     f"the best place is new (tracked {age:.1f} s; within tolerance with "
                     f"probability {p:.4f})"
+                )
+            elif t - lead < c.min_best_s:
+                held = (
+                    f"the best place has led for {t - lead:.1f} s, {c.min_best_s:g} s needed "
+                    f"(within tolerance with probability {p:.4f})"
                 )
             elif c.min_landmarks and (n_lm := self._landmarks_seen(t, mu_i, P)) < c.min_landmarks:
                 held = (
