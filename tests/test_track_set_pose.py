@@ -191,3 +191,16 @@ def test_a_prior_told_before_any_frame_is_as_old_as_the_first_frame() -> None:
     told = Tracker(EXAMPLE_MAP, EXAMPLE_SENSOR, EXAMPLE_MOTION)
     told.set_pose((6.0, 4.0, 0.3), TIGHT)  # told surely: old enough at once
     assert told._born.tolist() == [-math.inf]
+
+
+def test_a_pose_told_surely_has_led_since_it_was_told() -> None:
+    # min_best_s asks a place to have led for a while; a pose told surely has, from the
+    # moment it was told (a prior, told loosely, leads from its first frame as the best).
+    run = _run(3)
+    start = run.truth.pose_at(run.frames[0].t)
+    led = TrackerConfig(min_best_s=5.0)
+    first, n, wrong, est = _scored(run, initial_pose=start, initial_covariance=TIGHT, config=led)
+    assert first == 0.0 and wrong == 0 and n == len(est)
+    first, _, _, est = _scored(run, initial_pose=start, initial_covariance=WIDE, config=led)
+    assert first is not None and first >= 5.0
+    assert any("the best place has led for" in e.reason for e in est)

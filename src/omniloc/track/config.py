@@ -138,10 +138,13 @@ class TrackerConfig:
         ``localized`` (by the full tests) needs the best place to have been the best for
         this long (s), frame after frame (0: no such test). ``min_age_s`` counts from when a
         place was found, and a place is often found long before it leads: a rival tracked
-        for minutes at a few per cent that takes the mass in one frame of many bearings
-        would otherwise be called localized in that frame. A place stays the same place
-        through merges and splits (it keeps a hypothesis of the last frame's best place);
-        another place leading for one frame starts the count again.
+        for tens of seconds at a few per cent that takes the mass in one frame of many
+        bearings would otherwise be called localized in that frame. The place is the same
+        from one frame to the next when the last frame's best hypothesis, carried by the
+        odometry, lies within the tolerances of this frame's (whatever merges and splits
+        did to the hypotheses); another place leading for one frame starts the count again.
+        A pose told as surely as ``localized`` asks (:meth:`Tracker.set_pose`) has led since
+        it was told.
     min_landmarks : int
         ``localized`` (by the full tests, not the hysteresis of ``keep_probability``) needs
         the bearings of the last ``landmarks_window_s`` seconds to be explained, from the

@@ -448,6 +448,11 @@ class Tracker:
         self._fit_m = np.zeros(1)
         self._fit_n = np.zeros(1)
         self._mem_w = np.zeros((1, 0))
+        if trusted:
+            # ... and the best place since it was told (min_best_s; a prior leads from the
+            # first decision that finds it the best).
+            odom = self._window[len(self._window) - 1].odom if len(self._window) else np.zeros(3)
+            self._lead_last = self._lead_now = (mu.copy(), np.array(odom, dtype=float), -math.inf)
 
     # ---- input ---------------------------------------------------------------------------
     @property
