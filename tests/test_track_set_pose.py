@@ -204,3 +204,17 @@ def test_a_pose_told_surely_has_led_since_it_was_told() -> None:
     first, _, _, est = _scored(run, initial_pose=start, initial_covariance=WIDE, config=led)
     assert first is not None and first >= 5.0
     assert any("the best place has led for" in e.reason for e in est)
+
+
+def test_a_pose_told_surely_is_not_asked_to_name_landmarks() -> None:
+    # min_landmarks asks the bearings of the last seconds to name that many landmarks from a
+    # place a search found; a pose told surely is the user's word, as old and as confirmed
+    # as localized asks (on MRCLAM, held at its first frame, robot 4's told start lost the
+    # mass to elsewhere and was first right after 836 s).
+    run = _run(3)
+    start = run.truth.pose_at(run.frames[0].t)
+    every = TrackerConfig(min_landmarks=len(EXAMPLE_MAP))
+    first, n, wrong, est = _scored(run, initial_pose=start, initial_covariance=TIGHT, config=every)
+    assert first == 0.0 and wrong == 0 and n == len(est)
+    untold, n0, _, est0 = _scored(run, config=every)
+    assert n0 == 0 and any(f"{len(EXAMPLE_MAP)} needed" in e.reason for e in est0)

@@ -1470,7 +1470,11 @@ class Tracker:
                     f"the best place has led for {t - lead:.1f} s, {c.min_best_s:g} s needed "
                     f"(within tolerance with probability {p:.4f})"
                 )
-            elif c.min_landmarks and (n_lm := self._landmarks_seen(t, mu_i, P)) < c.min_landmarks:
+            elif (
+                c.min_landmarks
+                and math.isfinite(age)  # (a pose told surely is born at -inf: the user's word)
+                and (n_lm := self._landmarks_seen(t, mu_i, P)) < c.min_landmarks
+            ):
                 held = (
                     f"the best place's bearings of the last {c.landmarks_window_s:g} s are "
                     f"explained by {n_lm} landmark{'s' if n_lm != 1 else ''}, "
