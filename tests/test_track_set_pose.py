@@ -216,5 +216,5 @@ def test_a_pose_told_surely_is_not_asked_to_name_landmarks() -> None:
     every = TrackerConfig(min_landmarks=len(EXAMPLE_MAP))
     first, n, wrong, est = _scored(run, initial_pose=start, initial_covariance=TIGHT, config=every)
     assert first == 0.0 and wrong == 0 and n == len(est)
-    untold, n0, _, est0 = _scored(run, config=every)
+    _, n0, _, est0 = _scored(run, config=every)
     assert n0 == 0 and any(f"{len(EXAMPLE_MAP)} needed" in e.reason for e in est0)
