@@ -191,23 +191,27 @@ def test_the_tracker_reports_the_robot_of_a_mounted_sensor() -> None:
     assert len(wrong) == 0 or np.median(wrong[:, 0]) > 0.2
 
 
-def test_the_landmarks_a_place_names_are_seen_from_the_sensor() -> None:
-    # min_landmarks carries the place back in the sensor's frame and names the landmarks from
-    # there: with the mount, the run localizes as without the test (taken from the robot's
-    # pose, 0.3 m and 29 deg off the sensor's, the bearings would name no landmark).
+def _mounted(**config: object):  # type: ignore[no-untyped-def]
+    """``track`` on the run with the sensor at MOUNT, the tracker configured by ``config``."""
     from omniloc.track import TrackerConfig
 
     run = _run(MOUNT)
     sensor = EXAMPLE_SENSOR.replace(mount=MOUNT)
-    plain = track(EXAMPLE_MAP, run.odometry, run.frames, sensor=sensor, motion=EXAMPLE_MOTION)
-    checked = track(
+    return track(
         EXAMPLE_MAP,
         run.odometry,
         run.frames,
         sensor=sensor,
         motion=EXAMPLE_MOTION,
-        config=TrackerConfig(min_landmarks=4),
+        config=TrackerConfig(**config),  # type: ignore[arg-type]
     )
+
+
+def test_the_landmarks_a_place_names_are_seen_from_the_sensor() -> None:
+    # min_landmarks carries the place back in the sensor's frame and names the landmarks from
+    # there: with the mount, the run localizes as without the test (taken from the robot's
+    # pose, 0.3 m and 29 deg off the sensor's, the bearings would name no landmark).
+    plain, checked = _mounted(), _mounted(min_landmarks=4)
     assert sum(e.localized for e in plain.estimates) > 80
     assert [e.state for e in checked.estimates] == [e.state for e in plain.estimates]
 
@@ -551,19 +555,7 @@ def test_a_place_leads_in_the_sensors_frame() -> None:
     # (the sensor's) and compares robot poses: with the mount the lead holds frame after
     # frame, and the run localizes almost as often as without the test (not carried, the
     # lead starts again whenever the robot has moved a little).
-    from omniloc.track import TrackerConfig
-
-    run = _run(MOUNT)
-    sensor = EXAMPLE_SENSOR.replace(mount=MOUNT)
-    plain = track(EXAMPLE_MAP, run.odometry, run.frames, sensor=sensor, motion=EXAMPLE_MOTION)
-    led = track(
-        EXAMPLE_MAP,
-        run.odometry,
-        run.frames,
-        sensor=sensor,
-        motion=EXAMPLE_MOTION,
-        config=TrackerConfig(min_best_s=2.0),
-    )
+    plain, led = _mounted(), _mounted(min_best_s=2.0)
     n_plain = sum(e.localized for e in plain.estimates)
     n_led = sum(e.localized for e in led.estimates)
     assert n_plain > 80

@@ -451,8 +451,8 @@ class Tracker:
         if trusted:
             # ... and the best place since it was told (min_best_s; a prior leads from the
             # first decision that finds it the best).
-            odom = self._window[len(self._window) - 1].odom if len(self._window) else np.zeros(3)
-            self._lead_last = self._lead_now = (mu.copy(), np.array(odom, dtype=float), -math.inf)
+            told = (mu.copy(), self._odom_now(), -math.inf)
+            self._lead_last = self._lead_now = told
 
     # ---- input ---------------------------------------------------------------------------
     @property
@@ -1330,13 +1330,24 @@ class Tracker:
     def _place(self, i: int) -> NDArray[np.bool_]:
         """Which hypotheses are at the place of hypothesis ``i`` (within the tolerances, which
         are the robot's: with a mount, between the robot poses the sensor poses stand for)."""
+        return self._at(self._mu, self._mu[i])
+
+    def _at(self, mu: FloatArray, ref: FloatArray) -> NDArray[np.bool_]:
+        """Which sensor poses ``mu`` (n, 3) lie at the place of the sensor pose ``ref``
+        (within the tolerances, between the robot poses they stand for)."""
         c = self.config
-        mu = self._mu if self._mount is None else self.sensor.robot_poses(self._mu)
-        d = mu - mu[i]
+        if self._mount is not None:
+            mu, ref = self.sensor.robot_poses(mu), self.sensor.robot_poses(ref[None])[0]
+        d = mu - ref
         dh = np.abs(np.asarray(wrap(d[:, 2])))
         return np.asarray(
             (np.hypot(d[:, 0], d[:, 1]) <= c.tolerance_m) & (dh <= c.tolerance_heading)
         )
+
+    def _odom_now(self) -> FloatArray:
+        """The window's dead-reckoned pose at its newest frame (zero before any frame)."""
+        n = len(self._window)
+        return np.array(self._window[n - 1].odom if n else np.zeros(3), dtype=float)
 
     def _place_estimate(self, i: int) -> tuple[FloatArray, FloatArray, float]:
         """Mean, covariance (moment matched, times ``covariance_inflation``) and mass of the
@@ -1360,8 +1371,7 @@ class Tracker:
         if not frames:
             return 0
         # The place at each frame, and the landmarks in reach of the window's poses.
-        now = self._window[len(self._window) - 1].odom
-        poses = compose(mu, between(now, np.array([f.odom for f in frames])))
+        poses = compose(mu, between(self._odom_now(), np.array([f.odom for f in frames])))
         sensor = self.sensor
         if sensor.max_range is None:
             idx = np.arange(self.landmarks.n)
@@ -1398,20 +1408,14 @@ class Tracker:
         if i is None:
             self._lead_now = None
             return t
-        odom = self._window[len(self._window) - 1].odom if len(self._window) else np.zeros(3)
+        odom = self._odom_now()
         last = self._lead_last
         since = t
         if last is not None:
             carried = compose(last[0], between(last[1], odom))
-            pair = np.vstack([carried, self._mu[i]])
-            if self._mount is not None:
-                pair = self.sensor.robot_poses(pair)
-            d = pair[1] - pair[0]
-            c = self.config
-            turn = abs(float(wrap(float(d[2]))))
-            if math.hypot(d[0], d[1]) <= c.tolerance_m and turn <= c.tolerance_heading:
+            if self._at(carried[None], self._mu[i])[0]:
                 since = last[2]
-        self._lead_now = (self._mu[i].copy(), np.array(odom, dtype=float), since)
+        self._lead_now = (self._mu[i].copy(), odom, since)
         return since
 
     def _decide(self, t: float) -> tuple[TrackState, str, int | None]:
@@ -1422,11 +1426,12 @@ class Tracker:
         out = math.exp(self._log_out)
         H = self.n_hypotheses
         if H == 0:
-            self._lead_since(t, None)
+            if c.min_best_s:
+                self._lead_since(t, None)
             return TrackState.LOST, "no hypothesis explains the recent bearings yet", None
         i = int(np.argmax(self._logw))
         place = self._place(i)
-        lead = self._lead_since(t, i)
+        lead = self._lead_since(t, i) if c.min_best_s else t
         mu_i, P, mass = self._place_estimate(i)
         p_tol = within_tolerance(
             self._robot(mu_i[None], P[None])[1][0], c.tolerance_m, c.tolerance_heading
