@@ -270,7 +270,7 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # 0.255 m (docs/tracking-notebook.md, "A place must lead, and explain half").
         # min_landmarks 5 (since 2026-12-06 00:30; 4 before): three landmarks fix a pose,
         # and on this map of near-symmetric clusters one more can agree by chance. Robot 4's
-        # stretch at 140-172 s of its run (the streams kidnap4 and plain2 under elsewhere's
+        # stretch at 168-200 s of its run (the streams kidnap4 and plain2 under elsewhere's
         # seeds 0, 1 and 3): a place 6.3 m off held 93-99.9 % of the mass for 30 s while
         # the truth was in no hypothesis, and was called localized the frame its bearings
         # named a fourth tube, 2.7 s after a search had found the truth (which took the
