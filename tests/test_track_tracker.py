@@ -997,6 +997,7 @@ def test_on_mrclam_robot5_a_cluster_place_explaining_half_is_not_localized(
     # 99.6-99.95 % of the mass, explains 53-57 % of the recent bearings. Asked for half
     # (the preset until 2026-12-06 00:50) it is localized for 6 frames; asked for 60 % (the
     # preset) for none.
+    from omniloc.evaluate.tracking import errors_against
     from omniloc.track import load_frames, load_groundtruth, load_odometry, preset
 
     data = shared_data / "mrclam-ds6"
@@ -1011,15 +1012,9 @@ def test_on_mrclam_robot5_a_cluster_place_explaining_half_is_not_localized(
 
     def wrong(cfg: TrackerConfig) -> list[float]:
         run = track(lm, odometry, frames, sensor=sensor, motion=motion, config=cfg)
-        out = []
-        for e in run.estimates:
-            if e.localized:
-                p = truth.pose_at(e.t)
-                off = math.hypot(e.pose.x - p.x, e.pose.y - p.y)
-                turn = abs(float(wrap(e.pose.theta - p.theta)))
-                if off > 0.3 or turn > math.radians(5.0):
-                    out.append(round(e.t - t0, 1))
-        return out
+        right, _, _ = errors_against(truth, run.estimates)
+        pairs = zip(run.estimates, right, strict=True)
+        return [round(e.t - t0, 1) for e, ok in pairs if e.localized and not ok]
 
     assert wrong(replace(config, seed=1, fit_explained=0.5)) == [
         648.4,
@@ -1357,7 +1352,7 @@ def test_on_mrclam_robot4_a_place_naming_four_tubes_by_chance_is_not_localized(
     # the frame its bearings name a fourth tube (172.6 s after the first frame), the one
     # localized frame of the stretch; with the preset's five it never is, and the truth
     # takes the mass a second later either way.
-    from omniloc.evaluate.tracking import mrclam_streams, run_stream, segment_of
+    from omniloc.evaluate.tracking import errors_against, mrclam_streams, run_stream, segment_of
     from omniloc.track import preset
 
     (whole,) = mrclam_streams(shared_data / "mrclam-ds6", robots=(4,))
@@ -1368,13 +1363,8 @@ def test_on_mrclam_robot4_a_place_naming_four_tubes_by_chance_is_not_localized(
 
     def localized_errors(cfg: TrackerConfig) -> list[tuple[float, float]]:
         est, _ = run_stream(Tracker(stream.landmarks, sensor, motion, cfg), stream)
-        out = []
-        for f, e in zip(stream.frames, est, strict=True):
-            if e.localized:
-                truth = stream.truth_at(f.t)[0][0]
-                off = math.hypot(e.pose.x - truth[0], e.pose.y - truth[1])
-                out.append((round(f.t - t0, 1), off))
-        return out
+        _, off, _ = errors_against(stream.segments[0].truth, est)
+        return [(round(e.t - t0, 1), d) for e, d in zip(est, off, strict=True) if e.localized]
 
     four = localized_errors(replace(config, seed=1, min_landmarks=4))
     assert [t for t, _ in four] == [172.6] and 6.2 < four[0][1] < 6.5
