@@ -231,8 +231,11 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # a pose). The model's probability is overconfident (expected calibration error
         # 0.211; 0.232 with 7 m; an ambiguous frame at 0.95-0.99 is right about half the
         # time); tables fitted on four robots and applied to the fifth give 0.030 (0.025
-        # with 7 m; benchmarks/track_confidence.py). They change no decision, only what is
-        # reported.
+        # with 7 m; benchmarks/track_confidence.py; 0.034 with min_landmarks 5 and
+        # fit_explained 0.6, 2026-12-06, where tables fitted again on all five runs were
+        # not taken: on the default evaluation's streams 0.070 and 0.058, kidnapped and
+        # plain, against these tables' 0.057 and 0.045). They change no decision, only
+        # what is reported.
         # confidence_hypothesis: each reported hypothesis's weight mapped the same way (the
         # weights at 0.1 or more: ECE 0.256, 63,267 hypotheses with 7.5 m; held out by
         # robot, the confidences at 0.1 or more: 0.016, 54,559).
