@@ -8,15 +8,40 @@ import platform
 import sys
 from collections.abc import Sequence
 from datetime import datetime, timezone
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
-__all__ = ["run_meta", "write_results"]
+__all__ = ["libraries", "run_meta", "write_results"]
+
+#: The libraries whose arithmetic the figures depend on: a compiled kernel or a random
+#: generator of another version can sum in another order and move a particle filter's draws
+#: (the states of benchmarks/track_sim.py stayed, its weights' calibration moved between
+#: the venvs of 2026-12-05 and 2026-12-06).
+LIBRARIES = ("numpy", "scipy", "numba", "llvmlite")
+
+
+def libraries() -> dict[str, str]:
+    """The installed versions of :data:`LIBRARIES` ("not installed" for one that is not).
+
+    Examples
+    --------
+    >>> sorted(libraries()) == sorted(LIBRARIES)
+    True
+    """
+    out = {}
+    for name in LIBRARIES:
+        try:
+            out[name] = version(name)
+        except PackageNotFoundError:
+            out[name] = "not installed"
+    return out
 
 
 def run_meta(script: str, argv: Sequence[str] | None, **extra: Any) -> dict[str, Any]:
     """The ``meta`` block of a results file: the date (UTC), the machine, the command that
-    wrote it (``argv``: the script's arguments, None for the command line's) and ``extra``.
+    wrote it (``argv``: the script's arguments, None for the command line's), the versions
+    of the numerical libraries (:func:`libraries`) and ``extra``.
 
     Examples
     --------
@@ -29,6 +54,7 @@ def run_meta(script: str, argv: Sequence[str] | None, **extra: Any) -> dict[str,
         "date": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "machine": f"{platform.machine()}, Python {platform.python_version()}",
         "command": " ".join(["python", f"benchmarks/{script}", *args]),
+        "libraries": libraries(),
         **extra,
     }
 

@@ -76,6 +76,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
+from _results import libraries  # noqa: E402
 from baselines_track.ekf_known import EkfConfig, EkfKnown  # noqa: E402
 from baselines_track.harness import evaluate_streams  # noqa: E402
 from baselines_track.motion import MotionNoise, calibrate_motion_noise  # noqa: E402
@@ -790,6 +791,7 @@ def main(argv: list[str] | None = None) -> int:
         "command": " ".join(["python benchmarks/track_baselines.py", *(argv or sys.argv[1:])]),
         "python": platform.python_version(),
         "numpy": np.__version__,
+        "libraries": libraries(),
         "omniloc": getattr(omniloc, "__version__", "?"),
         "machine": platform.processor() or platform.machine(),
         "seed": args.seed,

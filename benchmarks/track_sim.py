@@ -33,9 +33,11 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
+sys.path.insert(0, str(HERE))
 
 import dataclasses  # noqa: E402
 
+from _results import libraries  # noqa: E402
 from omniloc import Pose  # noqa: E402
 from omniloc.evaluate.tracking import (  # noqa: E402
     Segment,
@@ -157,6 +159,7 @@ def main(argv: list[str] | None = None) -> int:
         "command": " ".join(["python benchmarks/track_sim.py", *(argv or sys.argv[1:])]),
         "python": platform.python_version(),
         "machine": platform.processor() or platform.machine(),
+        "libraries": libraries(),
         "wall_s": round(time.time() - t0, 1),
     }
     args.out.write_text(
@@ -168,8 +171,9 @@ def main(argv: list[str] | None = None) -> int:
         + "\n"
     )
     head = (
-        f"Measured {meta['when']} ({meta['machine']}, Python {meta['python']}): "
-        f"`{meta['command']}`, {meta['wall_s']:.0f} s.\n\n"
+        f"Measured {meta['when']} ({meta['machine']}, Python {meta['python']}, "
+        + ", ".join(f"{k} {v}" for k, v in meta["libraries"].items())
+        + f"): `{meta['command']}`, {meta['wall_s']:.0f} s.\n\n"
     )
     args.out.with_suffix(".md").write_text(head + md + "\n")
     print(md)

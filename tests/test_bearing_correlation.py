@@ -148,3 +148,8 @@ def test_results_files_say_when_where_and_how(tmp_path: Path) -> None:
     assert out["lags"] == [1, 2] and out["meta"]["wall_s"] == 2.0
     assert out["meta"]["command"] == "python benchmarks/bearing_correlation.py --out x.json"
     assert out["meta"]["date"].endswith("+00:00") and "Python" in out["meta"]["machine"]
+    # ... and with which numerical libraries (their arithmetic can move a filter's draws).
+    from importlib.metadata import version
+
+    assert out["meta"]["libraries"]["numpy"] == version("numpy")
+    assert set(out["meta"]["libraries"]) == {"numpy", "scipy", "numba", "llvmlite"}
