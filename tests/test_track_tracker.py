@@ -1070,6 +1070,87 @@ def test_keep_probability_keeps_a_place_localized_once_it_has_been(
     assert state is TrackState.AMBIGUOUS and "is new" in reason
 
 
+def test_a_frame_the_kept_place_explains_none_of_is_not_kept(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The first frame after a kidnapping: the place kept by the hysteresis explains none of
+    # its bearings (keep_unexplained, the mrclam preset's 2).
+    monkeypatch.setattr("omniloc.track.tracker.within_tolerance", lambda *a: 0.95)
+    keep = replace(CONFIG, keep_probability=0.9, keep_after=3, min_age_s=3.0, keep_unexplained=2)
+    pose = np.array([5.0, 4.0, 0.1])  # the place of _one_place
+    d = GRID.xy - pose[:2]
+    pred = np.asarray(wrap(np.arctan2(d[:, 1], d[:, 0]) - pose[2]))
+    seen = pred[SENSOR.visible(GRID.xy[None], pose[None])[0]]
+    assert seen.size >= 2
+    grid = np.linspace(-math.pi, math.pi, 3600, endpoint=False)
+    far = grid[np.abs(np.asarray(wrap(grid[:, None] - seen[None]))).min(axis=1) > 0.1]
+    stray = [float(far[0]), float(far[far.size // 2])]  # 6 deg or more from every tube in view
+
+    def decide(config: TrackerConfig, bearings: list[float]) -> tuple[TrackState, str]:
+        tr = _one_place(config, 0.995, 3, True)
+        tr._window.append(100.0, np.array(bearings), np.zeros(3), np.zeros((3, 3)))
+        state, reason, _ = tr._decide(100.0)
+        return state, reason
+
+    state, reason = decide(keep, stray)
+    assert state is TrackState.AMBIGUOUS
+    assert reason.startswith("not kept: the place explains none of the frame's 2 bearings; ")
+    # Kept: one stray bearing (fewer than asked), one of two explained, both explained, no
+    # such test.
+    for config, bearings in (
+        (keep, stray[:1]),
+        (keep, [stray[0], float(seen[0])]),
+        (keep, [float(b) for b in seen[:2]]),
+        (replace(keep, keep_unexplained=0), stray),
+    ):
+        state, reason = decide(config, bearings)
+        assert state is TrackState.LOCALIZED and reason.startswith("kept:")
+
+
+def test_on_mrclam_the_first_frame_after_a_jump_is_not_kept(shared_data: Path) -> None:
+    # The evaluation's kidnapped stream 18 of 20 (robot 3's run, then robot 5's from 61.6 s
+    # on), elsewhere's seed 0: robot 3's place, localized for 57 frames, was kept in the
+    # first frame after the jump, 3.2 m off, where it explains neither of the frame's two
+    # bearings. With keep_unexplained (the preset's 2) that frame is ambiguous, and no other
+    # frame's state, nor any hypothesis, changes.
+    from omniloc.evaluate.tracking import (
+        frames_within_tolerance,
+        kidnap_streams,
+        mrclam_streams,
+        run_stream,
+    )
+    from omniloc.track import preset
+
+    runs = mrclam_streams(shared_data / "mrclam-ds6")
+    stream = next(s for s in kidnap_streams(runs, 20, rng=0)[0] if s.name.startswith("kidnap18:"))
+    sensor, motion, config = preset("mrclam")
+    assert config.keep_unexplained == 2 and config.seed == 0
+
+    def run(cfg: TrackerConfig) -> tuple[list[TrackEstimate], list[float]]:
+        est, _ = run_stream(Tracker(stream.landmarks, sensor, motion, cfg), stream)
+        _, right = frames_within_tolerance(stream, est)
+        jump = stream.jump_t
+        wrong = [
+            round(e.t - jump, 2) for e, ok in zip(est, right, strict=True) if e.localized and not ok
+        ]
+        return est, wrong
+
+    before, wrong_before = run(replace(config, keep_unexplained=0))
+    after, wrong_after = run(config)
+    # (and one frame 11 s before the jump, wrong either way)
+    assert wrong_before == [-11.14, 0.08] and wrong_after == [-11.14]
+    k = next(i for i, e in enumerate(after) if e.t > stream.jump_t)
+    assert before[k].reason.startswith("kept:")
+    assert after[k].reason.startswith("not kept: the place explains none of the frame's 2 bearings")
+    # The test changes what a frame says, not what the filter does.
+    pairs = list(zip(before, after, strict=True))
+    assert [i for i, (e0, e1) in enumerate(pairs) if e0.state != e1.state] == [k]
+    for e0, e1 in pairs:
+        assert [(h.pose.as_tuple(), h.weight) for h in e0.hypotheses] == [
+            (h.pose.as_tuple(), h.weight) for h in e1.hypotheses
+        ]
+
+
 def test_kept_frames_follow_enough_frames_localized_by_the_full_tests(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -1140,6 +1221,11 @@ def test_kept_frames_follow_enough_frames_localized_by_the_full_tests(
         ({"keep_probability": 0.995}, r"must not exceed localized_probability \(0.99\)"),
         ({"keep_after": 0}, "keep_after must be a positive integer"),
         ({"keep_after": 1.5}, "keep_after must be a positive integer"),
+        ({"keep_unexplained": -1}, "keep_unexplained must be an integer from 0"),
+        ({"keep_unexplained": 2.0}, "keep_unexplained must be an integer from 0"),
+        ({"keep_unexplained": True}, "keep_unexplained must be an integer from 0"),
+        ({"keep_unexplained": "2"}, "keep_unexplained must be an integer from 0"),
+        ({"keep_unexplained": 1001}, "keep_unexplained must be an integer from 0"),
     ],
 )
 def test_keep_settings_are_checked(kw: dict[str, object], match: str) -> None:

@@ -70,6 +70,10 @@ _INT_MAX = {"elsewhere_samples": 100_000, "max_hypotheses": 10_000, "max_candida
 #: Largest ``min_landmarks``: the landmarks named by some seconds of frames of a few bearings
 #: each; a thousand or more is a typo.
 MIN_LANDMARKS_MAX = 1000
+#: Largest ``keep_unexplained``: a frame holds at most ``tracker.MAX_FRAME_BEARINGS`` (1,000).
+KEEP_UNEXPLAINED_MAX = 1000
+#: The settings that count (0: no such test) and their largest values.
+_COUNTS = {"min_landmarks": MIN_LANDMARKS_MAX, "keep_unexplained": KEEP_UNEXPLAINED_MAX}
 
 #: Largest seed of elsewhere's random generator.
 SEED_MAX = 2**63 - 1
@@ -107,6 +111,11 @@ class TrackerConfig:
     keep_after : int
         Frames ``localized`` in a row (by the full tests) before ``keep_probability``
         applies: a place the weights are sure of for a frame or two is not kept.
+    keep_unexplained : int
+        A frame of at least this many bearings of which the place explains none (each
+        within the sensor's gate of a landmark in view, as ``min_landmarks`` counts them)
+        is not kept by ``keep_probability`` (0, the default: no such test). The first frame
+        after a kidnapping is most often of this kind; a frame of a right place seldom is.
     lost_share : float
         ``lost`` when elsewhere holds at least this share of the mass (or there is no
         hypothesis).
@@ -366,6 +375,7 @@ class TrackerConfig:
     tolerance_heading: float = float(np.deg2rad(5.0))
     keep_probability: float | None = None
     keep_after: int = 3
+    keep_unexplained: int = 0
     lost_share: float = 0.99
     kidnap_rate: float = 1e-3
     evidence_weight: float = 1.0
@@ -449,12 +459,12 @@ class TrackerConfig:
                     raise InputError(f"{f.name} must lie strictly between 0 and 1, got {v!r}")
                 object.__setattr__(self, f.name, prob)
                 continue
-            if f.name == "min_landmarks":
+            if f.name in _COUNTS:
                 whole = isinstance(v, (int, np.integer)) and not isinstance(v, bool)
-                if not (whole and 0 <= v <= MIN_LANDMARKS_MAX):
+                if not (whole and 0 <= v <= _COUNTS[f.name]):
                     raise InputError(
-                        f"min_landmarks must be an integer from 0 (no such test) to "
-                        f"{MIN_LANDMARKS_MAX}, got {shorten(v)}"
+                        f"{f.name} must be an integer from 0 (no such test) to "
+                        f"{_COUNTS[f.name]}, got {shorten(v)}"
                     )
                 object.__setattr__(self, f.name, int(v))
                 continue

@@ -1362,14 +1362,21 @@ class Tracker:
     def _landmarks_seen(self, t: float, mu: FloatArray, P: FloatArray) -> int:
         """How many distinct landmarks explain the bearings of the last
         ``landmarks_window_s`` seconds from the place ``mu`` (a sensor pose, covariance
-        ``P``, at the newest frame): the place is carried back to each frame by the
-        odometry, and each bearing is explained by the nearest landmark in view whose
-        predicted bearing lies within the sensor's gate, widened by the place's heading
-        variance (``min_landmarks``)."""
-        c = self.config
-        frames = [f for f in self._window.since(t - c.landmarks_window_s) if f.bearings.size]
-        if not frames:
-            return 0
+        ``P``, at the newest frame; ``min_landmarks``): see :meth:`_named`."""
+        frames = self._window.since(t - self.config.landmarks_window_s)
+        named = self._named(mu, P, [f for f in frames if f.bearings.size])
+        return int(np.unique(named[named >= 0]).size)
+
+    def _named(self, mu: FloatArray, P: FloatArray, frames: list[WindowFrame]) -> NDArray[np.int64]:
+        """The landmark (row of the map, -1 for none) that explains each bearing of
+        ``frames`` (in their order) from the place ``mu`` (a sensor pose, covariance ``P``,
+        at the newest frame): the place is carried back to each frame by the odometry, and
+        each bearing is explained by the nearest landmark in view whose predicted bearing
+        lies within the sensor's gate, widened by the place's heading variance."""
+        n = sum(f.bearings.size for f in frames)
+        none = np.full(n, -1, dtype=np.int64)
+        if n == 0:
+            return none
         # The place at each frame, and the landmarks in reach of the window's poses.
         poses = compose(mu, between(self._odom_now(), np.array([f.odom for f in frames])))
         sensor = self.sensor
@@ -1381,7 +1388,7 @@ class Tracker:
             )
             idx = np.asarray(self.landmarks.kdtree.query_ball_point(mu[:2], reach), dtype=np.int64)
         if idx.size == 0:
-            return 0
+            return none
         L = self._L[idx]
         view = sensor.visible(np.broadcast_to(L, (poses.shape[0], *L.shape)), poses)
         d = L[None, :, :] - poses[:, None, :2]
@@ -1392,9 +1399,19 @@ class Tracker:
         diff = np.abs(np.asarray(wrap(b[:, None] - pred[fidx])))
         diff[~view[fidx]] = np.inf
         j = np.argmin(diff, axis=1)
-        seen = np.zeros(idx.size, dtype=bool)
-        seen[j[diff[np.arange(j.size), j] <= gate]] = True
-        return int(seen.sum())
+        return np.where(diff[np.arange(j.size), j] <= gate, idx[j], -1)
+
+    def _unexplained(self, mu: FloatArray, P: FloatArray) -> int:
+        """The newest frame's bearings if it holds ``keep_unexplained`` of them or more and
+        the place ``mu`` (covariance ``P``) explains none of them (see :meth:`_named`); else
+        0."""
+        k = self.config.keep_unexplained
+        if not k or not len(self._window):
+            return 0
+        newest = self._window[-1]
+        if newest.bearings.size < k or (self._named(mu, P, [newest]) >= 0).any():
+            return 0
+        return int(newest.bearings.size)
 
     def _lead_since(self, t: float, i: int | None) -> float:
         """Since when the best place, that of hypothesis ``i``, has been the best, frame after
@@ -1486,7 +1503,7 @@ class Tracker:
                     f"{c.min_landmarks} needed (within tolerance with probability {p:.4f})"
                 )
         full = p >= c.localized_probability and held is None
-        if (
+        keep = (
             c.keep_probability is not None
             and not full
             and mass >= c.localized_probability
@@ -1494,7 +1511,12 @@ class Tracker:
             and self._localized_run >= c.keep_after
             and self._localized_id is not None
             and bool(np.isin(self._localized_id, self._ids[place]))
-        ):
+        )
+        not_kept = ""
+        if keep and (n_un := self._unexplained(mu_i, P)):
+            keep = False
+            not_kept = f"not kept: the place explains none of the frame's {n_un} bearings; "
+        if keep:
             self._kept = True
             return (
                 TrackState.LOCALIZED,
@@ -1505,7 +1527,7 @@ class Tracker:
                 i,
             )
         if held is not None:
-            return TrackState.AMBIGUOUS, held, i
+            return TrackState.AMBIGUOUS, not_kept + held, i
         if full:
             return (
                 TrackState.LOCALIZED,
@@ -1525,7 +1547,8 @@ class Tracker:
             )
         return (
             TrackState.AMBIGUOUS,
-            f"{why} ({rivals} rival{'s' if rivals != 1 else ''}, {100 * out:.2g} % elsewhere)",
+            f"{not_kept}{why} ({rivals} rival{'s' if rivals != 1 else ''}, {100 * out:.2g} % "
+            "elsewhere)",
             i,
         )
 
