@@ -51,7 +51,8 @@ when the tracker wakes up.
   With ``keep_probability`` set, a place localized so for ``keep_after`` frames in a row stays
   ``localized`` while it holds that mass and its covariance puts it within tolerance with at
   least ``keep_probability`` (a hysteresis on the pose's uncertainty; the reason says
-  "kept").
+  "kept"), but not in a frame of ``keep_unexplained`` bearings or more of which it explains
+  none (the reason says "not kept").
 * **Kidnapping.** When the place the tracker was localized at loses its mass (below
   ``kidnap_share``) to elsewhere or to another place, the estimate is flagged ``kidnapped``;
   the old hypothesis stays alongside the new ones until the evidence decides. A place that
