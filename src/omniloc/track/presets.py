@@ -294,7 +294,7 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # keep_unexplained 2 (since 2026-12-06 02:40): a frame of two bearings or more of
         # which the place explains none is not kept by keep_probability. The kidnapped
         # stream kidnap18 (robot 3 to robot 5) kept robot 3's place 3.2 m off in the first
-        # frame after its jump under every seed (2-4 frames), a frame naming tubes 10 and
+        # frames after its jump under every seed (1-3 per seed), the first naming tubes 10 and
         # 11 where the old place has 0-2 in view; of seed 0's 456 kept frames on the whole
         # runs, all right, 2 are of that kind. Over seeds 0-4 on the whole runs and the
         # 20 + 20 seeded streams: 34 frames wrong against 43 (the kidnapped streams' 4
