@@ -1778,7 +1778,7 @@ def _tracker_targets() -> list[Target]:
     import dataclasses
 
     from omniloc.track import MotionModel, Tracker, TrackerConfig
-    from omniloc.track.config import _INTS, _PROBABILITIES, _SHARES
+    from omniloc.track.config import _COUNTS, _INTS, _PROBABILITIES, _SHARES
 
     def run(config: dict[str, Any] | None = None, motion: dict[str, Any] | None = None) -> Any:
         tr = Tracker(
@@ -1823,7 +1823,7 @@ def _tracker_targets() -> list[Target]:
             pool = regions
         elif f.name.startswith("confidence_") and f.name != "confidence_recent_s":
             pool = tables
-        elif f.name in _INTS or f.name == "min_landmarks":
+        elif f.name in _INTS or f.name in _COUNTS:
             pool = COUNTS
         elif f.name in _PROBABILITIES or f.name in _SHARES or f.name == "search_miss":
             pool = PROBABILITIES
