@@ -322,9 +322,11 @@ class Tracker:
         self._localized_id: int | None = None
         # Hysteresis (keep_probability): frames localized in a row up to the last one (0: it
         # was not localized; a frame can only be kept after keep_after of them, all localized
-        # by the full tests), and whether the last decision kept a frame.
+        # by the full tests), whether the last decision kept a frame, and whether it refused
+        # to (keep_unexplained).
         self._localized_run = 0
         self._kept = False
+        self._not_kept = False
         # min_best_s: the best hypothesis's pose, the window's odometry there and since when
         # its place has been the best, as the last frame's decision left them, and as this
         # frame's makes them (a frame may decide twice: before and after a search).
@@ -432,6 +434,7 @@ class Tracker:
         self._history.clear()
         self._localized_run = 0
         self._kept = False
+        self._not_kept = False
         self._unvouched_t = None
         self._mu = mu.reshape(1, 3)
         self._P = (0.5 * (P + P.T)).reshape(1, 3, 3)
@@ -1440,6 +1443,7 @@ class Tracker:
         """(state, reason, index of the best hypothesis)."""
         c = self.config
         self._kept = False
+        self._not_kept = False
         self._best_place = None
         out = math.exp(self._log_out)
         H = self.n_hypotheses
@@ -1515,7 +1519,7 @@ class Tracker:
         )
         not_kept = ""
         if keep and (n_un := self._unexplained(mu_i, P)):
-            keep = False
+            keep, self._not_kept = False, True
             not_kept = f"not kept: the place explains none of the frame's {n_un} bearings; "
         if keep:
             self._kept = True
@@ -1567,7 +1571,12 @@ class Tracker:
         rows = h_mu.tolist()  # (tolist: the floats float() gives, at once)
         w = np.minimum(np.exp(self._logw[order]), 1.0)
         weights = w.tolist()
-        soon = is_recent(since, self.config.confidence_recent_s)
+        # A frame the hysteresis refused because its place explains none of its bearings
+        # reads the tables of a tracker still searching: the recent tables were fitted on
+        # frames whose place is most often still right, and such a frame's is not (on
+        # MRCLAM, the first frame after a kidnapping; its since_localized is still reported,
+        # so a fit counts it among the recent frames -- a handful in a run).
+        soon = is_recent(since, self.config.confidence_recent_s) and not self._not_kept
         h_table = self._tables["confidence_hypothesis"]
         if soon and self._tables["confidence_hypothesis_recent"] is not None:
             h_table = self._tables["confidence_hypothesis_recent"]
