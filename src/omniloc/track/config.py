@@ -73,7 +73,11 @@ MIN_LANDMARKS_MAX = 1000
 #: Largest ``keep_unexplained``: a frame holds at most ``tracker.MAX_FRAME_BEARINGS`` (1,000).
 KEEP_UNEXPLAINED_MAX = 1000
 #: The settings that count (0: no such test) and their largest values.
-_COUNTS = {"min_landmarks": MIN_LANDMARKS_MAX, "keep_unexplained": KEEP_UNEXPLAINED_MAX}
+_COUNTS = {
+    "min_landmarks": MIN_LANDMARKS_MAX,
+    "keep_unexplained": KEEP_UNEXPLAINED_MAX,
+    "min_confirmations_alone": INT_MAX,
+}
 
 #: Largest seed of elsewhere's random generator.
 SEED_MAX = 2**63 - 1
@@ -140,6 +144,13 @@ class TrackerConfig:
         frames that do not overlap (track confirmation: one window of a few bearings on a
         map of clusters can be explained by a wrong pose; several seldom are, by the same
         one).
+    min_confirmations_alone : int
+        The searches asked instead of ``min_confirmations`` of a place no rival contests:
+        every hypothesis tracked is at that place (the look-alikes the searches found have
+        all been pruned by the evidence). 0: ``min_confirmations`` for every place. The
+        second search is there to rule out a look-alike; where the frames name too few
+        distinct landmarks for any search to run (``search_min_bearings``), a place alone
+        would otherwise wait for frames that tell nothing new.
     min_age_s : float
         A hypothesis must have been tracked this long (s) before its place can be
         localized (a new one has been weighed only on its replay).
@@ -385,6 +396,7 @@ class TrackerConfig:
     elsewhere_inject: float = 0.02
     min_age_s: float = 3.0
     min_confirmations: int = 2
+    min_confirmations_alone: int = 0
     min_best_s: float = 0.0
     min_landmarks: int = 0
     landmarks_window_s: float = 20.0

@@ -301,11 +301,26 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # against 13), 0.2 % fewer localized; the default evaluation's kidnapped streams
         # 66 against 67 (docs/tracking-notebook.md, "A kept frame its place explains none
         # of").
+        # min_confirmations_alone 1 (since 2026-12-06 05:30): a place no rival contests
+        # (every hypothesis tracked is at it) needs one search, not two. Robot 2's true
+        # place, found by a search at 367 s, held 99.6-99.9 % of the mass alone from 394 s
+        # and was first localized at 435.2 s (now 396.6 s): its frames name the same one or
+        # two tubes, which merge into fewer bearings than a search needs (4), so no second
+        # search ran. One search for every place (min_confirmations 1) let robot 3, told
+        # its start loosely, be localized 4.7 m off for two frames (the half-turn twin, with
+        # 7 rivals); no rival is what tells the two apart. Over seeds 0-4 on the whole runs
+        # and the 20 + 20 seeded streams: 3.5 % more frames localized (16,944 against
+        # 16,368), 38 wrong against 34 (the 4 more heading near misses, 5.0-8.8 deg, of the
+        # right place on one stream under seed 4), none far; the default evaluation's
+        # 100 + 100 streams the same 66 + 19 wrong frames, 41 kidnappings correct again
+        # against 38, after a median of 75.6 s against 79.3 s (docs/tracking-notebook.md,
+        # "One search, when no rival is left").
         config = TrackerConfig(
             region=(-1.0, 5.5, -6.0, 6.5),
             clutter_persistence=0.75,
             clutter_persistence_sd=float(np.deg2rad(0.6)),
             min_age_s=30.0,
+            min_confirmations_alone=1,
             min_landmarks=5,
             min_best_s=0.5,
             fit_explained=0.6,

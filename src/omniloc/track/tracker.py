@@ -1472,15 +1472,25 @@ class Tracker:
         age = t - float(self._born[place].min())
         fit = float(self._fit_m[i] / max(self._fit_n[i], 1e-9))
         conf = int(self._conf[place].max())
+        # The searches asked of the place: a second one is there to rule out a look-alike,
+        # and with min_confirmations_alone a place no rival contests asks fewer.
+        needed = c.min_confirmations
+        if c.min_confirmations_alone and not rivals:
+            needed = c.min_confirmations_alone
         # The full tests: the probability first, then, in order, the first other test that
         # holds the place back says why.
         held: str | None = None
         if p >= c.localized_probability:
-            if conf < c.min_confirmations:
+            if conf < needed:
                 held = (
                     f"the best place was found by {conf} search{'es' if conf != 1 else ''} on "
-                    f"separate frames, {c.min_confirmations} needed (within tolerance with "
-                    f"probability {p:.4f})"
+                    f"separate frames, {needed} needed"
+                    + (
+                        f" with {rivals} rival{'s' if rivals != 1 else ''}"
+                        if rivals and c.min_confirmations_alone
+                        else ""
+                    )
+                    + f" (within tolerance with probability {p:.4f})"
                 )
             elif fit < c.fit_explained:
                 held = (
