@@ -234,8 +234,9 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # with 7 m; benchmarks/track_confidence.py; 0.034 with min_landmarks 5 and
         # fit_explained 0.6, 2026-12-06, where tables fitted again on all five runs were
         # not taken: on the default evaluation's streams 0.070 and 0.058, kidnapped and
-        # plain, against these tables' 0.057 and 0.045). They change no decision, only
-        # what is reported.
+        # plain, against these tables' 0.057 and 0.045; 0.038 with min_confirmations_alone
+        # 1, these tables then 0.058 and 0.045 on those streams). They change no decision,
+        # only what is reported.
         # confidence_hypothesis: each reported hypothesis's weight mapped the same way (the
         # weights at 0.1 or more: ECE 0.256, 63,267 hypotheses with 7.5 m; held out by
         # robot, the confidences at 0.1 or more: 0.016, 54,559).
