@@ -639,9 +639,9 @@ def test_the_clutter_memory_reaches_the_frame_model(monkeypatch: pytest.MonkeyPa
     real_update = tracker_module.frame_update_clutter
     real_ratios = tracker_module.log_ratios_clutter
 
-    def update(mu, P, b, L, model, objects):  # type: ignore[no-untyped-def]
+    def update(mu, P, b, L, model, objects, **kw):  # type: ignore[no-untyped-def]
         seen.append(("hypotheses", objects))
-        return real_update(mu, P, b, L, model, objects)
+        return real_update(mu, P, b, L, model, objects, **kw)
 
     def ratios(poses, b, L, model, objects):  # type: ignore[no-untyped-def]
         seen.append(("elsewhere", objects))
@@ -1695,3 +1695,43 @@ def test_min_best_s_on_a_run_only_holds_places_back() -> None:
 def test_min_best_s_settings_are_checked(v: float, match: str) -> None:
     with pytest.raises(InputError, match=match):
         TrackerConfig(min_best_s=v)
+
+
+def test_a_replay_in_two_halves_gives_the_same_candidates_bit_for_bit(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A search's candidates are replayed in two halves side by side from
+    # REPLAY_PARALLEL_MIN on; each candidate is replayed alone, so every array must be the
+    # one-thread replay's to the bit -- with few candidates, and with so many that each half
+    # would split its frames again (which it must not: the helper thread runs one half).
+    import omniloc.track.tracker as tk
+
+    run, _ = _scenario()
+    calls: list[tuple[np.ndarray, np.ndarray, list[object]]] = []
+    replay = Tracker._replay
+
+    def record(self: Tracker, poses: np.ndarray, covs: np.ndarray, frames: list[object]):  # type: ignore[no-untyped-def]
+        calls.append((poses, covs, list(frames)))
+        return replay(self, poses, covs, frames)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(Tracker, "_replay", record)
+    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    tr.odometry(run.odometry.t, run.odometry.v, run.odometry.w)
+    for f in run.frames[:120]:
+        tr.frame(f.t, f.bearings)
+    monkeypatch.setattr(Tracker, "_replay", replay)
+    assert calls
+    poses, covs, frames = max(calls, key=lambda c: c[0].shape[0])
+    rng = np.random.default_rng(8)
+    many = 2 * 512 + 7  # (halves of at least likelihood.PARALLEL_MIN poses)
+    pick = rng.integers(0, poses.shape[0], many)
+    jitter = np.column_stack([rng.normal(0, 0.5, (many, 2)), rng.normal(0, 0.3, many)])
+    for p, c in ((poses, covs), (poses[pick] + jitter, covs[pick])):
+        monkeypatch.setattr(tk, "REPLAY_PARALLEL_MIN", 10**9)
+        whole = tr._replay(p, c, frames)  # type: ignore[arg-type]
+        monkeypatch.setattr(tk, "REPLAY_PARALLEL_MIN", 2)
+        halves = tr._replay(p, c, frames)  # type: ignore[arg-type]
+        assert len(halves) == len(whole) == 7
+        for x, y in zip(halves, whole, strict=True):
+            assert x.shape[0] == p.shape[0]
+            np.testing.assert_array_equal(x, y)

@@ -84,7 +84,7 @@ _pool: ThreadPoolExecutor | None = None
 _pool_lock = threading.Lock()
 
 
-def _shared_pool() -> ThreadPoolExecutor | None:
+def shared_pool() -> ThreadPoolExecutor | None:
     """The module's pool of one helper thread (the caller runs the other half), made at
     first use; None on a machine with one core."""
     global _pool
@@ -247,13 +247,17 @@ def frame_update_clutter(
     L: FloatArray,
     model: FrameModel,
     objects: Objects | None,
+    *,
+    parallel: bool = True,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """:func:`frame_update` with clutter that has memory (``objects``, None: none); also
-    returns each bearing's posterior probability of being clutter, shape (H, k)."""
+    returns each bearing's posterior probability of being clutter, shape (H, k).
+    ``parallel`` False: on the calling thread alone, however many hypotheses (for a caller
+    that runs parts of its work side by side already, with :func:`shared_pool`)."""
     if mu.shape[0] == 0:
         k = np.asarray(bearings).size
         return mu.copy(), P.copy(), np.zeros(0), np.zeros(0), np.zeros((0, k))
-    return _kernel(mu, P, bearings, L, model, update=True, objects=objects)
+    return _kernel(mu, P, bearings, L, model, update=True, objects=objects, parallel=parallel)
 
 
 def log_ratios_clutter(
@@ -280,6 +284,7 @@ def _kernel(
     *,
     update: bool,
     objects: Objects | None = None,
+    parallel: bool = True,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """The compiled kernel on the model's numbers (:func:`frame_update_kernel`), on the
     whole map or, on a large one with a range, cell by cell (:func:`_by_cells`)."""
@@ -320,17 +325,23 @@ def _kernel(
         margin = CELL_REACH_SHARE * model.max_range if update else 0.0
         groups = _cell_groups(mu, rest[1], model.max_range, margin)
         if groups is not None:
-            return _by_cells(mu, P, rest, ow, var, groups, update, margin)
-    return _scan(mu, P, rest, ow, var, update)[:5]
+            return _by_cells(mu, P, rest, ow, var, groups, update, margin, parallel)
+    return _scan(mu, P, rest, ow, var, update, parallel)[:5]
 
 
 def _scan(
-    mu: FloatArray, P: FloatArray, rest: tuple[Any, ...], ow: FloatArray, var: float, update: bool
+    mu: FloatArray,
+    P: FloatArray,
+    rest: tuple[Any, ...],
+    ow: FloatArray,
+    var: float,
+    update: bool,
+    parallel: bool = True,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """:func:`frame_update_kernel` on the map of ``rest``: in two halves side by side from
     ``PARALLEL_MIN`` hypotheses on."""
     H = mu.shape[0]
-    pool = _shared_pool() if H >= PARALLEL_MIN else None
+    pool = shared_pool() if parallel and H >= PARALLEL_MIN else None
     if pool is None:
         whole: tuple[Any, ...] = (mu, P, *rest, ow, var)
         return frame_update_kernel(*whole)
@@ -482,6 +493,7 @@ def _by_cells(
     groups: list[tuple[NDArray[np.int64], NDArray[np.int64]]],
     update: bool,
     margin: float,
+    parallel: bool = True,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
     """:func:`_kernel` cell by cell (``groups`` from :func:`_cell_groups`): the same
     numbers, bit for bit. With many poses the cells are shared between the caller and the
@@ -512,7 +524,7 @@ def _by_cells(
                 mu_out[idx], P_out[idx] = out[0], out[1]
                 far[idx] = ~(out[5] <= margin)
 
-    pool = _shared_pool() if H >= PARALLEL_MIN else None
+    pool = shared_pool() if parallel and H >= PARALLEL_MIN else None
     if pool is None:
         run(groups)
     else:
@@ -524,7 +536,13 @@ def _by_cells(
     if far.any():
         idx = np.flatnonzero(far)
         out = _scan(
-            np.ascontiguousarray(mu[idx]), np.ascontiguousarray(P[idx]), rest, ow[idx], var, True
+            np.ascontiguousarray(mu[idx]),
+            np.ascontiguousarray(P[idx]),
+            rest,
+            ow[idx],
+            var,
+            True,
+            parallel,
         )
         mu_out[idx], P_out[idx] = out[0], out[1]
         log_ratio[idx], explained[idx], post[idx] = out[2], out[3], out[4]

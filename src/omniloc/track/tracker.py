@@ -94,7 +94,13 @@ from .confidence import _interpolate, is_recent, knot_arrays
 from .config import _CONFIDENCE_TABLES, TrackerConfig
 from .data import _float_array
 from .elsewhere import Elsewhere
-from .likelihood import FrameModel, Objects, frame_update_clutter, log_ratios_clutter
+from .likelihood import (
+    FrameModel,
+    Objects,
+    frame_update_clutter,
+    log_ratios_clutter,
+    shared_pool,
+)
 from .motion import MotionModel, between, compose, integrate, inverse, move, twist_of
 from .records import Hypothesis, TrackEstimate, TrackState
 from .relocalize import search_window
@@ -120,6 +126,12 @@ KIDNAP_MARGIN = 0.5
 #: The share of the belief a pose told by :meth:`Tracker.set_pose` takes by default (the rest
 #: stays with elsewhere: a wrong pose told still leaves the robot somewhere to be found).
 SET_POSE_MASS = 0.99
+
+#: From this many candidates on, a search's replay runs in two halves side by side
+#: (:meth:`Tracker._replay`): a replay is many frames (14 on average on MRCLAM, 4 s), so
+#: one hand-off to the helper thread (about 0.1 ms) pays long before the 512 poses from
+#: which a single frame is split (``likelihood.PARALLEL_MIN``).
+REPLAY_PARALLEL_MIN = 64
 
 #: Below this many pairs of poses, all pairs are compared directly (building two k-d trees
 #: costs more).
@@ -868,7 +880,28 @@ class Tracker:
         log-likelihood ratios summed from each frame of the replay to its end (C, K), their
         counts of bearings explained and seen (with the recent-fit forgetting), and their
         clutter memory (the expected counts of the tracker's memory objects, zero when the
-        replay does not reach the tracker's last frame with bearings)."""
+        replay does not reach the tracker's last frame with bearings).
+
+        From ``REPLAY_PARALLEL_MIN`` candidates on, the two halves are replayed side by side
+        (each candidate is replayed alone, so the results are the same bit for bit): one
+        hand-off for the whole replay instead of one per frame, and the frames' own steps
+        run in parallel too."""
+        pool = shared_pool() if poses.shape[0] >= REPLAY_PARALLEL_MIN else None
+        if pool is None:
+            return self._replay_part(poses, covs, frames, parallel=True)
+        half = poses.shape[0] // 2
+        first = pool.submit(self._replay_part, poses[:half], covs[:half], frames, parallel=False)
+        second = self._replay_part(poses[half:], covs[half:], frames, parallel=False)
+        a = first.result()
+        return tuple(  # type: ignore[return-value]
+            np.concatenate([x, y]) for x, y in zip(a, second, strict=True)
+        )
+
+    def _replay_part(
+        self, poses: FloatArray, covs: FloatArray, frames: list[WindowFrame], *, parallel: bool
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """:meth:`_replay` of some candidates on the calling thread (``parallel``: its frame
+        likelihoods may use the helper thread)."""
         c = self.config
         rel = between(frames[0].odom, frames[-1].odom)
         mu = compose(poses, inverse(rel))
@@ -890,7 +923,13 @@ class Tracker:
                 fit_m, fit_n = fit_m * decay, fit_n * decay
             objects = self._objects(f.t, mem_b, rot, mem_t, mem_w)
             mu, P, lr, explained, post = frame_update_clutter(
-                mu, P, f.bearings, self._L, self._frame_model(f.turn_rate), objects
+                mu,
+                P,
+                f.bearings,
+                self._L,
+                self._frame_model(f.turn_rate),
+                objects,
+                parallel=parallel,
             )
             if f.bearings.size:
                 mem_b, mem_w, mem_t, rot = f.bearings, c.clutter_persistence * post, f.t, 0.0
