@@ -790,7 +790,6 @@ def main(argv: list[str] | None = None) -> int:
         "when": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "command": " ".join(["python benchmarks/track_baselines.py", *(argv or sys.argv[1:])]),
         "python": platform.python_version(),
-        "numpy": np.__version__,
         "libraries": libraries(),
         "omniloc": getattr(omniloc, "__version__", "?"),
         "machine": platform.processor() or platform.machine(),
@@ -824,7 +823,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         head = (
             f"Measured {meta['when']}{baselines} ({meta['machine']}, Python {meta['python']}, "
-            f"numpy {meta['numpy']}): `{meta['command']}`, {meta['wall_s']:.0f} s"
+            f"numpy {meta['libraries']['numpy']}): `{meta['command']}`, {meta['wall_s']:.0f} s"
             + ("" if final else " (INCOMPLETE: the run was still going)")
             + ".\n\n"
         )
