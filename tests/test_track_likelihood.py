@@ -13,6 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.stats import norm
 
+from omniloc.angles import wrap
 from omniloc.sensor import SensorModel
 from omniloc.track.likelihood import (
     FrameModel,
@@ -591,3 +592,123 @@ def test_miss_weight_reaches_the_frame_model_and_is_checked() -> None:
     for bad in (-0.1, 1.5, float("nan")):
         with pytest.raises(InputError, match="miss_weight"):
             TrackerConfig(miss_weight=bad)
+
+
+def _assignment_sum(R: np.ndarray) -> float:
+    """The sum over the assignments of bearings (rows) to landmarks (columns), each landmark
+    to at most one bearing and each bearing to at most one landmark, of the product of
+    their readings ``R`` (over the clutter's density; an unassigned bearing counts 1)."""
+    import itertools
+
+    k, n = R.shape
+    total = 0.0
+    for choice in itertools.product(range(-1, n), repeat=k):
+        used = [c for c in choice if c >= 0]
+        if len(used) != len(set(used)):
+            continue
+        total += math.prod(R[i, c] for i, c in enumerate(choice) if c >= 0)
+    return total
+
+
+def _readings(mu: np.ndarray, zs: np.ndarray, L: np.ndarray, model: FrameModel) -> np.ndarray:
+    """Each bearing's reading of each landmark in view from an exactly known pose, over the
+    clutter's density (a single Gaussian or the sharp-core mixture)."""
+    kappa = math.exp(model.log_kappa)
+    rho = model.p_detect / (1.0 - model.p_detect)
+    R = np.zeros((zs.size, L.shape[0]))
+    for i, z in enumerate(zs):
+        for n, lm in enumerate(L):
+            e = float(wrap(z - _bearing(mu[0], lm)))
+            g = (1 - model.core_share) * norm.pdf(e, scale=math.sqrt(model.sigma2))
+            if model.core_share:
+                g += model.core_share * norm.pdf(e, scale=math.sqrt(model.core_sigma2))
+            R[i, n] = rho * g / kappa
+    return R
+
+
+@pytest.mark.parametrize("core_share", [0.0, 0.43])
+@pytest.mark.parametrize(
+    "offsets",
+    [
+        ((0.0, 0.0), (0.5, -1.2)),  # one landmark, two bearings
+        ((0.0, 0.0), (0.5, -1.2, 2.0)),  # one landmark, three bearings
+        ((0.0, 0.3), (0.4, 3.5)),  # a pair of landmarks 4 deg apart, a bearing near each
+        ((0.0, 0.3, -0.3), (0.4, 3.5, 1.5)),  # three landmarks, three bearings between them
+    ],
+)
+def test_exclusive_landmarks_weigh_the_sum_over_assignments(
+    core_share: float, offsets: tuple[tuple[float, ...], tuple[float, ...]]
+) -> None:
+    # Each landmark explains at most one bearing of the frame: the frame's ratio is the sum
+    # over such assignments (times the misses), where weighing each bearing on its own
+    # counts one landmark for two bearings too. Exact for an exactly known pose, and for a
+    # hypothesis whose covariance is as good as zero.
+    base = _model(fov=np.deg2rad(120.0), max_range=8.0)
+    if core_share:
+        base = dataclasses.replace(base, core_share=core_share, core_sigma2=(SIGMA / 3) ** 2)
+    model = dataclasses.replace(base, exclusive=True)
+    lm_dy, z_deg = offsets
+    L = np.array([[4.0, 1.0 + dy] for dy in lm_dy])
+    mu = np.array([[0.0, 0.0, 0.2]])
+    zs = _bearing(mu[0], L[0]) + np.deg2rad(np.array(z_deg))
+    R = _readings(mu, zs, L, base)
+    misses = L.shape[0] * math.log(1 - 0.6)
+    exact = misses + math.log(_assignment_sum(R))
+    apart = misses + np.log1p(R.sum(axis=1)).sum()
+    got = log_ratios(mu, zs, L, model)[0]
+    assert math.isclose(got, exact, rel_tol=1e-12, abs_tol=1e-12)
+    assert math.isclose(log_ratios(mu, zs, L, base)[0], apart, rel_tol=1e-12, abs_tol=1e-12)
+    assert got < apart
+    P = np.diag([1e-14, 1e-14, 1e-16])[None]
+    assert math.isclose(frame_update(mu, P, zs, L, model)[2][0], exact, rel_tol=1e-6)
+
+
+def test_exclusive_changes_nothing_when_no_two_bearings_contest_a_landmark() -> None:
+    # Three landmarks spread over the view, one bearing on each: no landmark reads two
+    # bearings (the others' readings are thousands of sigmas off and not computed), so the
+    # frame weighs and moves the hypotheses as before, bit for bit.
+    model = _model(fov=np.deg2rad(120.0), max_range=8.0)
+    L = np.array([[4.0, -2.0], [5.0, 0.5], [3.0, 2.5]])
+    rng = np.random.default_rng(3)
+    mu = np.column_stack([rng.normal(0, 0.05, 6), rng.normal(0, 0.05, 6), rng.normal(0, 0.02, 6)])
+    P = np.tile(np.diag([1e-4, 1e-4, 1e-5]), (6, 1, 1))
+    zs = np.array([_bearing(np.zeros(3), lm) for lm in L]) + np.deg2rad([0.4, -0.3, 0.8])
+    ex = dataclasses.replace(model, exclusive=True)
+    for a, b in zip(frame_update(mu, P, zs, L, model), frame_update(mu, P, zs, L, ex), strict=True):
+        np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(log_ratios(mu, zs, L, model), log_ratios(mu, zs, L, ex))
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), k=st.integers(2, 6), update=st.booleans())
+def test_exclusive_landmarks_never_weigh_a_frame_more(seed: int, k: int, update: bool) -> None:
+    # Taking a landmark's reading away from all but one bearing can only lower the sum:
+    # every pose earns at most what weighing the bearings on their own gives it.
+    rng = np.random.default_rng(seed)
+    model = _model(fov=np.deg2rad(90.0), max_range=7.0)
+    L = np.column_stack([rng.uniform(1, 6, 6), rng.uniform(-2, 2, 6)])
+    mu = np.column_stack([rng.normal(0, 0.3, (8, 2)), rng.normal(0, 0.2, 8)])
+    P = np.tile(np.diag([0.05, 0.05, 0.01]), (8, 1, 1))
+    zs = np.asarray(wrap(rng.uniform(-0.6, 0.6, k)), dtype=np.float64)
+    ex = dataclasses.replace(model, exclusive=True)
+    if update:
+        a, b = frame_update(mu, P, zs, L, model)[2], frame_update(mu, P, zs, L, ex)[2]
+    else:
+        a, b = log_ratios(mu, zs, L, model), log_ratios(mu, zs, L, ex)
+    assert np.all(b <= a + 1e-12)
+
+
+def test_exclusive_landmarks_reaches_the_frame_model_and_is_checked() -> None:
+    from omniloc import LandmarkMap
+    from omniloc.errors import InputError
+    from omniloc.track import TrackerConfig
+    from omniloc.track.motion import MotionModel
+    from omniloc.track.tracker import Tracker
+
+    lm = LandmarkMap(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
+    sensor = SensorModel(sigma=SIGMA)
+    on = Tracker(lm, sensor, MotionModel(), TrackerConfig(exclusive_landmarks=True))
+    assert on._model.exclusive
+    assert not Tracker(lm, sensor, MotionModel(), TrackerConfig())._model.exclusive
+    with pytest.raises(InputError, match="exclusive_landmarks"):
+        TrackerConfig(exclusive_landmarks="yes")  # type: ignore[arg-type]

@@ -557,6 +557,80 @@ def _faint_cut(fresh: float, share: float, rho_max: float, root_min: float, norm
     return math.log(fresh) - 60.0 * math.log(2.0) - math.log(share * rho_max * norm / root_min)
 
 
+#: A reading below this share of its bearing's clutter density adds nothing to the frame's
+#: sum that survives rounding (:func:`_faint_cut`).
+_FAINT_SHARE = 2.0**-60
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _exclusive_correction(rr: FloatArray, one_plus: FloatArray) -> float:
+    """ln of the sum over assignments in which each landmark takes at most one bearing,
+    minus ln of the product in which each bearing is weighed on its own (both relative to
+    every bearing clutter): ``rr[i, n]`` the reading of landmark n for bearing i over the
+    bearing's clutter density, ``one_plus[i] = 1 + sum_n rr[i, n]``. Only the landmarks that
+    two bearings or more read, and those bearings, enter (the rest factor out alike); more
+    than 12 such bearings: 0. A reading below 2^-60 of its bearing's clutter density counts
+    as none (it is zeroed in ``rr``): those are the faint readings the frame kernel does not
+    compute, and they would change the sum by less than its last bit."""
+    kz, N = rr.shape
+    for i in range(kz):
+        for n in range(N):
+            if rr[i, n] < _FAINT_SHARE:
+                rr[i, n] = 0.0
+    cn = np.empty(N, dtype=np.int64)
+    nc = 0
+    for n in range(N):
+        cnt = 0
+        for i in range(kz):
+            if rr[i, n] > 0.0:
+                cnt += 1
+        if cnt >= 2:
+            cn[nc] = n
+            nc += 1
+    if nc == 0:
+        return 0.0
+    B = np.empty(kz, dtype=np.int64)
+    nb = 0
+    for i in range(kz):
+        hit = False
+        for c in range(nc):
+            if rr[i, cn[c]] > 0.0:
+                hit = True
+        if hit:
+            B[nb] = i
+            nb += 1
+    if nb > 12:
+        return 0.0
+    u = np.empty(nb)
+    for b in range(nb):
+        v = one_plus[B[b]]
+        for c in range(nc):
+            v -= rr[B[b], cn[c]]
+        u[b] = max(v, 1.0)
+    size = 1 << nb
+    dp = np.zeros(size)
+    dp[0] = 1.0
+    for c in range(nc):
+        n = cn[c]
+        for mask in range(size - 1, 0, -1):
+            acc = dp[mask]
+            for b in range(nb):
+                if mask & (1 << b):
+                    acc += dp[mask ^ (1 << b)] * rr[B[b], n]
+            dp[mask] = acc
+    M = 0.0
+    for mask in range(size):
+        term = dp[mask]
+        for b in range(nb):
+            if not mask & (1 << b):
+                term *= u[b]
+        M += term
+    out = math.log(M)
+    for b in range(nb):
+        out -= math.log(one_plus[B[b]])
+    return out
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def frame_update_kernel(
     mu: FloatArray,
@@ -579,6 +653,7 @@ def frame_update_kernel(
     update_scale: float,
     nonempty: bool,
     miss_weight: float,
+    exclusive: bool,
     obj_b: FloatArray,
     obj_w: FloatArray,
     obj_var: float,
@@ -621,7 +696,14 @@ def frame_update_kernel(
     ``nonempty``: the frame was recorded because it holds a bearing (a log that lists only
     frames with a detection); with at least one bearing, its likelihood (and the null's) is
     conditioned on that: each ratio is multiplied by ``P_null(some bearing) / P_k(some
-    bearing)``, where ``P_k(no bearing) = prod (1 - d_n) exp(-clutter expected)``."""
+    bearing)``, where ``P_k(no bearing) = prod (1 - d_n) exp(-clutter expected)``.
+
+    ``exclusive``: a landmark explains at most one bearing of the frame. Each bearing's
+    readings are computed as above (one bearing at a time, each on the hypothesis the ones
+    before it moved); the frame's ratio is then the sum over the assignments in which no
+    landmark takes two bearings instead of the product of the bearings' sums
+    (:func:`_exclusive_correction`). The updates, the clutter posteriors and the counts of
+    bearings explained are as without it."""
     # (Exactly known poses: neither mu nor P is changed, and P may be a single zero
     # covariance shared by every pose.)
     mu = mu.copy() if update else mu
@@ -682,6 +764,9 @@ def frame_update_kernel(
     # (Exactly known poses: the landmarks in view, and their odds.)
     view = np.empty(N, dtype=np.int64)
     view_rho = np.empty(N)
+    kz = bearings.shape[0]
+    rr = np.zeros((kz if exclusive else 0, N))
+    one_plus = np.ones(kz if exclusive else 0)
     # Each object's Gaussian at each bearing (the same for every hypothesis; each
     # hypothesis weighs it by its own expected count).
     obj_g = np.empty((bearings.shape[0], K))
@@ -769,6 +854,8 @@ def frame_update_kernel(
                 # An exactly known pose: the landmarks in view and their odds are those of
                 # the one prediction; the variances are the sensor's (var 0), their square
                 # roots taken once; the readings are not kept (nothing moves).
+                if exclusive:
+                    rr[iz, :] = 0.0
                 for j in range(n_view):
                     n = view[j]
                     e = wrap_float(z - h[n])
@@ -776,11 +863,14 @@ def frame_update_kernel(
                     if q * inv_wide < cut_wide and (core_share <= 0.0 or q * inv_core < cut_core):
                         continue  # both readings faint (see above)
                     if core_share > 0.0:
-                        total += _reading_root(
+                        r = _reading_root(
                             wide, view_rho[j], e, sigma2, root_wide, norm
                         ) + _reading_root(core_share, view_rho[j], e, core_sigma2, root_core, norm)
                     else:
-                        total += _reading_root(1.0, view_rho[j], e, sigma2, root_wide, norm)
+                        r = _reading_root(1.0, view_rho[j], e, sigma2, root_wide, norm)
+                    total += r
+                    if exclusive:
+                        rr[iz, n] = r
             for n in range(N if update else 0):
                 if d[n] == 0.0:
                     a[n] = 0.0
@@ -807,6 +897,13 @@ def frame_update_kernel(
             log_ratio[k] += math.log(total)
             explained[k] += 1.0 - base / total
             clutter_post[k, iz] = base / total
+            if exclusive:
+                if update:
+                    for n in range(N):
+                        rr[iz, n] = a[n] + ac[n]
+                for n in range(N):
+                    rr[iz, n] /= base
+                one_plus[iz] = total / base
             if not update:
                 continue
             mean[:] = 0.0
@@ -845,6 +942,8 @@ def frame_update_kernel(
                 m[i] += mean[i]
             m[2] = wrap_float(m[2])
             moved = True
+        if exclusive and kz >= 2:
+            log_ratio[k] += _exclusive_correction(rr, one_plus)
     return mu, P, log_ratio, explained, clutter_post, reach
 
 

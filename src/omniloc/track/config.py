@@ -50,7 +50,7 @@ _HALF_TURN_ANGLES = (
     "core_sigma",
 )
 _SHARES = {"fit_explained", "core_share", "miss_weight", "kidnap_fit"}
-_BOOLS = {"core_update", "temper_update", "nonempty_frames"}
+_BOOLS = {"core_update", "temper_update", "nonempty_frames", "exclusive_landmarks"}
 #: The confidence tables (:mod:`omniloc.track.confidence`).
 _CONFIDENCE_TABLES = (
     "confidence_localized",
@@ -275,6 +275,14 @@ class TrackerConfig:
         of reported tubes has 2.6 times the variance of independent detections, and a run
         of frames that report one of five tubes in view (robot 5 at 622-635 s) cost the true
         place a nat a frame until elsewhere took it. 1 (default): every miss counts in full.
+    exclusive_landmarks : bool
+        A landmark explains at most one bearing of a frame: a frame is weighed by the sum
+        over the assignments in which no landmark takes two bearings (exactly, over the
+        landmarks that two bearings read; :mod:`omniloc.track.likelihood`). On a map of
+        clusters, a place turned against the truth can otherwise explain two bearings of
+        one frame by one landmark near both. The updates of the poses are as without it.
+        False (default): each bearing is weighed on its own (one landmark read by two
+        bearings of a frame costs nothing).
     covariance_inflation : float
         Factor (>= 1) on the covariances the tracker reports and decides ``localized`` by (the
         probability of being within the tolerances), not on its filters' own: for data
@@ -424,6 +432,7 @@ class TrackerConfig:
     temper_update: bool = False
     nonempty_frames: bool = False
     miss_weight: float = 1.0
+    exclusive_landmarks: bool = False
     covariance_inflation: float = 1.0
     search_miss: float | None = None
     replay_s: float = 4.0

@@ -12,7 +12,8 @@ probability that it lies in the field of view given the pose's uncertainty (``Ph
 inside the edge its predicted bearing lies, in standard deviations) and 0 out of range;
 spurious bearings are a Poisson clutter of density ``kappa = clutter / fov`` per radian. Summed
 over the ways of assigning bearings to landmarks (each bearing to at most one landmark, the
-landmarks of a map being rarely contested by two bearings of one frame), the ratio is
+landmarks of a map being rarely contested by two bearings of one frame; ``exclusive`` weighs
+the sum in which no landmark takes two bearings where they are), the ratio is
 
     prod_j (1 - d_j)  *  prod_i (1 + sum_j rho_j g_ij / kappa),    rho_j = d_j / (1 - d_j),
 
@@ -153,6 +154,12 @@ class FrameModel:
         ``miss_weight * ln(1 - d)``, and a reading's odds are ``rho = d / (1 - d) **
         miss_weight``, so that a landmark reported still earns ``d`` times its density (1:
         the model as written above; :attr:`~omniloc.track.TrackerConfig.miss_weight`).
+    exclusive : bool
+        Each landmark explains at most one bearing of a frame: the frame's ratio is the sum
+        over the assignments in which no landmark takes two bearings, each bearing's
+        readings as the chain rule above computes them (the updates are unchanged). False:
+        each bearing is weighed on its own, as the product above has it
+        (:attr:`~omniloc.track.TrackerConfig.exclusive_landmarks`).
     """
 
     sigma2: float
@@ -169,6 +176,7 @@ class FrameModel:
     update_scale: float = 1.0
     nonempty: bool = False
     miss_weight: float = 1.0
+    exclusive: bool = False
 
     @classmethod
     def of(cls, sensor: SensorModel, *, p_detect: float = 0.5, clutter: float = 0.5) -> FrameModel:
@@ -318,6 +326,7 @@ def _kernel(
         model.update_scale,
         model.nonempty,
         model.miss_weight,
+        model.exclusive,
         ob,
     )
     var = model.object_var if ob.size else 1.0

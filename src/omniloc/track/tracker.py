@@ -267,6 +267,8 @@ class Tracker:
             self._model = replace(self._model, nonempty=True)
         if c.miss_weight != 1.0:
             self._model = replace(self._model, miss_weight=c.miss_weight)
+        if c.exclusive_landmarks:
+            self._model = replace(self._model, exclusive=True)
         if c.clutter_persistence > 0:
             self._model = replace(
                 self._model,
