@@ -566,7 +566,7 @@ _FAINT_SHARE = 2.0**-60
 def _exclusive_correction(rr: FloatArray, one_plus: FloatArray) -> float:
     """ln of the sum over assignments in which each landmark takes at most one bearing,
     minus ln of the product in which each bearing is weighed on its own (both relative to
-    every bearing clutter): ``rr[i, n]`` the reading of landmark n for bearing i over the
+    every bearing being clutter): ``rr[i, n]`` the reading of landmark n for bearing i over the
     bearing's clutter density, ``one_plus[i] = 1 + sum_n rr[i, n]``. Only the landmarks that
     two bearings or more read, and those bearings, enter (the rest factor out alike); more
     than 12 such bearings: 0. A reading below 2^-60 of its bearing's clutter density counts
