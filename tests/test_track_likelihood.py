@@ -712,3 +712,20 @@ def test_exclusive_landmarks_reaches_the_frame_model_and_is_checked() -> None:
     assert not Tracker(lm, sensor, MotionModel(), TrackerConfig())._model.exclusive
     with pytest.raises(InputError, match="exclusive_landmarks"):
         TrackerConfig(exclusive_landmarks="yes")  # type: ignore[arg-type]
+
+
+def test_exclusive_landmarks_stay_finite_where_the_clutter_is_nearly_all_memory() -> None:
+    # The most memory the configuration accepts (clutter_persistence just below 1: fresh
+    # 2^-53) and no object near: a bearing's clutter density is nearly 0 and its readings
+    # are ~1e18 times it. Ten bearings on a cluster of four landmarks: the sum over
+    # assignments is a tiny share of the product; finite and far below it, never inf or NaN.
+    model = dataclasses.replace(_model(), fresh=2.0**-53, object_var=1e-4)
+    ex = dataclasses.replace(model, exclusive=True)
+    L = np.array([[4.0, 1.0], [4.0, 1.04], [4.0, 0.96], [4.0, 1.08]])
+    mu = np.array([[0.0, 0.0, 0.2]])
+    zs = _bearing(mu[0], L[0]) + np.deg2rad(np.linspace(-0.5, 1.0, 10))
+    objects = Objects(np.array([2.0]), np.zeros((1, 1)))
+    plain = log_ratios_clutter(mu, zs, L, model, objects)[0][0]
+    got = log_ratios_clutter(mu, zs, L, ex, objects)[0][0]
+    assert np.isfinite(plain) and np.isfinite(got)
+    assert got < plain - 100.0

@@ -601,12 +601,16 @@ def _exclusive_correction(rr: FloatArray, one_plus: FloatArray) -> float:
             nb += 1
     if nb > 12:
         return 0.0
+    # Each bearing's readings and its uncontested part are taken over its whole sum
+    # ``one_plus``: the sum over assignments is then that of the product's share, at most 1
+    # (it is the product's with the double readings left out), and no product of large
+    # readings (a clutter density near 0) can overflow.
     u = np.empty(nb)
     for b in range(nb):
         v = one_plus[B[b]]
         for c in range(nc):
             v -= rr[B[b], cn[c]]
-        u[b] = max(v, 1.0)
+        u[b] = max(v, 1.0) / one_plus[B[b]]
     size = 1 << nb
     dp = np.zeros(size)
     dp[0] = 1.0
@@ -616,19 +620,19 @@ def _exclusive_correction(rr: FloatArray, one_plus: FloatArray) -> float:
             acc = dp[mask]
             for b in range(nb):
                 if mask & (1 << b):
-                    acc += dp[mask ^ (1 << b)] * rr[B[b], n]
+                    acc += dp[mask ^ (1 << b)] * (rr[B[b], n] / one_plus[B[b]])
             dp[mask] = acc
-    M = 0.0
+    share = 0.0
     for mask in range(size):
         term = dp[mask]
         for b in range(nb):
             if not mask & (1 << b):
                 term *= u[b]
-        M += term
-    out = math.log(M)
-    for b in range(nb):
-        out -= math.log(one_plus[B[b]])
-    return out
+        share += term
+    # (A share below the smallest double -- a dozen bearings that all read one landmark
+    # alone, each thousands of times its clutter -- is taken as that double: the frame
+    # weighs the pose down by 744 nats, not to minus infinity.)
+    return math.log(min(max(share, 5e-324), 1.0))
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

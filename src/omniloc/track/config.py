@@ -281,6 +281,8 @@ class TrackerConfig:
         landmarks that two bearings read; :mod:`omniloc.track.likelihood`). On a map of
         clusters, a place turned against the truth can otherwise explain two bearings of
         one frame by one landmark near both. The updates of the poses are as without it.
+        Its cost grows as 2^k with the k bearings of a frame that contest a landmark (a few
+        on MRCLAM); beyond 12 such bearings a frame is weighed as without it.
         False (default): each bearing is weighed on its own (one landmark read by two
         bearings of a frame costs nothing).
     covariance_inflation : float
