@@ -1,0 +1,215 @@
+"""The tracker against the particle filter on MRCLAM's five whole runs, each under several
+seeds of its own random draws: is "right about as often" a difference or the luck of one
+draw?
+
+Run:  python benchmarks/track_baselines_seeds.py [--seeds 0 1 2 3 4]
+      [--particles 2000,10000,50000] [--workers 2] [--data PATH] [--out PATH]
+
+``track_baselines.py`` scores every localizer once: the tracker under its default seed
+(``TrackerConfig.seed`` 0), the particle filter under the evaluation's ``--seed`` 0. Both
+draw particles at random, and on MRCLAM the draw alone moves the tracker's localized frames
+by a quarter (``omniloc evaluate --tracker-seeds``). Here each runs the five whole runs once
+per seed: the tracker with ``TrackerConfig.seed`` = s (the ``mrclam`` preset otherwise), the
+filter as ``track_baselines.py --seed s`` seeds it (:func:`baselines_track.tuning.stream_seed`
+per run; seed 0 is the filter of ``results_tracking.json``), with the options of the tuning
+record (``baselines_track/tuning.json``), scored by the same code
+(:func:`baselines_track.harness.evaluate_streams`). Each (localizer, seed) is one job; jobs
+run in ``--workers`` processes (CPU time per second of recording is each job's own).
+
+Per localizer: each seed's figures over the five runs (the median time to the first correct
+``localized`` state, runs never localized, the mean share of frames correct after it, the
+shares of all frames correct and confidently wrong, the position RMSE over localized frames,
+CPU per second of recording) and their range over the seeds. Writes
+``results_tracking_seeds.json`` and ``.md`` beside this file. With the defaults about 10 minutes
+on two cores (2026-12-06: 610 s; the 50,000-particle filter is most of it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+from typing import Any
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent / "src"))
+sys.path.insert(0, str(HERE))
+
+from _results import run_meta, write_results  # noqa: E402
+from baselines_track.harness import evaluate_streams  # noqa: E402
+from baselines_track.motion import calibrate_motion_noise  # noqa: E402
+from baselines_track.tuning import pf_factory  # noqa: E402
+from omniloc.evaluate.tracking import mrclam_streams  # noqa: E402
+from track_baselines import (  # noqa: E402
+    DEFAULT_DATA,
+    TUNING_RECORD,
+    chosen_options,
+    pf_config,
+    warm_up,
+)
+
+#: The figures of one (localizer, seed), from ``TrackingResult.totals()``.
+FIGURES = (
+    ("time_to_localize_median_s", "first correct, median s"),
+    ("never_localized", "runs never localized"),
+    ("correct_after_rate", "correct after it (mean over runs)"),
+    ("correct_rate", "correct (all frames)"),
+    ("confidently_wrong_rate", "confidently wrong"),
+    ("pos_rmse_m", "position RMSE m"),
+    ("cpu_per_s", "CPU s / s"),
+)
+
+
+def _job(kind: str, n: int, seed: int, data: str) -> dict[str, Any]:
+    """One localizer under one seed on the five whole runs: its totals."""
+    runs = mrclam_streams(data)
+    if kind == "tracker":
+        from omniloc.track import Tracker, preset, with_settings
+
+        sensor, motion, config = with_settings(*preset("mrclam"), {"seed": seed})
+
+        def make(s: Any, _start: Any) -> Tracker:
+            return Tracker(s.landmarks, sensor, motion, config)
+
+        name = "omniloc Tracker (mrclam preset)"
+    else:
+        noise, _ = calibrate_motion_noise(
+            [r.odometry for r in runs], [r.segments[0].truth for r in runs]
+        )
+        warm_up(runs[0].landmarks.xy, noise)
+        chosen = chosen_options(json.loads(TUNING_RECORD.read_text()), [n])
+        make = pf_factory(pf_config(n, noise, chosen["pf"][n]), seed)
+        name = f"PF {n:,} particles, uniform start"
+    t0 = time.time()
+    res = evaluate_streams(runs, make, name=name, progress=False)
+    t = res.totals()
+    dur = sum(r.duration_s for r in res.runs)
+    return {
+        "localizer": name,
+        "kind": kind,
+        "particles": n,
+        "seed": seed,
+        "wall_s": round(time.time() - t0, 1),
+        "time_to_localize_median_s": t["time_to_localize_median_s"],
+        "never_localized": t["never_localized"],
+        "correct_after_rate": t["correct_after_rate"],
+        "correct_rate": t["localized_rate"] - t["confidently_wrong_rate"],
+        "confidently_wrong_rate": t["confidently_wrong_rate"],
+        "pos_rmse_m": t["pos_rmse_m"],
+        "cpu_per_s": sum(r.cpu_s for r in res.runs) / dur if dur > 0 else math.nan,
+        "localized_frames": t["localized_frames"],
+        "frames_scored": t["frames_scored"],
+    }
+
+
+def _fmt(key: str, v: float) -> str:
+    if not math.isfinite(v):
+        return "never" if key.startswith("time") else "-"
+    if key == "confidently_wrong_rate":
+        return f"{100 * v:.2f} %"
+    if key.endswith("_rate"):
+        return f"{100 * v:.1f} %"
+    if key == "pos_rmse_m":
+        return f"{v:.3f}"
+    if key == "cpu_per_s":
+        return f"{v:.4f}"
+    if key == "never_localized":
+        return f"{v:.0f}"
+    return f"{v:.1f}"
+
+
+def _span(key: str, vals: list[float]) -> str:
+    """min-max over the seeds (a time that is never on some seeds says how many)."""
+    fin = [v for v in vals if math.isfinite(v)]
+    if not fin:
+        return _fmt(key, math.nan)
+    lo, hi = _fmt(key, min(fin)), _fmt(key, max(fin))
+    s = lo if lo == hi else f"{lo} - {hi}"
+    if len(fin) < len(vals):
+        s += f" ({len(vals) - len(fin)} never)"
+    return s
+
+
+def table(rows: list[dict[str, Any]], seeds: list[int]) -> str:
+    """The markdown tables: per localizer and seed, then the ranges over the seeds."""
+    order = sorted({(r["kind"] != "tracker", r["particles"], r["localizer"]) for r in rows})
+    head = "| localizer | seed | " + " | ".join(h for _, h in FIGURES) + " |"
+    sep = "|" + "---|" * (len(FIGURES) + 2)
+    lines = ["**Each seed** (the five whole runs)", "", head, sep]
+    for _, _, name in order:
+        for r in sorted((r for r in rows if r["localizer"] == name), key=lambda r: r["seed"]):
+            cells = " | ".join(_fmt(k, float(r[k])) for k, _ in FIGURES)
+            lines.append(f"| {name} | {r['seed']} | {cells} |")
+    lines += ["", f"**Over seeds {', '.join(map(str, seeds))}** (min - max)", "", head, sep]
+    for _, _, name in order:
+        mine = [r for r in rows if r["localizer"] == name]
+        cells = " | ".join(_span(k, [float(r[k]) for r in mine]) for k, _ in FIGURES)
+        lines.append(f"| {name} | {len(mine)} seeds | {cells} |")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    ap.add_argument("--particles", default="2000,10000,50000", help="comma-separated counts")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--data", type=Path, default=DEFAULT_DATA)
+    ap.add_argument("--out", type=Path, default=HERE / "results_tracking_seeds.json")
+    args = ap.parse_args(argv)
+    if not (args.data / "landmarks.csv").is_file():
+        raise SystemExit(f"no MRCLAM set 6 at {args.data} (landmarks.csv missing): --data PATH")
+    try:
+        counts = [int(p) for p in args.particles.split(",") if p.strip()]
+    except ValueError:
+        raise SystemExit(
+            f"--particles: comma-separated whole numbers, got {args.particles!r}"
+        ) from None
+    if args.workers < 1:
+        raise SystemExit(f"--workers must be at least 1, got {args.workers}")
+    # The slowest jobs first, so that the pool's last minutes are not one long job alone.
+    jobs = [("pf", n, s) for n in sorted(counts, reverse=True) for s in args.seeds]
+    jobs += [("tracker", 0, s) for s in args.seeds]
+    t0 = time.time()
+    rows: list[dict[str, Any]] = []
+    with ProcessPoolExecutor(max_workers=args.workers) as pool:
+        futs = [pool.submit(_job, k, n, s, str(args.data)) for k, n, s in jobs]
+        for f in futs:
+            r = f.result()
+            rows.append(r)
+            print(
+                f"{r['localizer']}, seed {r['seed']}: correct {100 * r['correct_rate']:.1f} %, "
+                f"wrong {100 * r['confidently_wrong_rate']:.2f} %, first correct "
+                f"{_fmt('time_to_localize_median_s', r['time_to_localize_median_s'])} s "
+                f"({r['wall_s']:.0f} s)",
+                flush=True,
+            )
+    md = table(rows, args.seeds)
+    print(md)
+    meta = run_meta(
+        "track_baselines_seeds.py", argv, seeds=args.seeds, wall_s=round(time.time() - t0)
+    )
+    # (JSON has no inf or NaN: a time never reached, or a figure not defined, is null.)
+    clean = [
+        {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in r.items()}
+        for r in rows
+    ]
+    write_results(args.out, meta, rows=clean)
+    intro = (
+        f"# The tracker and the particle filter under several seeds "
+        f"(`benchmarks/track_baselines_seeds.py`)\n\n{meta['date']}, {meta['machine']}; "
+        f"`{meta['command']}`, {meta['wall_s']} s. MRCLAM set 6, the five whole runs; "
+        "the tracker's `mrclam` preset with `TrackerConfig.seed` = seed, the filter seeded "
+        "as `track_baselines.py --seed` seeds it (seed 0: the rows of "
+        "`results_tracking.md`).\n\n"
+    )
+    args.out.with_suffix(".md").write_text(intro + md)
+    print(f"wrote {args.out.with_suffix('.md')}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

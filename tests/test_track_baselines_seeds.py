@@ -1,0 +1,70 @@
+"""benchmarks/track_baselines_seeds.py: the ranges over seeds it reports, and its errors."""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+from track_baselines_seeds import _span, main, table
+
+
+def _row(name: str, kind: str, seed: int, ttl: float, correct: float) -> dict[str, object]:
+    return {
+        "localizer": name,
+        "kind": kind,
+        "particles": 0 if kind == "tracker" else 2000,
+        "seed": seed,
+        "time_to_localize_median_s": ttl,
+        "never_localized": 0.0 if math.isfinite(ttl) else 5.0,
+        "correct_after_rate": 0.336,
+        "correct_rate": correct,
+        "confidently_wrong_rate": 0.0005,
+        "pos_rmse_m": 0.106,
+        "cpu_per_s": 0.009,
+    }
+
+
+def test_a_range_over_seeds_says_how_many_never_got_there() -> None:
+    assert _span("time_to_localize_median_s", [396.6, 142.2, math.inf]) == (
+        "142.2 - 396.6 (1 never)"
+    )
+    assert _span("correct_rate", [0.162, 0.162]) == "16.2 %"
+    assert _span("time_to_localize_median_s", [math.inf, math.inf]) == "never"
+    assert _span("confidently_wrong_rate", [0.0, 0.0012]) == "0.00 % - 0.12 %"
+
+
+def test_the_tables_list_each_seed_then_the_range_the_tracker_first() -> None:
+    rows = [
+        _row("PF 2,000", "pf", 1, math.inf, 0.150),
+        _row("omniloc Tracker", "tracker", 1, 142.2, 0.170),
+        _row("PF 2,000", "pf", 0, 657.6, 0.155),
+        _row("omniloc Tracker", "tracker", 0, 396.6, 0.162),
+    ]
+    md = table(rows, [0, 1])
+    each, over = md.split("**Over seeds 0, 1**")
+    lines = [ln for ln in each.splitlines() if ln.startswith("| omniloc") or ln.startswith("| PF")]
+    assert [ln.split(" | ")[:2] for ln in lines] == [
+        ["| omniloc Tracker", "0"],
+        ["| omniloc Tracker", "1"],
+        ["| PF 2,000", "0"],
+        ["| PF 2,000", "1"],
+    ]
+    assert "| never |" in lines[3]
+    assert "| omniloc Tracker | 2 seeds | 142.2 - 396.6 |" in over
+    assert "| PF 2,000 | 2 seeds | 657.6 (1 never) |" in over
+    assert "15.0 % - 15.5 %" in over
+
+
+def test_a_missing_recording_or_a_bad_count_is_a_clear_error(tmp_path: Path) -> None:
+    with pytest.raises(SystemExit, match="no MRCLAM set 6 at"):
+        main(["--data", str(tmp_path)])
+    (tmp_path / "landmarks.csv").write_text("x,y\n0,0\n")
+    with pytest.raises(SystemExit, match="--particles: comma-separated whole numbers"):
+        main(["--data", str(tmp_path), "--particles", "2k"])
+    with pytest.raises(SystemExit, match="--workers must be at least 1"):
+        main(["--data", str(tmp_path), "--workers", "0"])
