@@ -3,25 +3,33 @@ seeds of its own random draws: is "right about as often" a difference or the luc
 draw?
 
 Run:  python benchmarks/track_baselines_seeds.py [--seeds 0 1 2 3 4]
-      [--particles 2000,10000,50000] [--workers 2] [--data PATH] [--out PATH]
+      [--particles 2000,10000,50000] [--streams N] [--large-streams N] [--workers 2]
+      [--data PATH] [--out PATH]
 
 ``track_baselines.py`` scores every localizer once: the tracker under its default seed
 (``TrackerConfig.seed`` 0), the particle filter under the evaluation's ``--seed`` 0. Both
 draw particles at random, and on MRCLAM the draw alone moves the tracker's localized frames
-by a quarter (``omniloc evaluate --tracker-seeds``). Here each runs the five whole runs once
-per seed: the tracker with ``TrackerConfig.seed`` = s (the ``mrclam`` preset otherwise), the
-filter as ``track_baselines.py --seed s`` seeds it (:func:`baselines_track.tuning.stream_seed`
-per run; seed 0 is the filter of ``results_tracking.json``), with the options of the tuning
-record (``baselines_track/tuning.json``), scored by the same code
+by a quarter (``omniloc evaluate --tracker-seeds``). Here each runs the five whole runs, and
+``--streams`` kidnapped and as many plain streams (``kidnap_streams`` with seed 0: the
+streams of ``track_baselines.py`` and of ``omniloc evaluate --kidnap N``; from
+``LARGE`` particles on only the first ``--large-streams`` of each, as there), once per
+seed: the tracker with ``TrackerConfig.seed`` = s (the ``mrclam`` preset otherwise), the
+filter with its random draws seeded as ``track_baselines.py --seed s`` seeds them
+(:func:`baselines_track.tuning.stream_seed` per stream; seed 0 is the filter of
+``results_tracking.json``), with the options of the tuning record
+(``baselines_track/tuning.json``), scored by the same code
 (:func:`baselines_track.harness.evaluate_streams`). Each (localizer, seed) is one job; jobs
 run in ``--workers`` processes (CPU time per second of recording is each job's own).
 
-Per localizer: each seed's figures over the five runs (the median time to the first correct
-``localized`` state, runs never localized, the mean share of frames correct after it, the
-shares of all frames correct and confidently wrong, the position RMSE over localized frames,
-CPU per second of recording) and their range over the seeds. Writes
-``results_tracking_seeds.json`` and ``.md`` beside this file. With the defaults about 10 minutes
-on two cores (2026-12-06: 610 s; the 50,000-particle filter is most of it).
+Per localizer and kind of stream (whole runs, kidnapped, plain): each seed's figures (the
+median time to the first correct ``localized`` state, streams never localized, the mean share
+of frames correct after it, the shares of all frames correct and confidently wrong, the
+position RMSE over localized frames, kidnapped streams correct again, plain streams flagged
+``kidnapped``, CPU per second of recording) and their range over the seeds. Writes
+``results_tracking_seeds.json`` and ``.md`` beside this file. The whole runs alone
+(``--streams 0``) take about 10 minutes on two cores (2026-12-06: 610 s, the
+50,000-particle filter most of it); with the default 20 streams of each kind, 21 minutes
+(1,286 s).
 """
 
 from __future__ import annotations
@@ -43,9 +51,10 @@ from _results import run_meta, write_results  # noqa: E402
 from baselines_track.harness import evaluate_streams  # noqa: E402
 from baselines_track.motion import calibrate_motion_noise  # noqa: E402
 from baselines_track.tuning import pf_factory  # noqa: E402
-from omniloc.evaluate.tracking import mrclam_streams  # noqa: E402
+from omniloc.evaluate.tracking import kidnap_streams, mrclam_streams  # noqa: E402
 from track_baselines import (  # noqa: E402
     DEFAULT_DATA,
+    LARGE,
     TUNING_RECORD,
     chosen_options,
     pf_config,
@@ -55,18 +64,26 @@ from track_baselines import (  # noqa: E402
 #: The figures of one (localizer, seed), from ``TrackingResult.totals()``.
 FIGURES = (
     ("time_to_localize_median_s", "first correct, median s"),
-    ("never_localized", "runs never localized"),
+    ("never_localized", "never localized"),
     ("correct_after_rate", "correct after it (mean over runs)"),
     ("correct_rate", "correct (all frames)"),
     ("confidently_wrong_rate", "confidently wrong"),
     ("pos_rmse_m", "position RMSE m"),
+    ("recovered", "kidnappings correct again"),
+    ("false_alarm_run_rate", "flagged kidnapped without a jump"),
     ("cpu_per_s", "CPU s / s"),
 )
+#: The kinds of stream, in the tables' order.
+GROUPS = ("whole runs", "kidnapped", "plain")
 
 
-def _job(kind: str, n: int, seed: int, data: str) -> dict[str, Any]:
-    """One localizer under one seed on the five whole runs: its totals."""
+def _job(
+    kind: str, n: int, seed: int, data: str, n_streams: int, large_streams: int
+) -> list[dict[str, Any]]:
+    """One localizer under one seed on the whole runs and the streams: its totals per kind of
+    stream."""
     runs = mrclam_streams(data)
+    kid, plain = kidnap_streams(runs, n_streams, rng=0) if n_streams else ([], [])
     if kind == "tracker":
         from omniloc.track import Tracker, preset, with_settings
 
@@ -84,26 +101,39 @@ def _job(kind: str, n: int, seed: int, data: str) -> dict[str, Any]:
         chosen = chosen_options(json.loads(TUNING_RECORD.read_text()), [n])
         make = pf_factory(pf_config(n, noise, chosen["pf"][n]), seed)
         name = f"PF {n:,} particles, uniform start"
-    t0 = time.time()
-    res = evaluate_streams(runs, make, name=name, progress=False)
-    t = res.totals()
-    dur = sum(r.duration_s for r in res.runs)
-    return {
-        "localizer": name,
-        "kind": kind,
-        "particles": n,
-        "seed": seed,
-        "wall_s": round(time.time() - t0, 1),
-        "time_to_localize_median_s": t["time_to_localize_median_s"],
-        "never_localized": t["never_localized"],
-        "correct_after_rate": t["correct_after_rate"],
-        "correct_rate": t["localized_rate"] - t["confidently_wrong_rate"],
-        "confidently_wrong_rate": t["confidently_wrong_rate"],
-        "pos_rmse_m": t["pos_rmse_m"],
-        "cpu_per_s": sum(r.cpu_s for r in res.runs) / dur if dur > 0 else math.nan,
-        "localized_frames": t["localized_frames"],
-        "frames_scored": t["frames_scored"],
-    }
+        if n >= LARGE:
+            kid, plain = kid[:large_streams], plain[:large_streams]
+    rows = []
+    for group, streams in zip(GROUPS, (runs, kid, plain), strict=True):
+        if not streams:
+            continue
+        t0 = time.time()
+        res = evaluate_streams(streams, make, name=name, progress=False)
+        t = res.totals()
+        dur = sum(r.duration_s for r in res.runs)
+        rows.append(
+            {
+                "localizer": name,
+                "kind": kind,
+                "particles": n,
+                "seed": seed,
+                "streams": group,
+                "n_streams": len(streams),
+                "wall_s": round(time.time() - t0, 1),
+                "time_to_localize_median_s": t["time_to_localize_median_s"],
+                "never_localized": t["never_localized"],
+                "correct_after_rate": t["correct_after_rate"],
+                "correct_rate": t["localized_rate"] - t["confidently_wrong_rate"],
+                "confidently_wrong_rate": t["confidently_wrong_rate"],
+                "pos_rmse_m": t["pos_rmse_m"],
+                "recovered": (t["runs"] - t["unrecovered"] if group == "kidnapped" else math.nan),
+                "false_alarm_run_rate": t["false_alarm_run_rate"],
+                "cpu_per_s": sum(r.cpu_s for r in res.runs) / dur if dur > 0 else math.nan,
+                "localized_frames": t["localized_frames"],
+                "frames_scored": t["frames_scored"],
+            }
+        )
+    return rows
 
 
 def _fmt(key: str, v: float) -> str:
@@ -117,7 +147,7 @@ def _fmt(key: str, v: float) -> str:
         return f"{v:.3f}"
     if key == "cpu_per_s":
         return f"{v:.4f}"
-    if key == "never_localized":
+    if key in ("never_localized", "recovered"):
         return f"{v:.0f}"
     return f"{v:.1f}"
 
@@ -135,27 +165,66 @@ def _span(key: str, vals: list[float]) -> str:
 
 
 def table(rows: list[dict[str, Any]], seeds: list[int]) -> str:
-    """The markdown tables: per localizer and seed, then the ranges over the seeds."""
+    """The markdown tables: per kind of stream, localizer and seed, then the ranges over
+    the seeds (the tracker first, then the filter by its particle count)."""
     order = sorted({(r["kind"] != "tracker", r["particles"], r["localizer"]) for r in rows})
-    head = "| localizer | seed | " + " | ".join(h for _, h in FIGURES) + " |"
-    sep = "|" + "---|" * (len(FIGURES) + 2)
-    lines = ["**Each seed** (the five whole runs)", "", head, sep]
-    for _, _, name in order:
-        for r in sorted((r for r in rows if r["localizer"] == name), key=lambda r: r["seed"]):
-            cells = " | ".join(_fmt(k, float(r[k])) for k, _ in FIGURES)
-            lines.append(f"| {name} | {r['seed']} | {cells} |")
+    groups = [g for g in GROUPS if any(r["streams"] == g for r in rows)]
+    head = "| localizer | streams | seed | " + " | ".join(h for _, h in FIGURES) + " |"
+    sep = "|" + "---|" * (len(FIGURES) + 3)
+
+    def mine(name: str, group: str) -> list[dict[str, Any]]:
+        return sorted(
+            (r for r in rows if r["localizer"] == name and r["streams"] == group),
+            key=lambda r: r["seed"],
+        )
+
+    lines = ["**Each seed**", "", head, sep]
+    for group in groups:
+        for _, _, name in order:
+            for r in mine(name, group):
+                cells = " | ".join(_fmt(k, float(r[k])) for k, _ in FIGURES)
+                lines.append(f"| {name} | {group} ({r['n_streams']}) | {r['seed']} | {cells} |")
     lines += ["", f"**Over seeds {', '.join(map(str, seeds))}** (min - max)", "", head, sep]
-    for _, _, name in order:
-        mine = [r for r in rows if r["localizer"] == name]
-        cells = " | ".join(_span(k, [float(r[k]) for r in mine]) for k, _ in FIGURES)
-        lines.append(f"| {name} | {len(mine)} seeds | {cells} |")
+    for group in groups:
+        for _, _, name in order:
+            rs = mine(name, group)
+            if not rs:
+                continue
+            cells = " | ".join(_span(k, [float(r[k]) for r in rs]) for k, _ in FIGURES)
+            lines.append(f"| {name} | {group} ({rs[0]['n_streams']}) | {len(rs)} seeds | {cells} |")
     return "\n".join(lines) + "\n"
+
+
+def markdown(meta: dict[str, Any], rows: list[dict[str, Any]]) -> str:
+    """The results file's markdown: what ran (from ``meta``) and :func:`table`. ``rows`` as
+    written to the JSON file (null where a figure is not defined) or as measured."""
+    rows = [{k: (math.nan if v is None else v) for k, v in r.items()} for r in rows]
+    intro = (
+        f"# The tracker and the particle filter under several seeds "
+        f"(`benchmarks/track_baselines_seeds.py`)\n\n{meta['date']}, {meta['machine']}; "
+        f"`{meta['command']}`, {meta['wall_s']} s. MRCLAM set 6, the five whole runs and "
+        f"{meta['streams']} kidnapped and {meta['streams']} plain streams (`kidnap_streams`, "
+        f"seed 0; the first {meta['large_streams']} of each from {LARGE:,} particles on); "
+        "the tracker's `mrclam` preset with `TrackerConfig.seed` = seed, the filter seeded "
+        "as `track_baselines.py --seed` seeds it (seed 0: the rows of "
+        "`results_tracking.md`).\n\n"
+    )
+    return intro + table(rows, list(meta["seeds"]))
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     ap.add_argument("--particles", default="2000,10000,50000", help="comma-separated counts")
+    ap.add_argument(
+        "--streams", type=int, default=20, help="kidnapped (and plain) streams; 0: whole runs only"
+    )
+    ap.add_argument(
+        "--large-streams",
+        type=int,
+        default=4,
+        help=f"kidnapped (and plain) streams scored from {LARGE:,} particles on",
+    )
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--data", type=Path, default=DEFAULT_DATA)
     ap.add_argument("--out", type=Path, default=HERE / "results_tracking_seeds.json")
@@ -170,27 +239,37 @@ def main(argv: list[str] | None = None) -> int:
         ) from None
     if args.workers < 1:
         raise SystemExit(f"--workers must be at least 1, got {args.workers}")
+    if args.streams < 0 or args.large_streams < 0:
+        raise SystemExit(
+            f"--streams and --large-streams must be at least 0, got {args.streams} and "
+            f"{args.large_streams}"
+        )
     # The slowest jobs first, so that the pool's last minutes are not one long job alone.
     jobs = [("pf", n, s) for n in sorted(counts, reverse=True) for s in args.seeds]
     jobs += [("tracker", 0, s) for s in args.seeds]
     t0 = time.time()
     rows: list[dict[str, Any]] = []
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
-        futs = [pool.submit(_job, k, n, s, str(args.data)) for k, n, s in jobs]
+        futs = [
+            pool.submit(_job, k, n, s, str(args.data), args.streams, args.large_streams)
+            for k, n, s in jobs
+        ]
         for f in futs:
-            r = f.result()
-            rows.append(r)
-            print(
-                f"{r['localizer']}, seed {r['seed']}: correct {100 * r['correct_rate']:.1f} %, "
-                f"wrong {100 * r['confidently_wrong_rate']:.2f} %, first correct "
-                f"{_fmt('time_to_localize_median_s', r['time_to_localize_median_s'])} s "
-                f"({r['wall_s']:.0f} s)",
-                flush=True,
-            )
-    md = table(rows, args.seeds)
-    print(md)
+            for r in f.result():
+                rows.append(r)
+                print(
+                    f"{r['localizer']}, seed {r['seed']}, {r['streams']}: correct "
+                    f"{100 * r['correct_rate']:.1f} %, wrong "
+                    f"{100 * r['confidently_wrong_rate']:.2f} % ({r['wall_s']:.0f} s)",
+                    flush=True,
+                )
     meta = run_meta(
-        "track_baselines_seeds.py", argv, seeds=args.seeds, wall_s=round(time.time() - t0)
+        "track_baselines_seeds.py",
+        argv,
+        seeds=args.seeds,
+        streams=args.streams,
+        large_streams=args.large_streams,
+        wall_s=round(time.time() - t0),
     )
     # (JSON has no inf or NaN: a time never reached, or a figure not defined, is null.)
     clean = [
@@ -198,15 +277,9 @@ def main(argv: list[str] | None = None) -> int:
         for r in rows
     ]
     write_results(args.out, meta, rows=clean)
-    intro = (
-        f"# The tracker and the particle filter under several seeds "
-        f"(`benchmarks/track_baselines_seeds.py`)\n\n{meta['date']}, {meta['machine']}; "
-        f"`{meta['command']}`, {meta['wall_s']} s. MRCLAM set 6, the five whole runs; "
-        "the tracker's `mrclam` preset with `TrackerConfig.seed` = seed, the filter seeded "
-        "as `track_baselines.py --seed` seeds it (seed 0: the rows of "
-        "`results_tracking.md`).\n\n"
-    )
-    args.out.with_suffix(".md").write_text(intro + md)
+    md = markdown(meta, rows)
+    print(md)
+    args.out.with_suffix(".md").write_text(md)
     print(f"wrote {args.out.with_suffix('.md')}")
     return 0
 

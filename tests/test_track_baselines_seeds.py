@@ -10,15 +10,21 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
-from track_baselines_seeds import _span, main, table
+from track_baselines_seeds import _span, main, markdown, table
 
 
-def _row(name: str, kind: str, seed: int, ttl: float, correct: float) -> dict[str, object]:
+def _row(
+    name: str, kind: str, seed: int, ttl: float, correct: float, streams: str = "whole runs"
+) -> dict[str, object]:
     return {
         "localizer": name,
         "kind": kind,
         "particles": 0 if kind == "tracker" else 2000,
         "seed": seed,
+        "streams": streams,
+        "n_streams": 5 if streams == "whole runs" else 20,
+        "recovered": 3.0 if streams == "kidnapped" else math.nan,
+        "false_alarm_run_rate": 0.05 if streams == "plain" else math.nan,
         "time_to_localize_median_s": ttl,
         "never_localized": 0.0 if math.isfinite(ttl) else 5.0,
         "correct_after_rate": 0.336,
@@ -44,20 +50,48 @@ def test_the_tables_list_each_seed_then_the_range_the_tracker_first() -> None:
         _row("omniloc Tracker", "tracker", 1, 142.2, 0.170),
         _row("PF 2,000", "pf", 0, 657.6, 0.155),
         _row("omniloc Tracker", "tracker", 0, 396.6, 0.162),
+        _row("omniloc Tracker", "tracker", 0, math.inf, 0.076, "kidnapped"),
+        _row("omniloc Tracker", "tracker", 0, math.inf, 0.147, "plain"),
     ]
     md = table(rows, [0, 1])
     each, over = md.split("**Over seeds 0, 1**")
     lines = [ln for ln in each.splitlines() if ln.startswith("| omniloc") or ln.startswith("| PF")]
-    assert [ln.split(" | ")[:2] for ln in lines] == [
-        ["| omniloc Tracker", "0"],
-        ["| omniloc Tracker", "1"],
-        ["| PF 2,000", "0"],
-        ["| PF 2,000", "1"],
+    assert [ln.split(" | ")[:3] for ln in lines] == [
+        ["| omniloc Tracker", "whole runs (5)", "0"],
+        ["| omniloc Tracker", "whole runs (5)", "1"],
+        ["| PF 2,000", "whole runs (5)", "0"],
+        ["| PF 2,000", "whole runs (5)", "1"],
+        ["| omniloc Tracker", "kidnapped (20)", "0"],
+        ["| omniloc Tracker", "plain (20)", "0"],
     ]
     assert "| never |" in lines[3]
-    assert "| omniloc Tracker | 2 seeds | 142.2 - 396.6 |" in over
-    assert "| PF 2,000 | 2 seeds | 657.6 (1 never) |" in over
+    # The whole runs have no kidnapping to recover from nor plain streams to flag: "-".
+    assert lines[0].endswith("| - | - | 0.0090 |")
+    assert "| 3 | - |" in lines[4] and "| - | 5.0 % |" in lines[5]
+    assert "| omniloc Tracker | whole runs (5) | 2 seeds | 142.2 - 396.6 |" in over
+    assert "| PF 2,000 | whole runs (5) | 2 seeds | 657.6 (1 never) |" in over
     assert "15.0 % - 15.5 %" in over
+    assert "| omniloc Tracker | kidnapped (20) | 1 seeds | never |" in over
+
+
+def test_the_markdown_reads_the_json_file_s_rows_with_their_nulls() -> None:
+    row = _row("omniloc Tracker", "tracker", 0, math.inf, 0.162)
+    written = {
+        k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()
+    }
+    meta = {
+        "date": "2026-12-06T09:33:09+00:00",
+        "machine": "x86_64",
+        "command": "python benchmarks/track_baselines_seeds.py",
+        "wall_s": 1286,
+        "seeds": [0],
+        "streams": 20,
+        "large_streams": 4,
+    }
+    md = markdown(meta, [written])
+    assert md == markdown(meta, [row])
+    assert "20 kidnapped and 20 plain streams" in md and "the first 4 of each" in md
+    assert "| omniloc Tracker | whole runs (5) | 0 | never |" in md
 
 
 def test_a_missing_recording_or_a_bad_count_is_a_clear_error(tmp_path: Path) -> None:
@@ -68,3 +102,5 @@ def test_a_missing_recording_or_a_bad_count_is_a_clear_error(tmp_path: Path) -> 
         main(["--data", str(tmp_path), "--particles", "2k"])
     with pytest.raises(SystemExit, match="--workers must be at least 1"):
         main(["--data", str(tmp_path), "--workers", "0"])
+    with pytest.raises(SystemExit, match="--streams and --large-streams must be at least 0"):
+        main(["--data", str(tmp_path), "--streams", "-1"])
