@@ -1,6 +1,6 @@
-"""The tracker against the particle filter on MRCLAM's five whole runs, each under several
-seeds of its own random draws: is "right about as often" a difference or the luck of one
-draw?
+"""The tracker against the particle filter on MRCLAM (the five whole runs and seeded
+kidnapped and plain streams), each under several seeds of its own random draws: is "right
+about as often" a difference or the luck of one draw?
 
 Run:  python benchmarks/track_baselines_seeds.py [--seeds 0 1 2 3 4]
       [--particles 2000,10000,50000] [--streams N] [--large-streams N] [--workers 2]
@@ -61,7 +61,7 @@ from track_baselines import (  # noqa: E402
     warm_up,
 )
 
-#: The figures of one (localizer, seed), from ``TrackingResult.totals()``.
+#: The figures of one (localizer, seed, kind of stream), from ``TrackingResult.totals()``.
 FIGURES = (
     ("time_to_localize_median_s", "first correct, median s"),
     ("never_localized", "never localized"),
