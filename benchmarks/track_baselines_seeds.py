@@ -51,6 +51,7 @@ from _results import run_meta, write_results  # noqa: E402
 from baselines_track.harness import evaluate_streams  # noqa: E402
 from baselines_track.motion import calibrate_motion_noise  # noqa: E402
 from baselines_track.tuning import pf_factory  # noqa: E402
+from omniloc.evaluate.common import jsonable  # noqa: E402
 from omniloc.evaluate.tracking import kidnap_streams, mrclam_streams  # noqa: E402
 from track_baselines import (  # noqa: E402
     DEFAULT_DATA,
@@ -272,11 +273,7 @@ def main(argv: list[str] | None = None) -> int:
         wall_s=round(time.time() - t0),
     )
     # (JSON has no inf or NaN: a time never reached, or a figure not defined, is null.)
-    clean = [
-        {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in r.items()}
-        for r in rows
-    ]
-    write_results(args.out, meta, rows=clean)
+    write_results(args.out, meta, rows=[{k: jsonable(v) for k, v in r.items()} for r in rows])
     md = markdown(meta, rows)
     print(md)
     args.out.with_suffix(".md").write_text(md)

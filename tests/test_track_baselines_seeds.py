@@ -10,7 +10,9 @@ import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
-from track_baselines_seeds import _span, main, markdown, table
+import track_baselines_seeds
+from test_track_cli import _truncated_mrclam
+from track_baselines_seeds import _job, _span, main, markdown, table
 
 
 def _row(
@@ -104,3 +106,28 @@ def test_a_missing_recording_or_a_bad_count_is_a_clear_error(tmp_path: Path) -> 
         main(["--data", str(tmp_path), "--workers", "0"])
     with pytest.raises(SystemExit, match="--streams and --large-streams must be at least 0"):
         main(["--data", str(tmp_path), "--streams", "-1"])
+
+
+def test_a_job_scores_each_kind_of_stream_apart(
+    shared_data: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The five runs cut to their first 400 s, one kidnapped and one plain stream, a filter of
+    # 200 particles (a few seconds): one row per kind of stream, each with its own counts.
+    data = _truncated_mrclam(tmp_path / "mrclam", 400.0)
+    rows = _job("pf", 200, 0, str(data), 1, 1)
+    assert [(r["streams"], r["n_streams"]) for r in rows] == [
+        ("whole runs", 5),
+        ("kidnapped", 1),
+        ("plain", 1),
+    ]
+    for r in rows:
+        assert r["correct_rate"] == pytest.approx(
+            (r["localized_frames"] / r["frames_scored"]) - r["confidently_wrong_rate"]
+        )
+        assert 0.0 <= r["confidently_wrong_rate"] <= r["localized_frames"] / r["frames_scored"]
+    # Recoveries only where there was a jump; false alarms only where there was none.
+    assert [math.isnan(r["recovered"]) for r in rows] == [True, False, True]
+    assert [math.isnan(r["false_alarm_run_rate"]) for r in rows] == [False, True, False]
+    # From LARGE particles on, only the first --large-streams streams of each kind.
+    monkeypatch.setattr(track_baselines_seeds, "LARGE", 100)
+    assert [r["streams"] for r in _job("pf", 200, 0, str(data), 1, 0)] == ["whole runs"]
