@@ -156,6 +156,14 @@ def _sd_deg(text: str) -> tuple[float, float]:
     return sd_m, math.radians(sd_deg)
 
 
+#: ``--backward``'s help (``track`` and ``evaluate --dataset mrclam-track``).
+BACKWARD_HELP = (
+    "offline: a second pass backward in time reports the frames within S seconds before a "
+    'sure localized frame that it holds localized (docs/tracking.md, "Offline: a second '
+    'pass backward"); without it the forward pass alone, each frame placed by what came '
+    "before it, as online"
+)
+
 #: ``--initial-sd``'s default: AMCL's initial covariance (0.25 m^2, 0.068 rad^2).
 INITIAL_SD = (0.5, math.radians(15.0))
 
@@ -313,6 +321,12 @@ def _build_parser() -> argparse.ArgumentParser:
         "kidnapped streams)",
     )
     _add_settings_options(e, "mrclam-track: ")
+    e.add_argument(
+        "--backward",
+        type=_nonnegative,
+        metavar="S",
+        help="mrclam-track, " + BACKWARD_HELP,
+    )
     e.add_argument("--max-samples", type=int, help="use at most this many dataset samples")
     e.add_argument(
         "--min-landmarks",
@@ -537,6 +551,7 @@ def _add_track_parser(sub: Any) -> None:
         "--json", action="store_true", help="one JSON object per frame on stdout (JSON lines)"
     )
     t.add_argument("--plot", type=_out_path, metavar="OUT.png", help="save a figure of the run")
+    t.add_argument("--backward", type=_nonnegative, metavar="S", help=BACKWARD_HELP)
 
 
 # --------------------------------------------------------------------------------------------
@@ -891,6 +906,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         )
     if args.tracker_seeds and (args.dataset is None or args.dataset[0] != "mrclam-track"):
         raise InputError("--tracker-seeds applies to --dataset mrclam-track only")
+    if args.backward is not None and (args.dataset is None or args.dataset[0] != "mrclam-track"):
+        raise InputError("--backward applies to --dataset mrclam-track only")
     track_settings: dict[str, Any] = {}
     if args.dataset is not None and args.dataset[0] == "mrclam-track":
         from .track import preset, with_settings
@@ -954,6 +971,7 @@ def _cmd_evaluate_track(args: argparse.Namespace, settings: dict[str, Any]) -> i
         rng=args.seed,
         settings=settings,
         progress=not args.quiet,
+        backward_s=args.backward,
     )
     print(tracking_summary(res))
     written = _write_track_report(res, args.out)  # (made by _cmd_evaluate before the run)
@@ -995,6 +1013,7 @@ def _cmd_evaluate_track_seeds(args: argparse.Namespace, settings: dict[str, Any]
             rng=args.seed,
             settings={**settings, "seed": seed},
             progress=not args.quiet,
+            backward_s=args.backward,
         )
         print(tracking_summary(res))
         _write_track_report(res, make_folder(out / f"seed-{seed}", "--out"))
@@ -1087,6 +1106,7 @@ def _cmd_track(args: argparse.Namespace) -> int:
             motion=motion,
             config=config,
             progress=lambda n: bar.update(1),
+            backward_s=args.backward,
             **initial,
         )
     finally:
@@ -1113,6 +1133,11 @@ def _cmd_track(args: argparse.Namespace) -> int:
         f"{run.searches} searches: localized {100 * run.share('localized'):.1f} %, "
         f"ambiguous {100 * run.share('ambiguous'):.1f} %, lost {100 * run.share('lost'):.1f} %"
     )
+    if args.backward is not None:
+        print(
+            f"the pass backward ({args.backward:g} s before each sure frame) localized "
+            f"{run.backward} of them"
+        )
     first = next((e for e in est if e.localized), None)
     if first is not None:
         after = first.t - est[0].t

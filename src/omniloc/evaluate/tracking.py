@@ -83,6 +83,7 @@ __all__ = [
     "Stream",
     "TrackingReport",
     "TrackingResult",
+    "backward_offline",
     "censored_median",
     "errors_against",
     "evaluate_mrclam_tracking",
@@ -907,6 +908,7 @@ def evaluate_tracking(
     pos_tol_m: float = 0.3,
     heading_tol_deg: float = 5.0,
     bound: Callable[[Stream], StreamBound] | None = None,
+    offline: Callable[[Stream, list[TrackEstimate]], list[TrackEstimate]] | None = None,
 ) -> tuple[TrackingResult, list[list[TrackEstimate]]]:
     """Run a localizer over time on every stream and score it.
 
@@ -914,8 +916,10 @@ def evaluate_tracking(
     the true pose at the stream's start only when ``oracle_start`` is True (for a baseline
     started at the truth), else None. ``bound(stream)``, when given, says what the data
     allow on each stream (:func:`mrclam_bound`), scored beside the localizer
-    (:attr:`RunScore.bound_time_to_localize_s` and the rest). Returns the scores and every
-    estimate.
+    (:attr:`RunScore.bound_time_to_localize_s` and the rest). ``offline(stream,
+    estimates)``, when given, turns the localizer's estimates into those scored, with the
+    whole stream known (:func:`backward_offline`); its processor time is counted. Returns
+    the scores and every estimate.
     """
     runs: list[RunScore] = []
     all_est: list[list[TrackEstimate]] = []
@@ -927,6 +931,10 @@ def evaluate_tracking(
                 p, _ = s.truth_at(s.start)
                 start = Pose.from_array(p[0])
             est, cpu = run_stream(make_localizer(s.landmarks, start), s)
+            if offline is not None:
+                c0 = time.process_time()
+                est = offline(s, est)
+                cpu += time.process_time() - c0
             score = score_run(
                 s, est, cpu_s=cpu, pos_tol_m=pos_tol_m, heading_tol_deg=heading_tol_deg
             )
@@ -1006,6 +1014,38 @@ def tracker_factory(
     return make
 
 
+def backward_offline(
+    horizon_s: float,
+    preset_name: str = "mrclam",
+    settings: Mapping[str, Any] | None = None,
+) -> Callable[[Stream, list[TrackEstimate]], list[TrackEstimate]]:
+    """``offline`` for :func:`evaluate_tracking`: the tracker's second pass backward in time
+    (:mod:`omniloc.track.backward`) over the frames within ``horizon_s`` before a sure frame,
+    with a named preset's parameters changed by ``settings`` (those of
+    :func:`tracker_factory`'s trackers)."""
+    from ..track.backward import backward_pass, combine
+
+    h = float(horizon_s)
+    if not (math.isfinite(h) and h >= 0.0):
+        raise InputError(f"the backward pass's horizon must be seconds >= 0, got {horizon_s!r}")
+    sensor, motion, config = _preset_models(preset_name, settings)
+
+    def run(stream: Stream, estimates: list[TrackEstimate]) -> list[TrackEstimate]:
+        back = backward_pass(
+            stream.landmarks,
+            stream.odometry,
+            stream.frames,
+            estimates,
+            horizon_s=h,
+            sensor=sensor,
+            motion=motion,
+            config=config,
+        )
+        return combine(estimates, back, config)
+
+    return run
+
+
 def _preset_models(
     preset_name: str, settings: Mapping[str, Any] | None
 ) -> tuple[SensorModel, MotionModel, TrackerConfig]:
@@ -1072,12 +1112,15 @@ def evaluate_mrclam_tracking(
     preset_name: str = "mrclam",
     settings: Mapping[str, Any] | None = None,
     progress: bool = True,
+    backward_s: float | None = None,
 ) -> tuple[TrackingReport, list[list[TrackEstimate]]]:
     """Run the :class:`~omniloc.track.Tracker` on MRCLAM: each robot's whole run, and
     ``kidnapped`` kidnapped streams with as many without a jump (:func:`kidnap_streams`,
     seeded by ``rng``), with a preset's parameters changed by ``settings`` (names of
-    :func:`~omniloc.track.with_settings`). Returns the report and every estimate (whole
-    runs first)."""
+    :func:`~omniloc.track.with_settings`); ``backward_s``: with the second pass backward in
+    time over the frames within that many seconds before a sure frame
+    (:func:`backward_offline`; offline, every stream known in full). Returns the report and
+    every estimate (whole runs first)."""
     if isinstance(kidnapped, bool) or not isinstance(kidnapped, (int, np.integer)) or kidnapped < 0:
         raise InputError(f"kidnapped must be an integer >= 0, got {kidnapped!r}")
     make = tracker_factory(preset_name, settings)  # bad settings: refused before the data
@@ -1086,15 +1129,21 @@ def evaluate_mrclam_tracking(
         pos_tol_m=0.3,
         heading_tol_deg=5.0,
     )
+    offline = None if backward_s is None else backward_offline(backward_s, preset_name, settings)
     runs = mrclam_streams(path, robots)
     whole, est = evaluate_tracking(
-        runs, make, name="tracker: whole runs", progress=progress, bound=bound
+        runs, make, name="tracker: whole runs", progress=progress, bound=bound, offline=offline
     )
     kid = None
     if kidnapped:
         jumps, plain = kidnap_streams(runs, int(kidnapped), rng=rng)
         kid, est_k = evaluate_tracking(
-            jumps + plain, make, name="tracker: kidnap streams", progress=progress, bound=bound
+            jumps + plain,
+            make,
+            name="tracker: kidnap streams",
+            progress=progress,
+            bound=bound,
+            offline=offline,
         )
         est = est + est_k
     return TrackingReport(whole, kid), est

@@ -2,7 +2,8 @@
 
 * :class:`Tracker` (:mod:`.tracker`) -- the online localizer: feed it odometry and frames of
   bearings, it reports ``lost``, ``ambiguous`` or ``localized`` after every frame;
-* :func:`track` (:mod:`.offline`) -- the same over a whole recording;
+* :func:`track` (:mod:`.offline`) -- the same over a whole recording, optionally with a
+  second pass backward in time from each sure frame (:mod:`.backward`, ``backward_s``);
 * :mod:`.motion` -- the odometry's motion and noise (:class:`MotionModel`); :mod:`.calibrate`
   -- that model fitted to odometry and a ground-truth track (:func:`estimate_motion`), and
   the bearing sensor to frames and the track (:func:`estimate_frame_sensor`), and where it

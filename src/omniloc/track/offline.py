@@ -8,6 +8,7 @@ frame.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -19,6 +20,7 @@ from ..errors import InputError
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
+from .backward import backward_pass, combine
 from .data import Frame, Odometry
 from .motion import MotionModel
 from .records import TrackEstimate, TrackState
@@ -42,12 +44,16 @@ class TrackRun:
         hypotheses runs on two).
     wall_s : float
         Elapsed time, seconds.
+    backward : int
+        Frames reported from the second pass backward in time (``track(...,
+        backward_s=...)``; 0 without it).
     """
 
     estimates: tuple[TrackEstimate, ...] = field(repr=False)
     searches: int = 0
     cpu_s: float = 0.0
     wall_s: float = 0.0
+    backward: int = 0
 
     def __len__(self) -> int:
         return len(self.estimates)
@@ -71,6 +77,7 @@ def track(
     progress: Callable[[int], None] | None = None,
     initial_pose: Pose | ArrayLike | None = None,
     initial_covariance: ArrayLike | None = None,
+    backward_s: float | None = None,
 ) -> TrackRun:
     """Localize a robot over a whole recording.
 
@@ -91,6 +98,11 @@ def track(
         Where the robot is at the first frame, ``(x, y, theta)`` and its 3 x 3 covariance
         (both or neither): :meth:`Tracker.set_pose` before the first frame. Without them the
         tracker localizes globally.
+    backward_s : float, optional
+        Offline only: a second pass backward in time (:mod:`omniloc.track.backward`) reports
+        the frames within ``backward_s`` seconds before a sure ``localized`` frame that it
+        holds ``localized``, where the forward pass did not. None (the default): the
+        forward pass alone, each frame placed by what came before it, as online.
 
     Returns
     -------
@@ -135,6 +147,10 @@ def track(
             f"the frames (t = {f0:.12g} to {f1:.12g} s) and the odometry (t = {o0:.12g} to "
             f"{o1:.12g} s) share no time: are they stamped by one clock, in seconds?"
         )
+    if backward_s is not None and not (
+        isinstance(backward_s, (int, float)) and math.isfinite(backward_s) and backward_s >= 0
+    ):
+        raise InputError(f"backward_s must be a number of seconds >= 0, got {backward_s!r}")
     if (initial_pose is None) != (initial_covariance is None):
         raise InputError("initial_pose and initial_covariance go together: give both or neither")
     tracker = Tracker(lm, sensor, motion, config)
@@ -153,6 +169,26 @@ def track(
         out.append(tracker.frame(f.t, f.bearings))
         if progress is not None:
             progress(n)
+    if backward_s is not None:
+        behind = backward_pass(
+            lm,
+            odometry,
+            frames,
+            out,
+            horizon_s=backward_s,
+            sensor=sensor,
+            motion=motion,
+            config=config,
+        )
+        both = combine(out, behind, config)
+        n_back = sum(a is not b for a, b in zip(out, both, strict=True))
+        out = both
+    else:
+        n_back = 0
     return TrackRun(
-        tuple(out), tracker.searches, time.process_time() - c0, time.perf_counter() - w0
+        tuple(out),
+        tracker.searches,
+        time.process_time() - c0,
+        time.perf_counter() - w0,
+        n_back,
     )
