@@ -115,6 +115,8 @@ def test_the_frames_before_the_first_sure_one_are_localized_from_it(seed: int) -
     assert l2[:first].any() and _correct(run, two)[l2].all()
     added = [two[i] for i in np.flatnonzero(l2 & ~lf)]
     assert added and all(e.reason.startswith("from the pass backward") for e in added)
+    assert all(e.backward == (not lf[i] and l2[i]) for i, e in enumerate(two))
+    assert all(e.as_dict()["backward"] is e.backward for e in two)
     assert all(0.0 <= e.since_localized <= 30.0 for e in added)
     # A shorter horizon takes fewer of them, none beyond it.
     short = track(EXAMPLE_MAP, run.odometry, run.frames, backward_s=2.0, **kw).estimates
@@ -130,6 +132,10 @@ def test_a_kidnapping_is_not_carried_back_across() -> None:
     two = track(ex.landmarks, run.odometry, run.frames, backward_s=60.0, **kw).estimates
     ok, loc = _correct(run, two), _localized(two)
     assert not (loc & ~ok).any()
+    # The kidnapping stays flagged where the forward pass noticed it.
+    assert [e.kidnapped for e in two] == [e.kidnapped for e in fwd] and any(
+        e.kidnapped for e in fwd
+    )
     # The place after the jump (at 30 s) is localized backward only after the jump.
     jump = run.frames[0].t + 30.0
     after = [e for e, f in zip(two, fwd, strict=True) if not _same(e, f)]

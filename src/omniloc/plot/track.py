@@ -3,7 +3,8 @@
 Left: the landmarks, the true trajectory (when known), the ``localized`` estimates (dots
 coloured by state), and, every few seconds while ``ambiguous``, the competing hypotheses
 (small arrows, opacity by weight). Right, top: the state over time (lost / ambiguous /
-localized, and the frames flagged ``kidnapped``); bottom: the position and heading errors of
+localized, the frames flagged ``kidnapped`` and those localized by the pass backward over
+the recording); bottom: the position and heading errors of
 the reported pose (localized frames solid, ambiguous ones faint), with the 0.3 m / 5 degree
 tolerance drawn.
 """
@@ -114,9 +115,21 @@ def plot_track(
     for st, lv in level.items():
         m = y == lv
         ax_state.plot(t[m] - t0, y[m], "|", color=_COLOURS[st], ms=8)
+    back = np.array([e.backward for e in estimates])
+    if back.any():
+        # (Localized by the pass backward over the recording, not by the frames before.)
+        ax_state.plot(
+            t[back] - t0,
+            np.full(int(back.sum()), 2.2),
+            "|",
+            color="tab:olive",
+            ms=5,
+            label="localized by the pass backward",
+        )
     kid = np.array([e.kidnapped for e in estimates])
     if kid.any():
         ax_state.plot(t[kid] - t0, np.full(int(kid.sum()), 2.4), "v", color="k", label="kidnapped")
+    if kid.any() or back.any():
         ax_state.legend(loc="upper right", fontsize=7)
     ax_state.set_yticks([0, 1, 2], ["lost", "ambiguous", "localized"])
     ax_state.set_ylim(-0.5, 2.8)

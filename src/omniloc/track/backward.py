@@ -207,8 +207,10 @@ def combine(
     config: TrackerConfig | None = None,
 ) -> list[TrackEstimate]:
     """Per frame: the forward estimate where it is ``localized`` or the backward pass did
-    not localize the frame; else the backward pass's, its reason saying so and its
-    ``since_localized`` the seconds to the next sure forward frame."""
+    not localize the frame; else the backward pass's (``backward`` True), its reason saying
+    so, its ``since_localized`` the seconds to the next sure forward frame and its
+    ``kidnapped`` the forward pass's (the frame at which it noticed a kidnapping stays
+    flagged)."""
     if len(forward) != len(backward):
         raise InputError(
             f"forward and backward must hold one estimate per frame: {len(forward)} and "
@@ -230,7 +232,8 @@ def combine(
         out.append(
             replace(
                 b,
-                kidnapped=False,
+                backward=True,
+                kidnapped=f.kidnapped,  # (a kidnapping is the forward pass's to flag)
                 since_localized=ahead[i],
                 reason=f"from the pass backward, {ahead[i]:.1f} s before a sure frame: " + b.reason,
             )

@@ -180,11 +180,8 @@ def track(
             motion=motion,
             config=config,
         )
-        both = combine(out, behind, config)
-        n_back = sum(a is not b for a, b in zip(out, both, strict=True))
-        out = both
-    else:
-        n_back = 0
+        out = combine(out, behind, config)
+    n_back = sum(e.backward for e in out)
     return TrackRun(
         tuple(out),
         tracker.searches,

@@ -123,7 +123,11 @@ class TrackEstimate:
         Seconds since the localizer's last ``localized`` frame (0 when this one is). None
         when it has not been localized since it started, or since it last flagged a
         kidnapping or lost its motion to an odometry gap -- or from a localizer that does
-        not say.
+        not say. From the pass backward (``backward``): the seconds to the sure frame it
+        was carried back from.
+    backward : bool
+        True when the estimate comes from the second pass backward in time over a whole
+        recording (:mod:`omniloc.track.backward`), not from the frames before it.
     """
 
     t: float
@@ -136,6 +140,7 @@ class TrackEstimate:
     probability: float | None = None
     confidence: float | None = None
     since_localized: float | None = None
+    backward: bool = False
 
     def __post_init__(self) -> None:
         if not math.isfinite(float(self.t)):
@@ -162,7 +167,7 @@ class TrackEstimate:
 
     def as_dict(self) -> dict[str, object]:
         """Plain-JSON dictionary: ``t``, ``state``, ``reason``, ``kidnapped``,
-        ``since_localized`` (null when not given) and, unless lost, ``x``, ``y``,
+        ``since_localized`` (null when not given), ``backward`` and, unless lost, ``x``, ``y``,
         ``theta``, ``covariance`` (3x3 nested lists), ``probability`` and ``confidence``
         (null when not given) and ``hypotheses`` (each ``x``, ``y``, ``theta``, ``weight``,
         ``confidence``, ``covariance``)."""
@@ -173,6 +178,7 @@ class TrackEstimate:
             "reason": self.reason,
             "kidnapped": bool(self.kidnapped),
             "since_localized": None if since is None else float(since),
+            "backward": bool(self.backward),
         }
         if self.pose is not None:
             out.update(x=self.pose.x, y=self.pose.y, theta=self.pose.theta)
