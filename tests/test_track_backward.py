@@ -17,7 +17,7 @@ from omniloc import Pose
 from omniloc.cli import main
 from omniloc.errors import InputError
 from omniloc.evaluate.tracking import backward_offline, evaluate_tracking, whole_run
-from omniloc.track import Frame, MotionModel, Odometry, TrackerConfig, track
+from omniloc.track import Frame, MotionModel, Odometry, TrackerConfig, TrackEstimate, track
 from omniloc.track.backward import backward_pass, combine, reverse_recording, sure_frames
 from omniloc.track.motion import compose, integrate
 from omniloc.track.records import TrackState
@@ -154,6 +154,25 @@ def test_no_sure_frame_leaves_the_forward_pass_as_it_is() -> None:
     )
     assert back == [None] * len(fwd)
     assert combine(fwd, back, cfg) == list(fwd)
+
+
+def test_a_sure_pose_outside_the_region_starts_no_stretch() -> None:
+    run = simulate_run(EXAMPLE_MAP, EXAMPLE_SENSOR, Pose(6.0, 4.0, 0.3), duration_s=4.0, rng=1)
+    # A forward pass lost in every frame but the last, sure there.
+    fwd = [TrackEstimate(f.t, TrackState.LOST) for f in run.frames]
+    tight = np.diag([0.01, 0.01, 1e-4])
+    far = TrackEstimate(
+        fwd[-1].t, TrackState.LOCALIZED, Pose(1e4, 1e4, 0.0), tight, probability=1.0
+    )
+    near = TrackEstimate(
+        fwd[-1].t, TrackState.LOCALIZED, run.truth.pose_at(fwd[-1].t), tight, probability=1.0
+    )
+    kw = dict(horizon_s=2.0, motion=EXAMPLE_MOTION, sensor=EXAMPLE_SENSOR)
+    assert backward_pass(EXAMPLE_MAP, run.odometry, run.frames, [*fwd[:-1], far], **kw) == [
+        None
+    ] * len(fwd)
+    told = backward_pass(EXAMPLE_MAP, run.odometry, run.frames, [*fwd[:-1], near], **kw)
+    assert told[-1] is not None and told[-2] is not None and told[0] is None
 
 
 def test_bad_input_is_refused() -> None:

@@ -184,8 +184,9 @@ def backward_pass(
         fe = forward[i]
         if tracker is None:
             tracker = Tracker(landmarks, sensor, r_motion, config)
-            assert fe.pose is not None and fe.covariance is not None  # (a sure frame)
-            tracker.set_pose(fe.pose, fe.covariance)
+            if not _tell(tracker, fe):
+                tracker = None  # (a pose the tracker cannot be told: no stretch from it)
+                continue
             # The odometry from the row that holds at this frame on.
             k = max(int(np.searchsorted(r_odo.t, f.t, side="right")) - 1, 0)
         k1 = int(np.searchsorted(r_odo.t, f.t, side="right"))
@@ -196,9 +197,20 @@ def backward_pass(
         e = tracker.frame(f.t, f.bearings)
         out[i] = replace(e, t=t)
         if sure[i] and not (e.state is TrackState.LOCALIZED and _near(e, fe, config)):
-            assert fe.pose is not None and fe.covariance is not None
-            tracker.set_pose(fe.pose, fe.covariance)
+            _tell(tracker, fe)
     return out
+
+
+def _tell(tracker: Tracker, estimate: TrackEstimate) -> bool:
+    """Tell ``tracker`` a sure estimate's pose and covariance; False (nothing changed) when
+    it refuses them -- a pose the forward pass carried outside the tracker's region."""
+    if estimate.pose is None or estimate.covariance is None:
+        return False
+    try:
+        tracker.set_pose(estimate.pose, estimate.covariance)
+    except InputError:
+        return False
+    return True
 
 
 def combine(
