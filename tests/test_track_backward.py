@@ -177,7 +177,7 @@ def test_a_sure_pose_outside_the_region_starts_no_stretch() -> None:
 
 def test_bad_input_is_refused() -> None:
     run = simulate_run(EXAMPLE_MAP, EXAMPLE_SENSOR, Pose(6.0, 4.0, 0.3), duration_s=4.0, rng=1)
-    for bad in (-1.0, math.nan, math.inf, "10"):
+    for bad in (-1.0, math.nan, math.inf, "10", True, np.array([1.0, 2.0])):
         with pytest.raises(InputError, match="backward_s"):
             track(EXAMPLE_MAP, run.odometry, run.frames, backward_s=bad)  # type: ignore[arg-type]
     fwd = track(EXAMPLE_MAP, run.odometry, run.frames, motion=EXAMPLE_MOTION).estimates

@@ -61,7 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..angles import wrap
 from ..errors import InputError
-from ..io import shorten
+from ..io import finite_number, shorten
 from ..maps import LandmarkMap
 from ..pose import Pose
 from ..sensor import chi2_quantile
@@ -1025,9 +1025,9 @@ def backward_offline(
     :func:`tracker_factory`'s trackers)."""
     from ..track.backward import backward_pass, combine
 
-    h = float(horizon_s)
-    if not (math.isfinite(h) and h >= 0.0):
-        raise InputError(f"the backward pass's horizon must be seconds >= 0, got {horizon_s!r}")
+    h = finite_number(horizon_s, "the pass backward's horizon")
+    if h < 0.0:
+        raise InputError(f"the pass backward's horizon must be seconds >= 0, got {horizon_s!r}")
     sensor, motion, config = _preset_models(preset_name, settings)
 
     def run(stream: Stream, estimates: list[TrackEstimate]) -> list[TrackEstimate]:

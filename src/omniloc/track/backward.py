@@ -32,6 +32,7 @@ import numpy as np
 
 from ..angles import wrap
 from ..errors import InputError
+from ..io import finite_number
 from ..maps import LandmarkMap
 from ..sensor import SensorModel
 from .data import Frame, Odometry
@@ -158,9 +159,9 @@ def backward_pass(
         raise InputError(
             f"forward must hold one estimate per frame: {len(forward)} for {len(frames)} frames"
         )
-    h = float(horizon_s)
-    if not (math.isfinite(h) and h >= 0.0):
-        raise InputError(f"horizon_s must be a number >= 0, got {horizon_s!r}")
+    h = finite_number(horizon_s, "horizon_s")
+    if h < 0.0:
+        raise InputError(f"horizon_s must be seconds >= 0, got {horizon_s!r}")
     motion = MotionModel() if motion is None else motion
     config = TrackerConfig() if config is None else config
     sure = sure_frames(forward, config)

@@ -8,7 +8,6 @@ frame.
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -17,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..errors import InputError
+from ..io import finite_number
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
@@ -147,10 +147,8 @@ def track(
             f"the frames (t = {f0:.12g} to {f1:.12g} s) and the odometry (t = {o0:.12g} to "
             f"{o1:.12g} s) share no time: are they stamped by one clock, in seconds?"
         )
-    if backward_s is not None and not (
-        isinstance(backward_s, (int, float)) and math.isfinite(backward_s) and backward_s >= 0
-    ):
-        raise InputError(f"backward_s must be a number of seconds >= 0, got {backward_s!r}")
+    if backward_s is not None and finite_number(backward_s, "backward_s") < 0:
+        raise InputError(f"backward_s must be seconds >= 0, got {backward_s!r}")
     if (initial_pose is None) != (initial_covariance is None):
         raise InputError("initial_pose and initial_covariance go together: give both or neither")
     tracker = Tracker(lm, sensor, motion, config)
