@@ -1130,9 +1130,11 @@ def evaluate_mrclam_tracking(
         heading_tol_deg=5.0,
     )
     offline = None if backward_s is None else backward_offline(backward_s, preset_name, settings)
+    # (The pass backward is offline: its reports say so.)
+    who = "tracker" if backward_s is None else f"tracker with the pass backward ({backward_s:g} s)"
     runs = mrclam_streams(path, robots)
     whole, est = evaluate_tracking(
-        runs, make, name="tracker: whole runs", progress=progress, bound=bound, offline=offline
+        runs, make, name=f"{who}: whole runs", progress=progress, bound=bound, offline=offline
     )
     kid = None
     if kidnapped:
@@ -1140,7 +1142,7 @@ def evaluate_mrclam_tracking(
         kid, est_k = evaluate_tracking(
             jumps + plain,
             make,
-            name="tracker: kidnap streams",
+            name=f"{who}: kidnap streams",
             progress=progress,
             bound=bound,
             offline=offline,
