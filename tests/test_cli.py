@@ -191,6 +191,11 @@ def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
     # The flag says what the old place and the places held now explain of the bearings since.
     assert "explains 1 of the 4 bearings since (the places it holds now: 2): kidnapped" in out
     assert "localized in 207 of 240 frames, right (0.3 m, 5 deg) in 207 of them" in out
+    # Offline, the pass backward localizes the frames before each sure one as well.
+    assert (
+        "offline, with the pass backward (--backward 20): localized in 240 of 240 frames "
+        "(33 by the pass backward), right in 240 of them" in out
+    )
     assert (tmp_path / "track.png").stat().st_size > 10_000
 
 
