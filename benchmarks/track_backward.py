@@ -32,10 +32,12 @@ sys.path.insert(0, str(HERE.parent / "src"))
 sys.path.insert(0, str(HERE))
 
 from _results import run_meta, write_results  # noqa: E402
+from omniloc import Pose  # noqa: E402
 from omniloc.evaluate.common import jsonable  # noqa: E402
 from omniloc.evaluate.tracking import (  # noqa: E402
     TrackingResult,
     backward_offline,
+    frames_within_tolerance,
     kidnap_streams,
     mrclam_streams,
     run_stream,
@@ -79,22 +81,23 @@ def job(data: str, seed: int, horizons: list[float], kidnap: int) -> dict[str, A
             both = offline(s, est)
             dt = time.process_time() - c0
             scores[f"{h:g}"].append(score_run(s, both, cpu_s=cpu + dt))
-            t = np.array([e.t for e in both])
-            true, _ = s.truth_at(t)
-            for i, e in enumerate(both):
-                if not (e.backward and e.pose is not None):
-                    continue
-                d = math.hypot(e.pose.x - true[i, 0], e.pose.y - true[i, 1])
-                dh = abs(math.degrees(math.remainder(e.pose.theta - true[i, 2], 2 * math.pi)))
-                if not (d <= 0.3 and dh <= 5.0):
-                    added[f"{h:g}"].append(
-                        {
-                            "stream": s.name,
-                            "t_s": round(e.t - s.start, 2),
-                            "position_m": round(d, 3),
-                            "heading_deg": round(dh, 2),
-                        }
-                    )
+            # The frames the scoring counts wrong (scored, not within tolerance) that the
+            # pass backward reported, with how far off they are.
+            scored, right = frames_within_tolerance(s, both)
+            wrong = [i for i, e in enumerate(both) if e.backward and scored[i] and not right[i]]
+            true, _ = s.truth_at(np.array([both[i].t for i in wrong]))
+            for i, tp in zip(wrong, true, strict=True):
+                e = both[i]
+                assert e.pose is not None  # (a localized frame)
+                d, dh = e.pose.distance_to(Pose.from_array(tp))
+                added[f"{h:g}"].append(
+                    {
+                        "stream": s.name,
+                        "t_s": round(e.t - s.start, 2),
+                        "position_m": round(d, 3),
+                        "heading_deg": round(math.degrees(dh), 2),
+                    }
+                )
     out: dict[str, Any] = {"seed": seed, "variants": {}, "added_wrong": added}
     for variant, rs in scores.items():
         per: dict[str, Any] = {}

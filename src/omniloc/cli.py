@@ -828,6 +828,7 @@ def _demo_over_time(out: Path) -> None:
     from .evaluate.tracking import errors_against
     from .plot.track import plot_track
     from .track import track
+    from .track.backward import backward_pass, combine
     from .track.simulate import example_run
 
     ex = example_run()
@@ -867,21 +868,24 @@ def _demo_over_time(out: Path) -> None:
         f"{ok[loc].sum()} of them, position RMSE {np.sqrt(np.mean(d_pos[loc] ** 2)):.3f} m; "
         f"{span:.0f} s of recording in {run.cpu_s:.1f} s of CPU"
     )
-    # Offline, the same recording with the pass backward from each sure frame.
-    both = track(
+    # Offline, the pass backward from each sure frame over the same forward estimates (what
+    # track(..., backward_s=20) does after its forward pass).
+    behind = backward_pass(
         ex.landmarks,
         ex.run.odometry,
         ex.run.frames,
+        est,
+        horizon_s=20.0,
         sensor=ex.sensor,
         motion=ex.motion,
-        backward_s=20.0,
     )
-    ok2, _, _ = errors_against(ex.run.truth, both.estimates)
-    loc2 = np.array([e.localized for e in both.estimates])
+    both = combine(est, behind)
+    ok2, _, _ = errors_against(ex.run.truth, both)
+    loc2 = np.array([e.localized for e in both])
+    n_back = sum(e.backward for e in both)
     print(
         f"  offline, with the pass backward (--backward 20): localized in {loc2.sum()} of "
-        f"{len(est)} frames ({both.backward} by the pass backward), right in {ok2[loc2].sum()} "
-        "of them"
+        f"{len(est)} frames ({n_back} by the pass backward), right in {ok2[loc2].sum()} of them"
     )
     path = out / "track.png"
     plot_track(ex.landmarks, est, path, truth=ex.run.truth, title="the example recording")

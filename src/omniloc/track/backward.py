@@ -30,7 +30,6 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number
 from ..maps import LandmarkMap
@@ -113,8 +112,7 @@ def _near(a: TrackEstimate, b: TrackEstimate, config: TrackerConfig) -> bool:
     """Both have a pose, within the tracker's tolerance of each other."""
     if a.pose is None or b.pose is None:
         return False
-    d = math.hypot(a.pose.x - b.pose.x, a.pose.y - b.pose.y)
-    dh = abs(float(wrap(a.pose.theta - b.pose.theta)))
+    d, dh = a.pose.distance_to(b.pose)
     return d <= config.tolerance_m and dh <= config.tolerance_heading
 
 
