@@ -282,3 +282,32 @@ def test_the_evaluation_on_mrclam_says_it_ran_the_pass_backward(
     head = rows[0]["name"].split(",")
     col = head.index("n_localized")
     assert int(rows[1]["robot3"].split(",")[col]) > int(rows[0]["robot3"].split(",")[col])
+
+
+@pytest.mark.parametrize("n_back", [0, 2])
+def test_the_figure_marks_the_frames_of_the_pass_backward(monkeypatch, tmp_path, n_back) -> None:
+    import omniloc.plot.track as pt
+
+    figures = []
+    monkeypatch.setattr(pt, "save_figure", lambda fig, path: figures.append(fig) or path)
+    est = [
+        TrackEstimate(
+            float(k),
+            TrackState.LOCALIZED,
+            pose=Pose(1.0, 2.0, 0.3),
+            covariance=np.eye(3) * 1e-4,
+            probability=0.999,
+            backward=k < n_back,
+        )
+        for k in range(5)
+    ]
+    pt.plot_track(EXAMPLE_MAP, est, tmp_path / "x.png")
+    marked = [
+        line
+        for ax in figures[0].axes
+        for line in ax.get_lines()
+        if line.get_label() == "localized by the pass backward"
+    ]
+    assert len(marked) == (1 if n_back else 0)
+    if n_back:
+        assert list(marked[0].get_xdata()) == [0.0, 1.0]
