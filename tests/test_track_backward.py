@@ -18,7 +18,13 @@ from omniloc.cli import main
 from omniloc.errors import InputError
 from omniloc.evaluate.tracking import backward_offline, evaluate_tracking, whole_run
 from omniloc.track import Frame, MotionModel, Odometry, TrackerConfig, TrackEstimate, track
-from omniloc.track.backward import backward_pass, combine, reverse_recording, sure_frames
+from omniloc.track.backward import (
+    backward_pass,
+    combine,
+    kept_frames,
+    reverse_recording,
+    sure_frames,
+)
 from omniloc.track.motion import compose, integrate
 from omniloc.track.records import TrackState
 from omniloc.track.simulate import (
@@ -155,7 +161,7 @@ def test_no_sure_frame_leaves_the_forward_pass_as_it_is() -> None:
         EXAMPLE_MAP, run.odometry, run.frames, fwd, horizon_s=10.0, motion=EXAMPLE_MOTION
     )
     assert back == [None] * len(fwd)
-    assert combine(fwd, back, cfg) == list(fwd)
+    assert combine(fwd, back) == list(fwd)
 
 
 def test_a_sure_pose_outside_the_region_starts_no_stretch() -> None:
@@ -193,6 +199,11 @@ def test_bad_input_is_refused() -> None:
         reverse_recording(run.odometry, run.frames, math.nan)
     with pytest.raises(InputError, match="horizon"):
         backward_offline(-1.0)
+    for bad in (-1.0, math.nan, "4"):
+        with pytest.raises(InputError, match="confirm_s"):
+            kept_frames(fwd, run.odometry, confirm_s=bad)  # type: ignore[arg-type]
+        with pytest.raises(InputError, match="confirm_s"):
+            backward_offline(10.0, confirm_s=bad)  # type: ignore[arg-type]
 
 
 def test_the_evaluation_scores_the_two_passes() -> None:
@@ -311,3 +322,94 @@ def test_the_figure_marks_the_frames_of_the_pass_backward(monkeypatch, tmp_path,
     assert len(marked) == (1 if n_back else 0)
     if n_back:
         assert list(marked[0].get_xdata()) == [0.0, 1.0]
+
+
+def _straight(
+    n: int = 41, dt: float = 0.5, jump_at: float | None = None, how: str = "twin", vy: float = 0.0
+) -> tuple[list[TrackEstimate], Odometry]:
+    """A forward pass along a straight drive (0.5 m/s, and ``vy`` sideways): every fourth
+    frame sure, the others ambiguous at the place; from ``jump_at`` on, the pass gives the
+    place up (``how``: its pose jumps 2 m to a twin, turns 45 deg, goes lost, or flags a
+    kidnapping at that frame)."""
+    t = np.arange(n) * dt
+    odo = Odometry(t, np.full(n, 0.5), np.zeros(n), None if vy == 0.0 else np.full(n, vy))
+    out = []
+    for k, tk in enumerate(t.tolist()):
+        pose = Pose(1.0 + 0.5 * tk, 1.0 + vy * tk, 0.0)
+        state = TrackState.LOCALIZED if k % 4 == 0 else TrackState.AMBIGUOUS
+        kidnapped = False
+        if jump_at is not None and tk >= jump_at:
+            if how == "twin":
+                pose = Pose(pose.x, pose.y + 2.0, pose.theta)
+            elif how == "turn":
+                pose = Pose(pose.x, pose.y, math.radians(45.0))
+            elif how == "lost":
+                out.append(TrackEstimate(tk, TrackState.LOST))
+                continue
+            else:
+                kidnapped = math.isclose(tk, jump_at)
+        out.append(
+            TrackEstimate(tk, state, pose, np.eye(3) * 1e-4, probability=0.999, kidnapped=kidnapped)
+        )
+    return out, odo
+
+
+def test_a_held_place_keeps_every_sure_frame() -> None:
+    est, odo = _straight()
+    sure = sure_frames(est, TrackerConfig())
+    assert sure.sum() == 11
+    assert (kept_frames(est, odo) == sure).all()
+    # The odometry's sideways velocity carries the place too (a holonomic robot).
+    est, odo = _straight(vy=0.3)
+    assert (kept_frames(est, odo) == sure_frames(est, TrackerConfig())).all()
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.sampled_from(["twin", "turn", "lost", "kidnapped"]),
+    st.integers(1, 40),
+    st.sampled_from([0.0, 2.0, 5.0, 10.0]),
+)
+def test_a_place_given_up_keeps_no_sure_frame_within_confirm_s_before(how, k_jump, confirm_s):
+    est, odo = _straight(jump_at=0.5 * k_jump, how=how)
+    sure = sure_frames(est, TrackerConfig())
+    kept = kept_frames(est, odo, confirm_s=confirm_s)
+    t = np.array([e.t for e in est])
+    # Given up: the sure frames with the jump within confirm_s after them.
+    jump = 0.5 * k_jump
+    want = sure & ((t + confirm_s < jump) | (confirm_s == 0.0))
+    assert (kept[t < jump] == want[t < jump]).all()
+    if how in ("twin", "kidnapped"):
+        # From the jump on, the sure frames hold the place they are at (the twin's poses
+        # follow the odometry; a kidnapping is flagged once).
+        assert kept[(t >= jump) & sure].all()
+
+
+def test_a_sure_place_given_up_starts_no_pass_backward() -> None:
+    run = simulate_run(EXAMPLE_MAP, EXAMPLE_SENSOR, Pose(6.0, 4.0, 0.3), duration_s=6.0, rng=1)
+    n = len(run.frames)
+    mid = n // 2
+    tight = np.diag([0.01, 0.01, 1e-4])
+    fwd = [TrackEstimate(f.t, TrackState.LOST) for f in run.frames]
+    fwd[mid] = TrackEstimate(
+        fwd[mid].t, TrackState.LOCALIZED, run.truth.pose_at(fwd[mid].t), tight, probability=1.0
+    )
+    kw = dict(horizon_s=3.0, motion=EXAMPLE_MOTION, sensor=EXAMPLE_SENSOR)
+    # Lost right after its sure frame: the forward pass gave the place up.
+    assert not kept_frames(fwd, run.odometry, motion=EXAMPLE_MOTION).any()
+    assert backward_pass(EXAMPLE_MAP, run.odometry, run.frames, fwd, **kw) == [None] * n
+    # Without the test (confirm_s 0) the pass runs back from it.
+    told = backward_pass(EXAMPLE_MAP, run.odometry, run.frames, fwd, confirm_s=0.0, **kw)
+    assert told[mid] is not None and told[mid - 1] is not None and told[mid + 1] is None
+    assert told[mid - 1].since_localized == pytest.approx(fwd[mid].t - fwd[mid - 1].t)
+
+
+def test_odometry_pieces_carry_the_sideways_velocity() -> None:
+    odo = Odometry(
+        np.array([0.0, 1.0]), np.array([0.2, 0.1]), np.array([0.0, 0.3]), np.array([0.1, -0.2])
+    )
+    dt, v, w, vy = odo.pieces(-0.5, 1.5)
+    assert dt.tolist() == [0.5, 1.0, 0.5] and v.tolist() == [0.0, 0.2, 0.1]
+    assert w.tolist() == [0.0, 0.0, 0.3] and vy.tolist() == [0.0, 0.1, -0.2]
+    assert [a.tolist() for a in odo.between(-0.5, 1.5)] == [dt.tolist(), v.tolist(), w.tolist()]
+    assert not Odometry(odo.t, odo.v, odo.w).pieces(0.0, 1.0)[3].any()

@@ -1018,17 +1018,22 @@ def backward_offline(
     horizon_s: float,
     preset_name: str = "mrclam",
     settings: Mapping[str, Any] | None = None,
+    confirm_s: float | None = None,
 ) -> Callable[[Stream, list[TrackEstimate]], list[TrackEstimate]]:
     """``offline`` for :func:`evaluate_tracking`: the tracker's second pass backward in time
     (:mod:`omniloc.track.backward`) over the frames within ``horizon_s`` before a sure frame,
     with a named preset's parameters changed by ``settings`` (those of
-    :func:`tracker_factory`'s trackers)."""
-    from ..track.backward import backward_pass, combine
+    :func:`tracker_factory`'s trackers); ``confirm_s``: how long the forward pass must keep
+    a sure place (:func:`~omniloc.track.backward.kept_frames`; None: its default)."""
+    from ..track.backward import CONFIRM_S, backward_pass, combine
 
     h = finite_number(horizon_s, "the pass backward's horizon")
     if h < 0.0:
         raise InputError(f"the pass backward's horizon must be seconds >= 0, got {horizon_s!r}")
     sensor, motion, config = _preset_models(preset_name, settings)
+    keep = CONFIRM_S if confirm_s is None else finite_number(confirm_s, "confirm_s")
+    if keep < 0.0:
+        raise InputError(f"confirm_s must be seconds >= 0, got {confirm_s!r}")
 
     def run(stream: Stream, estimates: list[TrackEstimate]) -> list[TrackEstimate]:
         back = backward_pass(
@@ -1040,8 +1045,9 @@ def backward_offline(
             sensor=sensor,
             motion=motion,
             config=config,
+            confirm_s=keep,
         )
-        return combine(estimates, back, config)
+        return combine(estimates, back)
 
     return run
 

@@ -274,7 +274,14 @@ class Odometry:
         """The constant-velocity pieces that cover ``[t0, t1]``: durations (s), v and w.
 
         Before the first row the robot is taken to stand still; the last row holds forever.
+        (:meth:`pieces` gives the sideways velocity too.)
         """
+        dt, v, w, _ = self.pieces(t0, t1)
+        return dt, v, w
+
+    def pieces(self, t0: float, t1: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """As :meth:`between`, with each piece's sideways velocity (zeros without ``vy``):
+        durations (s), v, w and vy, for :func:`~omniloc.track.motion.integrate`."""
         if not t1 >= t0:
             raise InputError(f"between(t0, t1) needs t1 >= t0, got {t0!r} and {t1!r}")
         lo = int(np.searchsorted(self.t, t0, side="right"))
@@ -282,9 +289,12 @@ class Odometry:
         # Breakpoints inside (t0, t1) and the value holding on each piece.
         cuts = np.concatenate([[t0], self.t[lo:hi], [t1]])
         idx = np.arange(lo - 1, hi)
-        v = np.where(idx >= 0, self.v[np.maximum(idx, 0)], 0.0)
-        w = np.where(idx >= 0, self.w[np.maximum(idx, 0)], 0.0)
-        return np.diff(cuts), v, w
+        held = idx >= 0
+        at = np.maximum(idx, 0)
+        v = np.where(held, self.v[at], 0.0)
+        w = np.where(held, self.w[at], 0.0)
+        vy = np.zeros(idx.size) if self.vy is None else np.where(held, self.vy[at], 0.0)
+        return np.diff(cuts), v, w, vy
 
 
 @dataclass(frozen=True)

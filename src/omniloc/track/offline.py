@@ -178,7 +178,7 @@ def track(
             motion=motion,
             config=config,
         )
-        out = combine(out, behind, config)
+        out = combine(out, behind)
     n_back = sum(e.backward for e in out)
     return TrackRun(
         tuple(out),
