@@ -3,13 +3,15 @@ set 6: how many more frames it localizes, and how many of them are wrong, agains
 forward pass alone, under several seeds of the tracker and several horizons.
 
 Run:  python benchmarks/track_backward.py [--data PATH] [--seeds 0 1 2 3 4]
-          [--horizons 10 20 40] [--kidnap 20] [--jobs 2] [--out PATH]
+          [--horizons 10 20 40] [--every-sure 20] [--kidnap 20] [--jobs 2] [--out PATH]
 
 For each seed of the tracker's random particles (``TrackerConfig.seed``), the five whole runs
 and ``--kidnap`` kidnapped streams with as many without a jump (``kidnap_streams`` seeded 0,
 as ``omniloc evaluate --dataset mrclam-track --kidnap 20``): the forward pass once per stream
 (the ``mrclam`` preset), then the pass backward over its estimates at each horizon
-(``omniloc.evaluate.tracking.backward_offline``), every result scored by the evaluation's own
+(``omniloc.evaluate.tracking.backward_offline``: from the sure frames whose place the forward
+pass keeps, ``omniloc.track.backward.kept_frames``), and at each ``--every-sure`` horizon
+also from every sure frame (``confirm_s`` 0), every result scored by the evaluation's own
 ``score_run``. Each wrong frame the pass backward added is listed (its stream, time, position
 and heading error). Writes ``results_track_backward.json`` and ``.md`` beside this file
 (about 20 minutes with two jobs).
@@ -59,7 +61,18 @@ def _kind(name: str) -> str:
     )
 
 
-def job(data: str, seed: int, horizons: list[float], kidnap: int) -> dict[str, Any]:
+def _label(variant: str) -> str:
+    """A variant's column: "forward", a horizon ("20"), or one from every sure frame
+    ("20/all")."""
+    if variant == "forward":
+        return "the forward pass alone"
+    h, _, every = variant.partition("/")
+    return f"with the pass backward, {h} s" + (", from every sure frame" if every else "")
+
+
+def job(
+    data: str, seed: int, horizons: list[float], kidnap: int, every: list[float]
+) -> dict[str, Any]:
     """One seed: the forward pass on every stream, then the pass backward at each horizon.
     Returns, per variant ("forward" or the horizon), per kind of stream, the totals of the
     evaluation and the counts of frames; and the wrong frames each horizon added."""
@@ -70,17 +83,18 @@ def job(data: str, seed: int, horizons: list[float], kidnap: int) -> dict[str, A
         streams += jumps + plain
     settings = {"seed": seed}
     make = tracker_factory("mrclam", settings)
-    passes = {h: backward_offline(h, "mrclam", settings) for h in horizons}
-    scores: dict[str, list[Any]] = {"forward": [], **{f"{h:g}": [] for h in horizons}}
-    added: dict[str, list[dict[str, Any]]] = {f"{h:g}": [] for h in horizons}
+    passes = {f"{h:g}": backward_offline(h, "mrclam", settings) for h in horizons}
+    passes |= {f"{h:g}/all": backward_offline(h, "mrclam", settings, confirm_s=0.0) for h in every}
+    scores: dict[str, list[Any]] = {"forward": [], **{v: [] for v in passes}}
+    added: dict[str, list[dict[str, Any]]] = {v: [] for v in passes}
     for s in streams:
         est, cpu = run_stream(make(s.landmarks, None), s)
         scores["forward"].append(score_run(s, est, cpu_s=cpu))
-        for h, offline in passes.items():
+        for v, offline in passes.items():
             c0 = time.process_time()
             both = offline(s, est)
             dt = time.process_time() - c0
-            scores[f"{h:g}"].append(score_run(s, both, cpu_s=cpu + dt))
+            scores[v].append(score_run(s, both, cpu_s=cpu + dt))
             # The frames the scoring counts wrong (scored, not within tolerance) that the
             # pass backward reported, with how far off they are.
             scored, right = frames_within_tolerance(s, both)
@@ -90,7 +104,7 @@ def job(data: str, seed: int, horizons: list[float], kidnap: int) -> dict[str, A
                 e = both[i]
                 assert e.pose is not None  # (a localized frame)
                 d, dh = e.pose.distance_to(Pose.from_array(tp))
-                added[f"{h:g}"].append(
+                added[v].append(
                     {
                         "stream": s.name,
                         "t_s": round(e.t - s.start, 2),
@@ -142,10 +156,7 @@ def _share(localized: int, wrong: int, frames: int) -> str:
 def table(jobs: list[dict[str, Any]], variants: list[str]) -> list[str]:
     """The markdown table: one column per variant, figures as ranges over the seeds or
     totals."""
-    head = [
-        "the forward pass alone" if v == "forward" else f"with the pass backward, {v} s"
-        for v in variants
-    ]
+    head = [_label(v) for v in variants]
     lines = ["| over the seeds | " + " | ".join(head) + " |", "|---" * (len(variants) + 1) + "|"]
 
     def row(label: str, cell: Any) -> None:
@@ -194,23 +205,38 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", type=Path, default=DATA, help="the mrclam-ds6 folder")
     ap.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     ap.add_argument("--horizons", type=float, nargs="+", default=[10.0, 20.0, 40.0])
+    ap.add_argument(
+        "--every-sure",
+        type=float,
+        nargs="*",
+        default=[20.0],
+        help="horizons to run also from every sure frame (none given up)",
+    )
     ap.add_argument("--kidnap", type=int, default=20, help="kidnapped streams (and as many plain)")
     ap.add_argument("--jobs", type=int, default=2, help="processes, one seed each")
     ap.add_argument("--out", type=Path, default=HERE / "results_track_backward.json")
     args = ap.parse_args(argv)
     if not (args.data / "landmarks.csv").is_file():
         ap.error(f"{args.data}: not the mrclam-ds6 folder")
-    if any(not (math.isfinite(h) and h >= 0) for h in args.horizons):
-        ap.error("--horizons: seconds >= 0")
+    if any(not (math.isfinite(h) and h >= 0) for h in [*args.horizons, *args.every_sure]):
+        ap.error("--horizons, --every-sure: seconds >= 0")
     w0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         futures = [
-            pool.submit(job, str(args.data), s, list(args.horizons), args.kidnap)
+            pool.submit(
+                job, str(args.data), s, list(args.horizons), args.kidnap, list(args.every_sure)
+            )
             for s in args.seeds
         ]
         jobs = [f.result() for f in futures]
     wall = time.perf_counter() - w0
-    variants = ["forward", *(f"{h:g}" for h in args.horizons)]
+    variants = [
+        "forward",
+        *sorted(
+            [f"{h:g}" for h in args.horizons] + [f"{h:g}/all" for h in args.every_sure],
+            key=lambda v: (float(v.split("/")[0]), v),
+        ),
+    ]
     meta = run_meta("track_backward.py", argv, wall_s=round(wall, 1))
     write_results(args.out, meta, jobs=jsonable(jobs))
     lines = table(jobs, variants)
@@ -234,12 +260,13 @@ def main(argv: list[str] | None = None) -> int:
             pos = [w["position_m"] for w in ws]
             hdg = [w["heading_deg"] for w in ws]
             md.append(
-                f"* {v} s: {len(ws)}, {min(pos):.2f}-{max(pos):.2f} m and "
+                f"* {_label(v)[len('with the pass backward, ') :]}: {len(ws)}, "
+                f"{min(pos):.2f}-{max(pos):.2f} m and "
                 f"{min(hdg):.1f}-{max(hdg):.1f} deg off"
                 f" ({sum(p > 0.3 for p in pos)} of them more than 0.3 m off)"
             )
         else:
-            md.append(f"* {v} s: none")
+            md.append(f"* {_label(v)[len('with the pass backward, ') :]}: none")
     args.out.with_suffix(".md").write_text("\n".join(md) + "\n")
     print("\n".join(md))
     print(f"wrote {args.out.with_suffix('.md')}")

@@ -10,7 +10,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 from test_track_cli import _truncated_mrclam
-from track_backward import _range, _share, job, table
+from track_backward import _label, _range, _share, job, table
 
 
 def _variant(localized: int, wrong: int, first: float) -> dict[str, object]:
@@ -61,8 +61,12 @@ def test_a_job_scores_the_forward_pass_and_the_pass_backward(
     # The five runs cut to their first 200 s (robot 3 is sure of its place within a minute),
     # no kidnapped streams: the pass backward localizes more frames of the same estimates.
     data = _truncated_mrclam(tmp_path / "mrclam", 200.0)
-    out = job(str(data), 0, [20.0], 0)
+    out = job(str(data), 0, [20.0], 0, [20.0])
     fwd, back = out["variants"]["forward"]["whole runs"], out["variants"]["20"]["whole runs"]
+    every = out["variants"]["20/all"]["whole runs"]
+    assert set(out["variants"]) == {"forward", "20", "20/all"}
+    assert every["frames"] == fwd["frames"] and every["localized"] > fwd["localized"]
+    assert len(out["added_wrong"]["20/all"]) == every["wrong"] - fwd["wrong"]
     assert set(out["variants"]["forward"]) == {"whole runs"}
     assert fwd["frames"] == back["frames"] and fwd["localized"] > 0
     assert back["localized"] > fwd["localized"]
@@ -71,4 +75,8 @@ def test_a_job_scores_the_forward_pass_and_the_pass_backward(
     assert len(out["added_wrong"]["20"]) == back["wrong"] - fwd["wrong"]
     for w in out["added_wrong"]["20"]:
         assert w["position_m"] > 0.3 or w["heading_deg"] > 5.0
-    assert table([out], ["forward", "20"])[2].startswith("| whole runs: localized and right")
+    lines = table([out], ["forward", "20", "20/all"])
+    assert lines[2].startswith("| whole runs: localized and right")
+    assert lines[0].endswith("| with the pass backward, 20 s, from every sure frame |")
+    assert _label("forward") == "the forward pass alone"
+    assert _label("10") == "with the pass backward, 10 s"
