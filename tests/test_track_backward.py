@@ -19,8 +19,11 @@ from omniloc.errors import InputError
 from omniloc.evaluate.tracking import backward_offline, evaluate_tracking, whole_run
 from omniloc.track import Frame, MotionModel, Odometry, TrackerConfig, TrackEstimate, track
 from omniloc.track.backward import (
+    CONFIRM_S,
     backward_pass,
     combine,
+    held_frames,
+    hold,
     kept_frames,
     reverse_recording,
     sure_frames,
@@ -135,9 +138,15 @@ def test_a_kidnapping_is_not_carried_back_across() -> None:
     run = ex.run
     kw = dict(sensor=ex.sensor, motion=ex.motion)
     fwd = track(ex.landmarks, run.odometry, run.frames, **kw).estimates
-    two = track(ex.landmarks, run.odometry, run.frames, backward_s=60.0, **kw).estimates
+    both = track(ex.landmarks, run.odometry, run.frames, backward_s=60.0, **kw)
+    two = both.estimates
     ok, loc = _correct(run, two), _localized(two)
     assert not (loc & ~ok).any()
+    # The localized frames of the seconds before the jump are given up by the forward pass
+    # (it flags the kidnapping): counted, and those the pass did not localize say why.
+    given = [e for e in two if e.reason.startswith("the forward pass gives this place up")]
+    assert both.given_up > len(given) > 0
+    assert all(e.state is TrackState.AMBIGUOUS and e.t < run.frames[0].t + 30.0 for e in given)
     # The kidnapping stays flagged where the forward pass noticed it.
     assert [e.kidnapped for e in two] == [e.kidnapped for e in fwd] and any(
         e.kidnapped for e in fwd
@@ -262,6 +271,7 @@ def test_the_command_line_takes_the_second_pass(tmp_path, capsys) -> None:
     assert share[1] > share[0]
     assert "within 0.3 m / 5 deg 100.0 % of localized frames" in two
     assert "the pass backward (20 s before each sure frame) localized" in two
+    assert "localized at a place the forward pass gave up within 10 s are not" in two
     assert "the pass backward" not in one
     assert main([*args, "--backward", "-1"]) == 1
     assert "must be >= 0" in capsys.readouterr().err
@@ -413,3 +423,34 @@ def test_odometry_pieces_carry_the_sideways_velocity() -> None:
     assert w.tolist() == [0.0, 0.0, 0.3] and vy.tolist() == [0.0, 0.1, -0.2]
     assert [a.tolist() for a in odo.between(-0.5, 1.5)] == [dt.tolist(), v.tolist(), w.tolist()]
     assert not Odometry(odo.t, odo.v, odo.w).pieces(0.0, 1.0)[3].any()
+
+
+def test_a_localized_frame_whose_place_is_given_up_is_reported_ambiguous() -> None:
+    est, odo = _straight(jump_at=12.0)  # the pose jumps 2 m at 12 s
+    cfg = TrackerConfig(
+        confidence_recent=((0.5, 0.3), (1.0, 0.8)), confidence_ambiguous=((0.5, 0.1), (1.0, 0.2))
+    )
+    out = hold(est, odo, config=cfg)
+    t = np.array([e.t for e in est])
+    loc = _localized(est)
+    given_up = loc & (t + CONFIRM_S >= 12.0) & (t < 12.0)
+    assert given_up.sum() == 5  # the sure frames at 2, 4, ..., 10 s
+    assert not _localized(out)[given_up].any()
+    for i in np.flatnonzero(given_up):
+        e, f = out[i], est[i]
+        assert e.state is TrackState.AMBIGUOUS and (e.pose, e.probability) == (
+            f.pose,
+            f.probability,
+        )
+        assert e.reason.startswith("the forward pass gives this place up within 10 s")
+        assert e.confidence == pytest.approx(0.3 + (0.999 - 0.5))  # the recent table
+    assert all(out[i] is est[i] for i in np.flatnonzero(~given_up))
+    # Without a recent table the ambiguous one; without tables no confidence.
+    amb = hold(est, odo, config=TrackerConfig(confidence_ambiguous=((0.5, 0.1), (1.0, 0.2))))
+    assert amb[int(np.flatnonzero(given_up)[0])].confidence == pytest.approx(0.1998)
+    assert all(e.confidence is None for e in hold(est, odo) if e.state is TrackState.AMBIGUOUS)
+    # Held for 2 s only, the sure frames from 10 s on are given up, no others.
+    short = hold(est, odo, confirm_s=2.0)
+    assert [e.t for e, f in zip(short, est, strict=True) if e is not f] == [10.0]
+    with pytest.raises(InputError, match="among"):
+        held_frames(est, odo, among=np.ones(3, dtype=bool))

@@ -828,7 +828,7 @@ def _demo_over_time(out: Path) -> None:
     from .evaluate.tracking import errors_against
     from .plot.track import plot_track
     from .track import track
-    from .track.backward import backward_pass, combine
+    from .track.backward import backward_pass, combine, hold
     from .track.simulate import example_run
 
     ex = example_run()
@@ -870,22 +870,25 @@ def _demo_over_time(out: Path) -> None:
     )
     # Offline, the pass backward from each sure frame over the same forward estimates (what
     # track(..., backward_s=20) does after its forward pass).
+    held = hold(est, ex.run.odometry, motion=ex.motion)
     behind = backward_pass(
         ex.landmarks,
         ex.run.odometry,
         ex.run.frames,
-        est,
+        held,
         horizon_s=20.0,
         sensor=ex.sensor,
         motion=ex.motion,
     )
-    both = combine(est, behind)
+    both = combine(held, behind)
     ok2, _, _ = errors_against(ex.run.truth, both)
     loc2 = np.array([e.localized for e in both])
     n_back = sum(e.backward for e in both)
+    n_given = sum(a is not b for a, b in zip(est, held, strict=True))
     print(
         f"  offline, with the pass backward (--backward 20): localized in {loc2.sum()} of "
-        f"{len(est)} frames ({n_back} by the pass backward), right in {ok2[loc2].sum()} of them"
+        f"{len(est)} frames ({n_back} by the pass backward; {n_given} localized forward at a "
+        f"place given up within 10 s after), right in {ok2[loc2].sum()} of them"
     )
     path = out / "track.png"
     plot_track(ex.landmarks, est, path, truth=ex.run.truth, title="the example recording")
@@ -1156,7 +1159,8 @@ def _cmd_track(args: argparse.Namespace) -> int:
     if args.backward is not None:
         print(
             f"the pass backward ({args.backward:g} s before each sure frame) localized "
-            f"{run.backward} of them"
+            f"{run.backward} of them; {run.given_up} localized at a place the forward pass "
+            "gave up within 10 s are not"
         )
     first = next((e for e in est if e.localized), None)
     if first is not None:

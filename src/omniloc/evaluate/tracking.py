@@ -1025,7 +1025,7 @@ def backward_offline(
     with a named preset's parameters changed by ``settings`` (those of
     :func:`tracker_factory`'s trackers); ``confirm_s``: how long the forward pass must keep
     a sure place (:func:`~omniloc.track.backward.kept_frames`; None: its default)."""
-    from ..track.backward import CONFIRM_S, backward_pass, combine
+    from ..track.backward import CONFIRM_S, backward_pass, combine, hold
 
     h = finite_number(horizon_s, "the pass backward's horizon")
     if h < 0.0:
@@ -1036,6 +1036,7 @@ def backward_offline(
         raise InputError(f"confirm_s must be seconds >= 0, got {confirm_s!r}")
 
     def run(stream: Stream, estimates: list[TrackEstimate]) -> list[TrackEstimate]:
+        estimates = hold(estimates, stream.odometry, motion=motion, config=config, confirm_s=keep)
         back = backward_pass(
             stream.landmarks,
             stream.odometry,

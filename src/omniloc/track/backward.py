@@ -29,7 +29,13 @@ odometry carries the sure pose, it goes lost, or it flags a kidnapping) where a 
 place is most often held. So only the sure frames whose place the forward pass holds for
 ``confirm_s`` seconds after them start the pass (:func:`kept_frames`); on MRCLAM's kidnapped
 streams that took the wrong frames the pass added from 39 to 3, all heading near misses at
-the right place (docs/tracking.md, "Offline: a second pass backward").
+the right place. And the same test, applied to every ``localized`` frame of the forward
+pass, finds most of its own wrong ones: such a frame is reported ``ambiguous`` after the
+pass (:func:`hold`), unless the pass localizes it (docs/tracking.md, "Offline: a second pass
+backward").
+
+:func:`~omniloc.track.track` with ``backward_s`` runs :func:`hold`, :func:`backward_pass` and
+:func:`combine` in that order.
 """
 
 from __future__ import annotations
@@ -45,6 +51,7 @@ from ..io import finite_number
 from ..maps import LandmarkMap
 from ..pose import compose
 from ..sensor import SensorModel
+from .confidence import confidence_of
 from .data import Frame, Odometry
 from .motion import MotionModel, integrate
 from .records import TrackEstimate, TrackState
@@ -56,6 +63,8 @@ __all__ = [
     "PLACE_M",
     "backward_pass",
     "combine",
+    "held_frames",
+    "hold",
     "kept_frames",
     "reverse_recording",
     "sure_frames",
@@ -144,22 +153,21 @@ def sure_frames(estimates: Sequence[TrackEstimate], config: TrackerConfig) -> np
     )
 
 
-def kept_frames(
+def held_frames(
     estimates: Sequence[TrackEstimate],
     odometry: Odometry,
     *,
     motion: MotionModel | None = None,
-    config: TrackerConfig | None = None,
     confirm_s: float = CONFIRM_S,
+    among: np.ndarray | None = None,
 ) -> np.ndarray:
-    """The sure frames (:func:`sure_frames`) whose place the forward pass holds for
-    ``confirm_s`` seconds after them.
+    """The frames whose place the forward pass holds for ``confirm_s`` seconds after them.
 
-    A sure frame's pose is carried forward by the odometry; the forward pass holds the place
+    A frame's pose is carried forward by the odometry; the forward pass holds the place
     while, frame after frame, its pose is within :data:`PLACE_M` and :data:`PLACE_HEADING`
-    of it, it is not ``lost`` and it flags no kidnapping. A sure frame is kept when that
-    holds for every frame within ``confirm_s`` seconds after it (the recording may end
-    sooner); else the forward pass gave the place up.
+    of it, it is not ``lost`` and it flags no kidnapping. A frame is held when that holds
+    for every frame within ``confirm_s`` seconds after it (the recording may end sooner);
+    else the forward pass gave the place up.
 
     Parameters
     ----------
@@ -167,10 +175,12 @@ def kept_frames(
         The forward pass's estimates, one per frame, in time order.
     odometry : Odometry
         The recording's.
-    motion, config
-        The forward pass's (the odometry's latency and scales; what a sure frame is).
+    motion : MotionModel, optional
+        The forward pass's (the odometry's latency and scales).
     confirm_s : float
-        Seconds (>= 0; 0: every sure frame is kept).
+        Seconds (>= 0; 0: every frame with a pose is held).
+    among : ndarray of bool, shape (n,), optional
+        The frames to look at (default: every frame with a pose); the others are False.
 
     Returns
     -------
@@ -179,16 +189,23 @@ def kept_frames(
     Raises
     ------
     InputError
-        ``confirm_s`` not a number of seconds >= 0.
+        ``confirm_s`` not a number of seconds >= 0, or ``among`` of another length.
     """
     motion = MotionModel() if motion is None else motion
     w = finite_number(confirm_s, "confirm_s")
     if w < 0.0:
         raise InputError(f"confirm_s must be seconds >= 0, got {confirm_s!r}")
-    sure = sure_frames(estimates, TrackerConfig() if config is None else config)
-    kept = sure.copy()
+    posed = np.array([e.pose is not None for e in estimates], dtype=bool)
+    if among is not None:
+        sel = np.asarray(among, dtype=bool)
+        if sel.shape != posed.shape:
+            raise InputError(
+                f"among must hold one flag per estimate: shape {sel.shape} for {posed.size}"
+            )
+        posed &= sel
+    held = posed.copy()
     if w == 0.0:
-        return kept
+        return held
     t = [e.t for e in estimates]
     steps: dict[int, np.ndarray] = {}
 
@@ -199,9 +216,9 @@ def kept_frames(
             steps[k] = integrate(dt, v, om, motion, vy=vy)[0]
         return steps[k]
 
-    for s in np.flatnonzero(sure).tolist():
+    for s in np.flatnonzero(posed).tolist():
         pose = estimates[s].pose
-        assert pose is not None  # (a sure frame has one)
+        assert pose is not None  # (posed)
         carried = pose.as_array()
         for k in range(s + 1, len(estimates)):
             if t[k] - t[s] > w:
@@ -209,9 +226,72 @@ def kept_frames(
             carried = compose(carried, step(k))
             e = estimates[k]
             if e.pose is None or e.kidnapped or not _at(e.pose.as_array(), carried):
-                kept[s] = False
+                held[s] = False
                 break
-    return kept
+    return held
+
+
+def kept_frames(
+    estimates: Sequence[TrackEstimate],
+    odometry: Odometry,
+    *,
+    motion: MotionModel | None = None,
+    config: TrackerConfig | None = None,
+    confirm_s: float = CONFIRM_S,
+) -> np.ndarray:
+    """The sure frames (:func:`sure_frames`) whose place the forward pass holds for
+    ``confirm_s`` seconds after them (:func:`held_frames`): those that start the pass.
+
+    Raises
+    ------
+    InputError
+        ``confirm_s`` not a number of seconds >= 0.
+    """
+    sure = sure_frames(estimates, TrackerConfig() if config is None else config)
+    return held_frames(estimates, odometry, motion=motion, confirm_s=confirm_s, among=sure)
+
+
+def hold(
+    forward: Sequence[TrackEstimate],
+    odometry: Odometry,
+    *,
+    motion: MotionModel | None = None,
+    config: TrackerConfig | None = None,
+    confirm_s: float = CONFIRM_S,
+) -> list[TrackEstimate]:
+    """The forward pass's estimates, each ``localized`` one whose place the forward pass gives
+    up within ``confirm_s`` seconds after it (:func:`held_frames`) reported ``ambiguous``.
+
+    Offline, what the forward pass does next is known: a place it gives up within seconds
+    was one it should not have been sure of (on MRCLAM most of its wrong localized frames,
+    and the right ones just before a kidnapping). Such a frame keeps its pose, covariance,
+    hypotheses and probability; its reason says why it is not localized, and its confidence
+    is read from ``config``'s table for an ambiguous frame soon after a localized one
+    (``confidence_recent``, or ``confidence_ambiguous`` without it; None without tables).
+
+    Raises
+    ------
+    InputError
+        ``confirm_s`` not a number of seconds >= 0.
+    """
+    config = TrackerConfig() if config is None else config
+    localized = np.array([e.state is TrackState.LOCALIZED for e in forward], dtype=bool)
+    held = held_frames(forward, odometry, motion=motion, confirm_s=confirm_s, among=localized)
+    table = config.confidence_ambiguous
+    if config.confidence_recent is not None:
+        table = config.confidence_recent
+    out = list(forward)
+    for i in np.flatnonzero(localized & ~held).tolist():
+        e = forward[i]
+        p = e.probability
+        out[i] = replace(
+            e,
+            state=TrackState.AMBIGUOUS,
+            confidence=None if p is None or table is None else confidence_of(table, p),
+            reason=f"the forward pass gives this place up within {float(confirm_s):g} s after "
+            f"(localized when it came): {e.reason}",
+        )
+    return out
 
 
 def _at(pose: np.ndarray, place: np.ndarray) -> bool:

@@ -20,7 +20,7 @@ from ..io import finite_number
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from .backward import backward_pass, combine
+from .backward import backward_pass, combine, hold
 from .data import Frame, Odometry
 from .motion import MotionModel
 from .records import TrackEstimate, TrackState
@@ -47,6 +47,10 @@ class TrackRun:
     backward : int
         Frames reported from the second pass backward in time (``track(...,
         backward_s=...)``; 0 without it).
+    given_up : int
+        With the pass backward, the frames the forward pass localized at a place it gave up
+        within 10 s after, reported ``ambiguous`` unless the pass localized them
+        (:func:`~omniloc.track.backward.hold`; 0 without it).
     """
 
     estimates: tuple[TrackEstimate, ...] = field(repr=False)
@@ -54,6 +58,7 @@ class TrackRun:
     cpu_s: float = 0.0
     wall_s: float = 0.0
     backward: int = 0
+    given_up: int = 0
 
     def __len__(self) -> int:
         return len(self.estimates)
@@ -101,8 +106,10 @@ def track(
     backward_s : float, optional
         Offline only: a second pass backward in time (:mod:`omniloc.track.backward`) reports
         the frames within ``backward_s`` seconds before a sure ``localized`` frame that it
-        holds ``localized``, where the forward pass did not. None (the default): the
-        forward pass alone, each frame placed by what came before it, as online.
+        holds ``localized``, where the forward pass did not; and a ``localized`` frame whose
+        place the forward pass gives up within 10 s after it is reported ``ambiguous``
+        (:func:`~omniloc.track.backward.hold`). None (the default): the forward pass alone,
+        each frame placed by what came before it, as online.
 
     Returns
     -------
@@ -167,7 +174,11 @@ def track(
         out.append(tracker.frame(f.t, f.bearings))
         if progress is not None:
             progress(n)
+    n_given = 0
     if backward_s is not None:
+        forward = out
+        out = hold(forward, odometry, motion=motion, config=config)
+        n_given = sum(a is not b for a, b in zip(forward, out, strict=True))
         behind = backward_pass(
             lm,
             odometry,
@@ -186,4 +197,5 @@ def track(
         time.process_time() - c0,
         time.perf_counter() - w0,
         n_back,
+        n_given,
     )
