@@ -423,6 +423,8 @@ def test_odometry_pieces_carry_the_sideways_velocity() -> None:
     assert w.tolist() == [0.0, 0.0, 0.3] and vy.tolist() == [0.0, 0.1, -0.2]
     assert [a.tolist() for a in odo.between(-0.5, 1.5)] == [dt.tolist(), v.tolist(), w.tolist()]
     assert not Odometry(odo.t, odo.v, odo.w).pieces(0.0, 1.0)[3].any()
+    with pytest.raises(InputError, match="needs t1 >= t0"):
+        odo.pieces(1.0, 0.5)
 
 
 def test_a_localized_frame_whose_place_is_given_up_is_reported_ambiguous() -> None:

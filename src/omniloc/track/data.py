@@ -283,7 +283,7 @@ class Odometry:
         """As :meth:`between`, with each piece's sideways velocity (zeros without ``vy``):
         durations (s), v, w and vy, for :func:`~omniloc.track.motion.integrate`."""
         if not t1 >= t0:
-            raise InputError(f"between(t0, t1) needs t1 >= t0, got {t0!r} and {t1!r}")
+            raise InputError(f"odometry over [t0, t1] needs t1 >= t0, got {t0!r} and {t1!r}")
         lo = int(np.searchsorted(self.t, t0, side="right"))
         hi = int(np.searchsorted(self.t, t1, side="right"))
         # Breakpoints inside (t0, t1) and the value holding on each piece.
