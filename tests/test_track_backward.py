@@ -6,6 +6,7 @@ across."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,7 @@ from omniloc.track.backward import (
     held_frames,
     hold,
     kept_frames,
+    refine,
     reverse_recording,
     sure_frames,
 )
@@ -460,3 +462,40 @@ def test_a_localized_frame_whose_place_is_given_up_is_reported_ambiguous() -> No
     assert [e.t for e, f in zip(short, est, strict=True) if e is not f] == [10.0]
     with pytest.raises(InputError, match="among"):
         held_frames(est, odo, among=np.ones(3, dtype=bool))
+
+
+def test_the_evaluation_and_track_run_the_same_offline_steps() -> None:
+    ex = example_run()
+    run = ex.run
+    kw = dict(sensor=ex.sensor, motion=ex.motion)
+    stream = whole_run("ex", ex.landmarks, run.odometry, run.frames, run.truth)
+    fwd = list(track(ex.landmarks, run.odometry, run.frames, **kw).estimates)
+    both = track(ex.landmarks, run.odometry, run.frames, backward_s=20.0, **kw)
+    mine = refine(ex.landmarks, run.odometry, run.frames, fwd, horizon_s=20.0, **kw)
+    assert [(e.t, e.state, e.pose, e.reason) for e in mine] == [
+        (e.t, e.state, e.pose, e.reason) for e in both.estimates
+    ]
+    # A forward frame kept localized is the same estimate; one given up is not.
+    assert both.given_up == sum(f.localized and o is not f for f, o in zip(fwd, mine, strict=True))
+    assert both.given_up > 0
+    # backward_offline (the evaluation's) is refine with the preset's models.
+    ev = backward_offline(20.0, "generic")
+    from omniloc.track import preset
+
+    s_, m_, c_ = preset("generic")
+    want = refine(
+        ex.landmarks, run.odometry, run.frames, fwd, horizon_s=20.0, sensor=s_, motion=m_, config=c_
+    )
+    got = ev(stream, fwd)
+    assert [(e.state, e.pose, e.reason) for e in got] == [(e.state, e.pose, e.reason) for e in want]
+    assert any(e.reason.startswith("the forward pass gives this place up") for e in got)
+    assert any(e.backward for e in got)
+
+
+def test_a_backward_estimate_without_its_time_to_the_sure_frame_says_so_plainly() -> None:
+    f = TrackEstimate(1.0, TrackState.AMBIGUOUS, Pose(1.0, 2.0, 0.0), np.eye(3) * 1e-2)
+    b = TrackEstimate(1.0, TrackState.LOCALIZED, Pose(1.0, 2.0, 0.0), np.eye(3) * 1e-4, reason="r")
+    (out,) = combine([f], [b])
+    assert out.backward and out.reason == "from the pass backward: r"
+    (out,) = combine([f], [replace(b, since_localized=2.5)])
+    assert out.reason == "from the pass backward, 2.5 s before a sure frame: r"

@@ -828,7 +828,7 @@ def _demo_over_time(out: Path) -> None:
     from .evaluate.tracking import errors_against
     from .plot.track import plot_track
     from .track import track
-    from .track.backward import backward_pass, combine, hold
+    from .track.backward import refine
     from .track.simulate import example_run
 
     ex = example_run()
@@ -870,21 +870,19 @@ def _demo_over_time(out: Path) -> None:
     )
     # Offline, the pass backward from each sure frame over the same forward estimates (what
     # track(..., backward_s=20) does after its forward pass).
-    held = hold(est, ex.run.odometry, motion=ex.motion)
-    behind = backward_pass(
+    both = refine(
         ex.landmarks,
         ex.run.odometry,
         ex.run.frames,
-        held,
+        est,
         horizon_s=20.0,
         sensor=ex.sensor,
         motion=ex.motion,
     )
-    both = combine(held, behind)
     ok2, _, _ = errors_against(ex.run.truth, both)
     loc2 = np.array([e.localized for e in both])
     n_back = sum(e.backward for e in both)
-    n_given = sum(a is not b for a, b in zip(est, held, strict=True))
+    n_given = sum(f.localized and o is not f for f, o in zip(est, both, strict=True))
     print(
         f"  offline, with the pass backward (--backward 20): localized in {loc2.sum()} of "
         f"{len(est)} frames ({n_back} by the pass backward; {n_given} localized forward at a "

@@ -1023,9 +1023,10 @@ def backward_offline(
     """``offline`` for :func:`evaluate_tracking`: the tracker's second pass backward in time
     (:mod:`omniloc.track.backward`) over the frames within ``horizon_s`` before a sure frame,
     with a named preset's parameters changed by ``settings`` (those of
-    :func:`tracker_factory`'s trackers); ``confirm_s``: how long the forward pass must keep
-    a sure place (:func:`~omniloc.track.backward.kept_frames`; None: its default)."""
-    from ..track.backward import CONFIRM_S, backward_pass, combine, hold
+    :func:`tracker_factory`'s trackers), as ``track(..., backward_s=horizon_s)`` runs it
+    (:func:`~omniloc.track.backward.refine`); ``confirm_s``: how long the forward pass must
+    hold a place for it to stay localized and start the pass (None: its default)."""
+    from ..track.backward import CONFIRM_S, refine
 
     h = finite_number(horizon_s, "the pass backward's horizon")
     if h < 0.0:
@@ -1036,8 +1037,7 @@ def backward_offline(
         raise InputError(f"confirm_s must be seconds >= 0, got {confirm_s!r}")
 
     def run(stream: Stream, estimates: list[TrackEstimate]) -> list[TrackEstimate]:
-        estimates = hold(estimates, stream.odometry, motion=motion, config=config, confirm_s=keep)
-        back = backward_pass(
+        return refine(
             stream.landmarks,
             stream.odometry,
             stream.frames,
@@ -1048,7 +1048,6 @@ def backward_offline(
             config=config,
             confirm_s=keep,
         )
-        return combine(estimates, back)
 
     return run
 

@@ -34,8 +34,8 @@ pass, finds most of its own wrong ones: such a frame is reported ``ambiguous`` a
 pass (:func:`hold`), unless the pass localizes it (docs/tracking.md, "Offline: a second pass
 backward").
 
-:func:`~omniloc.track.track` with ``backward_s`` runs :func:`hold`, :func:`backward_pass` and
-:func:`combine` in that order.
+:func:`refine` runs :func:`hold`, :func:`backward_pass` and :func:`combine` in that order:
+what :func:`~omniloc.track.track` with ``backward_s`` reports.
 """
 
 from __future__ import annotations
@@ -46,10 +46,11 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..angles import wrap
 from ..errors import InputError
 from ..io import finite_number
 from ..maps import LandmarkMap
-from ..pose import compose
+from ..pose import between, compose
 from ..sensor import SensorModel
 from .confidence import confidence_of
 from .data import Frame, Odometry
@@ -66,6 +67,7 @@ __all__ = [
     "held_frames",
     "hold",
     "kept_frames",
+    "refine",
     "reverse_recording",
     "sure_frames",
 ]
@@ -204,30 +206,33 @@ def held_frames(
             )
         posed &= sel
     held = posed.copy()
-    if w == 0.0:
+    if w == 0.0 or not posed.any():
         return held
-    t = [e.t for e in estimates]
-    steps: dict[int, np.ndarray] = {}
-
-    def step(k: int) -> np.ndarray:
-        """The odometry's motion from frame k - 1 to frame k."""
-        if k not in steps:
-            dt, v, om, vy = odometry.pieces(t[k - 1] - motion.delay_s, t[k] - motion.delay_s)
-            steps[k] = integrate(dt, v, om, motion, vy=vy)[0]
-        return steps[k]
-
+    t = np.array([e.t for e in estimates])
+    pose = np.array([e.pose.as_array() if e.pose is not None else [np.nan] * 3 for e in estimates])
+    # A frame no place can be held through: lost, or flagged kidnapped.
+    broken = np.array([e.pose is None or e.kidnapped for e in estimates], dtype=bool)
+    # The odometry's pose at each frame (from the first frame looked at, to the last frame
+    # any window reaches): one chain, so that each window is two array operations.
+    end = np.searchsorted(t, t + w, side="right")  # (each frame's window: s + 1 .. end - 1)
+    first = int(np.flatnonzero(posed)[0])
+    last = int(end[np.flatnonzero(posed)].max())
+    odo = np.zeros((last - first, 3))
+    for k in range(first + 1, last):
+        dt, v, om, vy = odometry.pieces(t[k - 1] - motion.delay_s, t[k] - motion.delay_s)
+        odo[k - first] = compose(odo[k - 1 - first], integrate(dt, v, om, motion, vy=vy)[0])
     for s in np.flatnonzero(posed).tolist():
-        pose = estimates[s].pose
-        assert pose is not None  # (posed)
-        carried = pose.as_array()
-        for k in range(s + 1, len(estimates)):
-            if t[k] - t[s] > w:
-                break
-            carried = compose(carried, step(k))
-            e = estimates[k]
-            if e.pose is None or e.kidnapped or not _at(e.pose.as_array(), carried):
-                held[s] = False
-                break
+        win = slice(s + 1, int(end[s]))
+        if win.start >= win.stop:
+            continue  # (the recording ends: nothing gives the place up)
+        if broken[win].any():
+            held[s] = False
+            continue
+        rel = between(odo[s - first], odo[win.start - first : win.stop - first])
+        carried = compose(pose[s], rel)
+        d = np.hypot(*(pose[win, :2] - carried[:, :2]).T)
+        dh = np.abs(wrap(pose[win, 2] - carried[:, 2]))
+        held[s] = bool(((d <= PLACE_M) & (dh <= PLACE_HEADING)).all())
     return held
 
 
@@ -292,12 +297,6 @@ def hold(
             f"(localized when it came): {e.reason}",
         )
     return out
-
-
-def _at(pose: np.ndarray, place: np.ndarray) -> bool:
-    """A pose within :data:`PLACE_M` and :data:`PLACE_HEADING` of a place."""
-    d = math.hypot(pose[0] - place[0], pose[1] - place[1])
-    return d <= PLACE_M and abs(math.remainder(pose[2] - place[2], 2.0 * math.pi)) <= PLACE_HEADING
 
 
 def _near(a: TrackEstimate, b: TrackEstimate, config: TrackerConfig) -> bool:
@@ -428,13 +427,54 @@ def combine(
         if f.state is TrackState.LOCALIZED or b is None or b.state is not TrackState.LOCALIZED:
             out.append(f)
             continue
-        ahead = math.nan if b.since_localized is None else b.since_localized
+        ahead = (
+            "" if b.since_localized is None else f", {b.since_localized:.1f} s before a sure frame"
+        )
         out.append(
             replace(
                 b,
                 backward=True,
                 kidnapped=f.kidnapped,  # (a kidnapping is the forward pass's to flag)
-                reason=f"from the pass backward, {ahead:.1f} s before a sure frame: " + b.reason,
+                reason=f"from the pass backward{ahead}: {b.reason}",
             )
         )
     return out
+
+
+def refine(
+    landmarks: LandmarkMap,
+    odometry: Odometry,
+    frames: Sequence[Frame],
+    forward: Sequence[TrackEstimate],
+    *,
+    horizon_s: float,
+    sensor: SensorModel | None = None,
+    motion: MotionModel | None = None,
+    config: TrackerConfig | None = None,
+    confirm_s: float = CONFIRM_S,
+) -> list[TrackEstimate]:
+    """The forward pass's estimates after the offline steps, what ``track(...,
+    backward_s=horizon_s)`` reports: the places the forward pass gives up within
+    ``confirm_s`` seconds not localized (:func:`hold`), then the pass backward over the
+    frames within ``horizon_s`` before a sure frame (:func:`backward_pass`), the two
+    combined (:func:`combine`). A frame the forward pass localized is ``is`` the same
+    estimate in the result unless it was given up.
+
+    Raises
+    ------
+    InputError
+        As :func:`hold` and :func:`backward_pass`.
+    """
+    held = hold(forward, odometry, motion=motion, config=config, confirm_s=confirm_s)
+    behind = backward_pass(
+        landmarks,
+        odometry,
+        frames,
+        held,
+        horizon_s=horizon_s,
+        sensor=sensor,
+        motion=motion,
+        config=config,
+        confirm_s=0.0,  # (hold left localized only the places the forward pass holds)
+    )
+    return combine(held, behind)

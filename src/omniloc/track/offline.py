@@ -20,7 +20,7 @@ from ..io import finite_number
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import Pose
 from ..sensor import SensorModel
-from .backward import backward_pass, combine, hold
+from .backward import refine
 from .data import Frame, Odometry
 from .motion import MotionModel
 from .records import TrackEstimate, TrackState
@@ -177,19 +177,17 @@ def track(
     n_given = 0
     if backward_s is not None:
         forward = out
-        out = hold(forward, odometry, motion=motion, config=config)
-        n_given = sum(a is not b for a, b in zip(forward, out, strict=True))
-        behind = backward_pass(
+        out = refine(
             lm,
             odometry,
             frames,
-            out,
+            forward,
             horizon_s=backward_s,
             sensor=sensor,
             motion=motion,
             config=config,
         )
-        out = combine(out, behind)
+        n_given = sum(f.localized and o is not f for f, o in zip(forward, out, strict=True))
     n_back = sum(e.backward for e in out)
     return TrackRun(
         tuple(out),
