@@ -69,8 +69,41 @@ def test_forward_and_mirror_transform_bearings(demo_image: np.ndarray) -> None:
     plain = extract_bearings(demo_image, calibration=cal)
     turned = extract_bearings(demo_image, calibration=cal, forward=0.3, mirrored=True)
     np.testing.assert_allclose(plain.image_angles, np.sort(plain.image_angles))
-    expected = np.sort(np.asarray(wrap(-plain.image_angles - 0.3)))
+    expected = np.sort(np.asarray(wrap(-(plain.image_angles - 0.3))))
     np.testing.assert_allclose(turned.bearings, expected, atol=1e-12)
+
+
+def _annulus_image(pole_phi_deg: float) -> np.ndarray:
+    """A conic mirror's image drawn with numpy alone (not the renderer): walls of four grey
+    levels (steps at image angles 45, 160, 240 and 320 deg), one dark pole 3 deg wide at the
+    image angle ``pole_phi_deg``."""
+    ss, h, w, radius = 4, 480, 640, 200.0
+    cx, cy = (w - 1) / 2, (h - 1) / 2
+    u = (np.arange(w * ss) - (ss - 1) / 2) / ss - cx
+    v = (np.arange(h * ss) - (ss - 1) / 2) / ss - cy
+    du, dv = np.meshgrid(u, v)
+    phi = np.degrees(np.arctan2(-dv, du)) % 360
+    rho = np.hypot(du, dv) / radius
+    img = np.select([phi < 45, phi < 160, phi < 240, phi < 320], [190.0, 70.0, 150.0, 100.0], 190.0)
+    img[np.abs((phi - pole_phi_deg + 180) % 360 - 180) < 1.5] = 20.0
+    img[rho < 0.25] = 45.0
+    img[rho > 1] = 10.0
+    return np.rint(img.reshape(h, ss, w, ss).mean(axis=(1, 3))).astype(np.uint8)
+
+
+@pytest.mark.parametrize("mirrored", [False, True])
+@pytest.mark.parametrize("forward_deg", [0.0, 60.0, -135.0])
+def test_a_pole_on_the_forward_axis_is_at_bearing_zero(mirrored: bool, forward_deg: float) -> None:
+    # The definition of `forward`, mirrored or not: the image angle of the robot's forward
+    # axis. A pole drawn there is straight ahead; one 30 deg counter-clockwise of it in the
+    # image is 30 deg to the left (a plain sensor) or to the right (a mirrored one).
+    for offset in (0.0, 30.0):
+        img = _annulus_image(forward_deg + offset)
+        det = extract_bearings(img, forward=np.deg2rad(forward_deg), mirrored=mirrored)
+        poles = det.bearings[det.kind == "pole"]
+        assert poles.size == 1
+        expected = np.deg2rad(-offset if mirrored else offset)
+        assert abs(float(angdiff(poles[0], expected))) < np.deg2rad(0.2)
 
 
 def test_pole_reported_once_at_its_centre() -> None:

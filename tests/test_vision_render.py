@@ -60,7 +60,7 @@ def test_seeded_rng_is_reproducible() -> None:
 def test_renderer_inverts_the_bearing_convention(
     forward: float, mirrored: bool, aspect: float
 ) -> None:
-    # One bright pole straight at bearing b; its stripe must lie at phi = s * (b + forward).
+    # One bright pole straight at bearing b; its stripe must lie at phi = s * b + forward.
     pose = (0.3, -0.2, 0.7)
     b = np.deg2rad(40.0)
     d = 2.0
@@ -69,7 +69,7 @@ def test_renderer_inverts_the_bearing_convention(
     cam = clean_camera(aspect=aspect, radius=180.0, forward=forward, mirrored=mirrored)
     img = render_omni_image(OmniScene(poles=(pole,), edges=ROOM), pose, cam, rng=0)
     s = -1.0 if mirrored else 1.0
-    phi = float(wrap(s * (b + forward)))
+    phi = float(wrap(s * b + forward))
     cx, cy = cam.center
     for rho in (0.5, 0.7, 0.9):
         u = cx + aspect * cam.radius * rho * np.cos(phi)

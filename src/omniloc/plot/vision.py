@@ -135,7 +135,7 @@ def plot_detections(
     # Panorama in bearing order, -180 to 180 degrees left to right.
     cols = pano.shape[1]
     s = -1.0 if detections.mirrored else 1.0
-    b = np.asarray(wrap(s * np.arange(cols) * (2 * np.pi / cols) - detections.forward))
+    b = np.asarray(wrap(s * (np.arange(cols) * (2 * np.pi / cols) - detections.forward)))
     order = np.argsort(b)
     ax_pan.imshow(
         np.nan_to_num(pano[:, order]),
@@ -231,7 +231,7 @@ def plot_conventions(path: str | os.PathLike[str]) -> Figure:
         -0.5,
         h + 30,
         "phi = atan2(-(v - cy) * aspect, u - cx)   (counter-clockwise as displayed)\n"
-        "bearing = wrap(s * phi - forward),  s = -1 if mirrored else +1",
+        "bearing = wrap(s * (phi - forward)),  s = -1 if mirrored else +1",
         fontsize=9,
         family="monospace",
         va="top",

@@ -9,9 +9,9 @@ omniloc):
 * image angle ``phi = atan2(-(v - cy) * aspect, u - cx)`` (counter-clockwise as displayed,
   0 to the right), with the rim centre ``(cx, cy)`` and ``aspect`` = rim semi-axis along u /
   rim semi-axis along v;
-* bearing ``wrap(s * phi - forward)`` with ``s = -1`` for a mirrored sensor, else ``+1``;
-  ``forward`` is the image angle of the robot's forward axis. Bearings are in radians,
-  counter-clockwise from forward, in [-pi, pi).
+* bearing ``wrap(s * (phi - forward))`` with ``s = -1`` for a mirrored sensor, else ``+1``;
+  ``forward`` is the image angle of the robot's forward axis (bearing 0, mirrored or not).
+  Bearings are in radians, counter-clockwise from forward, in [-pi, pi).
 
 Method: unwrap the mirror annulus (without the camera's own reflection and the rim) to a
 panorama whose columns are image angles and rows radii; take the azimuthal derivative of
@@ -631,7 +631,7 @@ def extract_bearings(
     forward : float
         Image angle of the robot's forward axis, radians.
     mirrored : bool
-        True if the mirror flips the sense of rotation (bearing = -phi - forward).
+        True if the mirror flips the sense of rotation (bearing = forward - phi).
     calibration : MirrorCalibration, optional
         A known rim; by default :func:`calibrate_mirror` finds it in `image`.
     radial_range : tuple of float
@@ -757,7 +757,7 @@ def extract_bearings(
             flags.append(bool(ambiguous_step[group[0]]))
     phi_arr = np.asarray(wrap(np.asarray(phis, dtype=np.float64)), dtype=np.float64).reshape(-1)
     s = -1.0 if mirrored else 1.0
-    bearings = np.asarray(wrap(s * phi_arr - fwd), dtype=np.float64).reshape(-1)
+    bearings = np.asarray(wrap(s * (phi_arr - fwd)), dtype=np.float64).reshape(-1)
     order = np.argsort(bearings, kind="stable")
     return EdgeDetections(
         bearings=bearings[order],

@@ -5,7 +5,7 @@ a pixel ``(u, v)`` (u = column to the right, v = row downward, (0, 0) the centre
 top-left pixel) has the image angle ``phi = atan2(-(v - cy) * aspect, u - cx)`` and the
 normalised elliptic radius ``rho = hypot((u - cx) / (aspect * radius), (v - cy) / radius)``
 (1 on the mirror rim). It shows what the robot sees at the bearing
-``wrap(s * phi - forward)`` with ``s = -1`` for a mirrored sensor, else ``+1``.
+``wrap(s * (phi - forward))`` with ``s = -1`` for a mirrored sensor, else ``+1``.
 
 The scene model is deliberately simple: every landmark is a vertical structure seen over the
 whole mirror annulus. Wall edges (corners, door frames) are steps in the brightness of a
@@ -251,7 +251,7 @@ class OmniCamera:
     forward : float
         Image angle of the robot's forward axis, radians.
     mirrored : bool
-        True if the mirror flips the sense of rotation (bearing = -phi - forward).
+        True if the mirror flips the sense of rotation (bearing = forward - phi).
     blur_sigma : float
         Gaussian blur in pixels (0 for none).
     noise_sigma : float
@@ -633,9 +633,9 @@ def render_omni_image(
     dv = dv1[:, None]
     phi = np.arctan2(-dv * f32(cam.aspect), du)  # the image angle, exactly as the spec writes it
     rho = np.sqrt((du1 / f32(r_u))[None, :] ** 2 + (dv1 / f32(r_v))[:, None] ** 2)
-    # World azimuth of each sample in profile bins: theta + (s * phi - forward), shifted by pi.
+    # World azimuth of each sample in profile bins: theta + s * (phi - forward), shifted by pi.
     bins_per_rad = _PROFILE_BINS / (2 * np.pi)
-    t = phi * f32(sign * bins_per_rad) + f32((theta - cam.forward + np.pi) * bins_per_rad)
+    t = phi * f32(sign * bins_per_rad) + f32((theta - sign * cam.forward + np.pi) * bins_per_rad)
     idx = np.floor(t).astype(np.int64) & (_PROFILE_BINS - 1)
     val = table[idx]
     wall = is_wall[idx]
