@@ -278,6 +278,77 @@ def test_fov_limits_negative_evidence() -> None:
     assert all(s.missed == 1 for s in res.solutions)
 
 
+def test_a_bearing_outside_the_field_of_view_is_refused() -> None:
+    # Bearings measured from one edge of the view (0 to fov) instead of from the forward
+    # axis: the search would otherwise match them and report a pose turned by fov / 2.
+    lm = demo_room()
+    truth = Pose(5.6, 2.1, math.radians(30))
+    fov = math.radians(100)
+    scene = observe(lm, truth, fov=fov, rng=0)
+    assert scene.bearings.size >= 3
+    ok = localize(lm, scene.bearings, fov=fov, sigma=math.radians(0.2))
+    assert ok.best is not None and ok.best.pose.distance_to(truth)[0] < 0.05
+    with pytest.raises(InputError, match="outside the field of view"):
+        localize(lm, scene.bearings + fov / 2, fov=fov, sigma=math.radians(0.2))
+    # A bearing just past the edge, within a gate's width, is noise, not a convention.
+    edge = np.append(scene.bearings[:3], fov / 2 + math.radians(0.5))
+    localize(lm, edge, fov=fov, sigma=math.radians(0.2), max_spurious=1)
+    # Stacked from several frames of a turning robot (a tracker's window): not refused.
+    localize(lm, scene.bearings + fov / 2, fov=fov, sigma=math.radians(0.2), check_view=False)
+
+
+def test_a_spurious_bearing_in_a_landmarks_gate_is_also_tried_as_spurious() -> None:
+    # 16 landmarks, 9 true bearings and 2 spurious ones, sigma 0.5 deg. Bearing 3 is spurious
+    # and falls inside landmark 5's gate: the interpretation that takes it for landmark 5 lies
+    # 0.64 m from the truth (15 of its standard deviations). The hypotheses engine, trying
+    # the wildcard after a fitting landmark only for bearings with another one close by,
+    # never scored the true interpretation and called that pose decisive (99.9 %).
+    L = np.array(
+        [
+            [3.425065, 3.178875],
+            [0.976122, 18.1908],
+            [10.917499, 2.531848],
+            [2.944842, 18.757094],
+            [1.512456, 12.349981],
+            [0.597985, 7.633556],
+            [18.847695, 7.337913],
+            [8.891307, 1.417676],
+            [1.434226, 11.474866],
+            [19.079127, 17.343161],
+            [13.00917, 19.571281],
+            [8.634995, 19.155462],
+            [10.482388, 1.269059],
+            [9.290899, 19.336263],
+            [8.334987, 19.708606],
+            [7.778475, 3.23285],
+        ]
+    )
+    z = np.array(
+        [
+            0.814193345,
+            0.585374602,
+            1.455973738,
+            2.420309508,
+            0.885734303,
+            -1.313201355,
+            -1.516238662,
+            1.1978607,
+            0.85311605,
+            1.282554995,
+            -0.415288464,
+        ]
+    )
+    truth = Pose(6.0725, 5.8352, 0.51813)
+    kw = {"sigma": math.radians(0.5), "max_spurious": 2}
+    for res in (localize(L, z, **kw), localize(L, z, strategy="tree", **kw)):
+        assert res.ambiguous
+        assert res.best.assignment[3] is None
+        assert res.best.pose.distance_to(truth)[0] < 0.3
+    # Only the contested bearings (the tracker's searches): the rival alone, decisive.
+    fast = localize(L, z, contested_wildcards=True, **kw)
+    assert fast.best.assignment[3] == 5 and not fast.ambiguous
+
+
 def test_symmetric_map_is_ambiguous_with_equal_confidence() -> None:
     lm = symmetric_map("square", size=6.0)
     truth = Pose(1.5, 2.0, 0.7)

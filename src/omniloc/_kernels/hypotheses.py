@@ -93,7 +93,7 @@ class Bearings(NamedTuple):
 
     beta: FloatArray  #: (m,) bearings, radians
     pair_d2: FloatArray  #: (m, m) squared largest distance of the landmarks of two bearings
-    contested: NDArray[np.bool_]  #: (m,) another bearing is close enough to rob its landmark
+    contested: NDArray[np.bool_]  #: (m,) the wildcard is tried after a landmark fits
 
 
 class Seeds(NamedTuple):
@@ -904,10 +904,12 @@ def _verify(
         elif p == walk.n_cand[level] and (p == 0 or (contested[o] and not budget.stop_first)):
             # After every landmark that fits, the wildcard ("not on the map": a spurious bearing
             # may fall on a landmark's ray and take it from the true one), while the path can
-            # still reach min_match. Where a landmark fits, only for a bearing with another
-            # one close by (``contested``): otherwise the wildcard could only give the same
-            # interpretation with one match fewer, which the merge would drop. A first fit,
-            # which gives up completeness anyway, takes it only where nothing fits.
+            # still reach min_match. Where a landmark fits, only for the bearings marked
+            # ``contested`` (by default all of them: a spurious bearing inside a landmark's
+            # gate pulls the pose, and the interpretation that calls it clutter can be
+            # another answer, metres away; the tracker's searches mark only the bearings
+            # with another one close by). A first fit, which gives up completeness anyway,
+            # takes it only where nothing fits.
             if wild + 1 + walk.ahead[level + 1] <= max_wild:
                 wild += 1
                 level += 1

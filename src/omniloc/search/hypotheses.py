@@ -219,10 +219,17 @@ def run_hypotheses(
     # Poses from narrow seeds are far from linear: relinearise their first matches.
     relin = np.where(seeding.narrow(beta, triples), RELINEARISE, 0).astype(np.int64)
     wide, narrow = PRETEST_SLACK[not stop_first]
-    near_pair = seeding.angle_between(beta) <= CONTESTED
-    np.fill_diagonal(near_pair, False)
+    # The bearings for which the wildcard is tried after a landmark fits (a first fit tries
+    # it only where none does): every one, as the tree does, unless only the contested ones
+    # are asked for (another bearing close enough to rob its landmark).
+    if opt.contested_wildcards:
+        near_pair = seeding.angle_between(beta) <= CONTESTED
+        np.fill_diagonal(near_pair, False)
+        wild_after_fit = near_pair.any(axis=1)
+    else:
+        wild_after_fit = np.ones(m, dtype=bool)
     bearings = Bearings(
-        np.require(beta, np.float64, ["C"]), limits, np.ascontiguousarray(near_pair.any(axis=1))
+        np.require(beta, np.float64, ["C"]), limits, np.ascontiguousarray(wild_after_fit)
     )
     gate = Gate(
         -1.0 if s.sigma is None else float(s.sigma),

@@ -93,6 +93,10 @@ class SearchOptions:
     budget : Budget
     decisive : float
         Share of the posterior the best solution must hold for the answer to be unambiguous.
+    contested_wildcards : bool
+        The hypotheses engine leaves a bearing that a landmark fits unmatched too only when
+        another bearing lies close by (see :func:`omniloc.search.localize`); False: always,
+        while the wildcards allow (as the tree does).
     """
 
     sensor: SensorModel
@@ -102,6 +106,7 @@ class SearchOptions:
     merge: bool
     budget: Budget = field(default_factory=Budget)
     decisive: float = 0.95
+    contested_wildcards: bool = False
 
     @property
     def min_match(self) -> int:

@@ -133,6 +133,8 @@ def search_window(
             max_nodes=max_nodes,
             timeout_s=timeout_s,
             exhaustive=True,  # every interpretation: the candidates are weighed later
+            check_view=False,  # stacked from frames of a turning robot
+            contested_wildcards=True,  # the preset's searches were measured so
         )
     except OmnilocError:
         # Geometry the search refuses (e.g. too many bearings for the map): no candidates.
