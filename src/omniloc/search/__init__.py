@@ -315,7 +315,9 @@ def localize(
         spurious bearing that falls inside a landmark's gate is then always taken as that
         landmark, and the interpretation that calls it clutter, which can be another pose
         metres away, is never scored: the answer may be called decisive without its rival.
-        The tracker's searches use it (their candidates are weighed by the frames after).
+        The tracker's searches use it (their candidates are weighed by the frames after,
+        and their node budget went to sub-interpretations without it: on the five MRCLAM
+        runs 1,406 frames localized and right and 3 wrong, against 1,567 and none).
 
     Returns
     -------
