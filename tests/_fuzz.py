@@ -774,6 +774,10 @@ def _search_targets() -> list[Target]:
         "method": Arg(("method",), (("unknown", "fast"), ("None", None), ("int", 1))),
         "strategy": Arg(("strategy",), (("unknown", "fast"), ("None", None), ("list", []))),
         "exhaustive": Arg(("exhaustive",), (("string", "no"), ("None", None), ("float", 0.0))),
+        "check_view": Arg(("check_view",), (("string", "no"), ("None", None), ("int 1", 1))),
+        "contested_wildcards": Arg(
+            ("contested_wildcards",), (("string", "yes"), ("None", None), ("int 0", 0))
+        ),
         **keywords,
     }
     return [

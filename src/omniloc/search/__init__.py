@@ -379,6 +379,9 @@ def localize(
         legacy=legacy,
         decisive=decisive,
     )
+    for name, flag in (("check_view", check_view), ("contested_wildcards", contested_wildcards)):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise InputError(f"{name} must be True or False, got {flag!r}")
     if check_view:
         _refuse_out_of_view(b, opt.sensor)
     if contested_wildcards:
