@@ -99,6 +99,34 @@ def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: 
 
 
 @pytest.mark.parametrize(
+    "header",
+    [
+        "t,bearing",
+        "t,bearing_deg",
+        "frame_id,t,t_span,n_landmarks,landmarks,robot_detections",  # MRCLAM's columns
+    ],
+)
+def test_a_frames_file_with_a_header_alone_holds_no_frames_and_the_commands_say_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], header: str
+) -> None:
+    path = tmp_path / "f.csv"
+    path.write_text(f"{header}\n# nothing recorded\n")
+    assert load_frames(path) == []
+    grid = EXAMPLES / "grid-run"
+    common = ["--map", str(grid / "landmarks.csv"), "--frames", str(path)]
+    truth = ["--groundtruth", str(grid / "groundtruth.csv")]
+    odometry = ["--odometry", str(grid / "odometry.csv")]
+    for argv in (
+        ["track", *common, *odometry],
+        ["fit-sensor", *common, *truth],
+        ["fit-confidence", *common, *truth, *odometry],
+    ):
+        assert main(["-q", *argv]) == 1, argv[0]
+        err = capsys.readouterr().err
+        assert err == f"error: {path}: no frames\n", argv[0]
+
+
+@pytest.mark.parametrize(
     ("text", "warning"),
     [
         # odometry: a turn rate in degrees per second, a speed in mm/s, neither at the limits

@@ -1347,6 +1347,9 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
             "ground-truth track per frames file, in the same order"
         )
     frames = [load_frames(path, degrees=args.degrees) for path in args.frames]
+    for path, run in zip(args.frames, frames, strict=True):
+        if not run:
+            raise InputError(f"{path}: no frames")
     truths = [load_groundtruth(path) for path in args.groundtruth]
     lm = LandmarkMap.load(args.map)
     fov = None if args.fov is None else float(np.deg2rad(args.fov))

@@ -602,7 +602,9 @@ def load_frames(
     Returns
     -------
     list of Frame
-        In time order; a generic file's frames each hold the rows sharing one ``t``.
+        In time order; a generic file's frames each hold the rows sharing one ``t``. Empty
+        for a file with a header and no rows, of either format (callers that need frames
+        say so, naming the file).
 
     Raises
     ------
@@ -636,6 +638,8 @@ def load_frames(
     else:
         lines = [n for (n, _), ok in zip(rows, seen, strict=True) if ok]
         check_radians(b, lambda k: f"{src}:{lines[k]}: bearing", InputError)
+    if t.size == 0:
+        return []  # (a header alone: no frames, as of an MRCLAM file)
     # Each bearing's place among the rows that have one: frame s..e holds b[at[s]:at[e]].
     at = np.concatenate([[0], np.cumsum(seen)])
     frames = []
