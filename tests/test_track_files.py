@@ -168,6 +168,31 @@ def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> Non
     assert np.allclose(np.rad2deg(frames[1].bearings), [-0.2, 120])
 
 
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("t,bearing_rad\n0.5,0.1\n", r"f\.csv:1: the column says radians \(bearing_rad\)"),
+        (
+            "t,landmarks,robot_detections\n0.5,6:0.1:2.0,\n",
+            r"f\.csv:1: an MRCLAM frames file \(landmarks, robot_detections\) holds radians",
+        ),
+    ],
+)
+def test_degrees_for_a_file_whose_bearings_say_radians_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, message: str
+) -> None:
+    path = tmp_path / "f.csv"
+    path.write_text(text)
+    assert np.allclose(load_frames(path)[0].bearings, [0.1])
+    with pytest.raises(InputError, match=message):
+        load_frames(path, degrees=True)
+    grid = EXAMPLES / "grid-run"
+    argv = ["-q", "track", "--map", str(grid / "landmarks.csv"), "--degrees"]
+    argv += ["--odometry", str(grid / "odometry.csv"), "--frames", str(path)]
+    assert main(argv) == 1
+    assert "degrees=True" in capsys.readouterr().err
+
+
 def test_the_truth_as_tum_is_the_track_at_the_times_asked(tmp_path: Path) -> None:
     t = np.linspace(0.0, 10.0, 11)
     truth = GroundTruth(t, t * 0.5, -t, np.linspace(-3.0, 3.0, 11))

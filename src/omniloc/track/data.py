@@ -593,7 +593,8 @@ def load_frames(
     path : str or path-like
         A generic ``t,bearing`` file or an MRCLAM ``robotR_frames.csv``.
     degrees : bool
-        The generic file's bearings are in degrees (a ``bearing_deg`` column says so too).
+        The generic file's bearings are in degrees (a ``bearing_deg`` column says so too);
+        refused with a ``bearing_rad`` column or an MRCLAM file, whose bearings are radians.
     landmark_ids : dict, optional
         MRCLAM only: map from a landmark id (as written in the file) to its row in the map,
         to fill :attr:`Frame.truth` for evaluation (other robots' detections are None). The
@@ -610,12 +611,17 @@ def load_frames(
     ------
     InputError
         The file cannot be read or is not a frames file, a value is not a number, times go
-        back, or a generic file read as radians has a bearing beyond a full turn (degrees
-        without ``degrees=True``: :func:`omniloc.io.check_radians`); the message names the
-        line.
+        back, ``degrees=True`` for a file whose bearings say radians, or a generic file read
+        as radians has a bearing beyond a full turn (degrees without ``degrees=True``:
+        :func:`omniloc.io.check_radians`); the message names the line.
     """
     src, header, rows = _table(path, "frames")
     if "landmarks" in header and "robot_detections" in header:
+        if degrees:
+            raise InputError(
+                f"{src}:1: an MRCLAM frames file (landmarks, robot_detections) holds radians "
+                "but degrees=True"
+            )
         return _mrclam_frames(src, header, rows, landmark_ids)
     col = next((c for c in ("bearing", "bearing_rad", "bearing_deg") if c in header), None)
     if col is None or "t" not in header:
