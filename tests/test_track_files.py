@@ -158,6 +158,38 @@ def test_recordings_in_other_units_are_warned_of_with_their_line(
     assert values[-1] == float(text.splitlines()[-1].split(",")[-1])
 
 
+@pytest.mark.parametrize(
+    ("text", "warning"),
+    [
+        # headings in degrees: 2 deg in 0.25 s read as 8 rad/s, named by the later pose
+        (
+            "t,x,y,theta\n0,0,0,0\n0.25,0.1,0,0\n0.25,0.1,0,0\n0.5,0.2,0,2\n",
+            "o.csv:5: turn rate w 8 rad/s from the pose before this one, more than 6.28 rad/s: "
+            "are the headings in degrees? omniloc reads radians",
+        ),
+        # positions in mm: 100 mm in 0.5 s read as 200 m/s
+        (
+            "t,x,y,theta\n0,0,0,0\n0.5,100,0,0\n1.0,100,0,0.1\n",
+            "o.csv:3: speed v 200 m/s from the pose before this one",
+        ),
+        # the same track in radians and metres: quiet
+        ("t,x,y,theta\n0,0,0,0\n0.5,0.1,0,0\n1.0,0.2,0,0.5236\n", ""),
+    ],
+)
+def test_a_pose_track_in_other_units_is_warned_of_with_its_line(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, text: str, warning: str
+) -> None:
+    path = tmp_path / "o.csv"
+    path.write_text(text)
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        odo = load_odometry(path)
+    if not warning:
+        assert caplog.text == ""
+        assert np.max(np.abs(odo.w)) == pytest.approx(0.5236 / 0.5)
+        return
+    assert warning in caplog.text and caplog.text.count("WARNING") == 1
+
+
 def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> None:
     # Read as radians, degrees would be wrapped into bearings the robot never saw.
     path = tmp_path / "f.csv"
