@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -188,6 +189,28 @@ def test_a_pose_track_in_other_units_is_warned_of_with_its_line(
         assert np.max(np.abs(odo.w)) == pytest.approx(0.5236 / 0.5)
         return
     assert warning in caplog.text and caplog.text.count("WARNING") == 1
+
+
+@pytest.mark.parametrize(
+    ("name", "text"),
+    [
+        ("g.csv", "t,x,y,theta\n"),
+        ("g.csv", "t,x,y,theta\n0,1,2,0.5\n"),
+        ("g.tum", "0 1 2 0 0 0 0 1\n"),
+    ],
+)
+def test_a_ground_truth_of_fewer_than_two_samples_is_refused_naming_the_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, text: str
+) -> None:
+    path = tmp_path / name
+    path.write_text(text)
+    message = f"{path}: ground truth needs at least 2 samples"
+    with pytest.raises(InputError, match="^" + re.escape(message)):
+        load_groundtruth(path)
+    grid = EXAMPLES / "grid-run"
+    argv = ["-q", "fit-motion", "--odometry", str(grid / "odometry.csv")]
+    assert main([*argv, "--groundtruth", str(path)]) == 1
+    assert capsys.readouterr().err.startswith(f"error: {path}: ground truth needs at least 2")
 
 
 def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> None:

@@ -580,7 +580,10 @@ def load_groundtruth(path: PathLike) -> GroundTruth:
             a = read_tum(path, max_tilt=TUM_MAX_TILT)
             _check_times(str(path), a[:, 0])
             _warn_time_unit(str(path), a[:, 0])
-            return GroundTruth(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
+            try:
+                return GroundTruth(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
+            except InputError as exc:
+                raise InputError(f"{path}: {exc}") from exc  # (e.g. too few samples)
         except InputError as exc:
             raise InputError(
                 f"{exc}; the ground truth was read as a TUM file (t x y z qx qy qz qw)"
@@ -600,7 +603,10 @@ def load_groundtruth(path: PathLike) -> GroundTruth:
                 rows[k][0],
                 th[k],
             )
-    return GroundTruth(t, x, y, th, gap)
+    try:
+        return GroundTruth(t, x, y, th, gap)
+    except InputError as exc:
+        raise InputError(f"{src}: {exc}") from exc  # (e.g. too few samples)
 
 
 def _detections(text: str, where: str, what: str) -> list[tuple[str, float]]:
