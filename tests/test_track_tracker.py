@@ -513,6 +513,20 @@ def test_track_refuses_frames_out_of_order() -> None:
         track(GRID, Odometry([0.0], [0.0], [0.0]), [fr[0], fr[2], Frame(0.1, fr[1].bearings)])
 
 
+def test_track_takes_frames_from_any_iterable_and_refuses_what_is_not_a_frame() -> None:
+    fr = _frames(6)
+    still = Odometry([0.0], [0.0], [0.0])
+    listed = track(GRID, still, fr, sensor=SENSOR, motion=MOTION, config=CONFIG)
+    for frames in ((f for f in fr), iter(fr), tuple(fr)):
+        run = track(GRID, still, frames, sensor=SENSOR, motion=MOTION, config=CONFIG)
+        assert len(run) == len(fr)
+        assert [e.state for e in run.estimates] == [e.state for e in listed.estimates]
+        assert [e.pose for e in run.estimates] == [e.pose for e in listed.estimates]
+    as_tuples = [fr[0], fr[1], (fr[2].t, fr[2].bearings)]
+    with pytest.raises(InputError, match=r"frames\[2\] must be a Frame .*, got tuple"):
+        track(GRID, still, as_tuples)
+
+
 def test_config_errors_name_the_option() -> None:
     with pytest.raises(InputError, match="localized_probability"):
         TrackerConfig(localized_probability=1.5)

@@ -9,7 +9,7 @@ frame.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -74,7 +74,7 @@ class TrackRun:
 def track(
     landmarks: LandmarkMap | ArrayLike,
     odometry: Odometry,
-    frames: Sequence[Frame],
+    frames: Iterable[Frame],
     *,
     sensor: SensorModel | None = None,
     motion: MotionModel | None = None,
@@ -93,8 +93,9 @@ def track(
     odometry : Odometry
         Velocity odometry (``t, v, w``, and ``vy`` when it has a sideways part), in time
         order.
-    frames : sequence of Frame
-        Frames of bearings in time order (their ``truth``, if any, is not read).
+    frames : iterable of Frame
+        Frames of bearings in time order (their ``truth``, if any, is not read); any
+        iterable, a generator too (read once, into a list).
     sensor, motion, config
         See :class:`~omniloc.track.Tracker` (defaults: its defaults).
     progress : callable, optional
@@ -118,8 +119,9 @@ def track(
     Raises
     ------
     InputError
-        Frames out of time order (the message names the frame), frames and odometry that
-        share no time (two clocks), or what :meth:`Tracker.frame` refuses.
+        An item of ``frames`` that is not a :class:`Frame` or frames out of time order (the
+        message names the frame), frames and odometry that share no time (two clocks), or
+        what :meth:`Tracker.frame` refuses.
 
     Examples
     --------
@@ -139,6 +141,13 @@ def track(
     lm = as_landmark_map(landmarks)
     if not isinstance(odometry, Odometry):
         raise InputError(f"odometry must be an Odometry, got {type(odometry).__name__}")
+    frames = list(frames)  # (once: a generator read twice would be empty the second time)
+    for i, f in enumerate(frames):
+        if not isinstance(f, Frame):
+            raise InputError(
+                f"frames[{i}] must be a Frame (omniloc.track.Frame(t, bearings)), got "
+                f"{type(f).__name__}"
+            )
     times = np.array([f.t for f in frames], dtype=np.float64)
     back = np.flatnonzero(np.diff(times) < 0)
     if back.size:
