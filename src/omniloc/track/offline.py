@@ -2,8 +2,8 @@
 
 The online :class:`~omniloc.track.Tracker` takes odometry and frames as they come;
 :func:`track` feeds it a whole recording in time order -- before each frame, the odometry
-rows up to the frame's time -- and returns one :class:`~omniloc.track.TrackEstimate` per
-frame.
+rows up to the frame's time, and with a negative latency those whose motion starts by then
+(:func:`rows_before`) -- and returns one :class:`~omniloc.track.TrackEstimate` per frame.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputError
 from ..io import finite_number
@@ -26,7 +26,47 @@ from .motion import MotionModel
 from .records import TrackEstimate, TrackState
 from .tracker import Tracker, TrackerConfig
 
-__all__ = ["TrackRun", "track"]
+__all__ = ["TrackRun", "rows_before", "track"]
+
+
+def rows_before(
+    odometry_t: NDArray[np.float64], frame_t: ArrayLike, delay_s: float
+) -> NDArray[np.intp]:
+    """How many odometry rows to feed a tracker before each frame, offline.
+
+    The rows stamped up to the frame's time; with a negative ``delay_s`` (odometry stamped
+    late: a row stamped ``t`` moves the robot from ``t + delay_s`` on) also those stamped
+    later whose motion starts by the frame, ``t + delay_s <= frame time`` (the tracker
+    refuses a row, fed after a frame, whose motion starts before that frame). With
+    ``delay_s >= 0`` only the rows stamped up to the frame, as ever.
+
+    Parameters
+    ----------
+    odometry_t : ndarray, shape (n,)
+        The odometry's times, seconds, not decreasing.
+    frame_t : array_like, shape (m,)
+        The frames' times, seconds, not decreasing.
+    delay_s : float
+        The odometry's latency (:attr:`MotionModel.delay_s`), seconds.
+
+    Returns
+    -------
+    ndarray of int, shape (m,)
+        Per frame, the number of rows (from the first) fed before it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rows_before(np.array([0.0, 0.1, 0.2, 0.3]), [0.1, 0.2], 0.05).tolist()
+    [2, 3]
+    >>> rows_before(np.array([0.0, 0.1, 0.2, 0.3]), [0.1, 0.2], -0.1).tolist()
+    [3, 4]
+    """
+    ft = np.asarray(frame_t, dtype=np.float64)
+    if delay_s < 0.0:
+        # (The tracker's own sum, t + delay_s, so that no row is fed a frame too late.)
+        return np.searchsorted(odometry_t + delay_s, ft, side="right")
+    return np.searchsorted(odometry_t, ft, side="right")
 
 
 @dataclass(frozen=True)
@@ -174,8 +214,9 @@ def track(
     k = 0
     c0 = time.process_time()
     w0 = time.perf_counter()
+    cuts = rows_before(odometry.t, times, tracker.motion.delay_s)
     for n, f in enumerate(frames, 1):
-        k1 = int(np.searchsorted(odometry.t, f.t, side="right"))
+        k1 = int(cuts[n - 1])
         if k1 > k:
             vy = None if odometry.vy is None else odometry.vy[k:k1]
             tracker.odometry(odometry.t[k:k1], odometry.v[k:k1], odometry.w[k:k1], vy)
