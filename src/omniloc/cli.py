@@ -381,8 +381,17 @@ def _build_parser() -> argparse.ArgumentParser:
         "their order)",
     )
     fs.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
-    fs.add_argument("--fov", type=_fov_deg, help="full field of view, deg (default: all around)")
-    fs.add_argument("--max-range", type=_positive, help="sensor range, m")
+    fs.add_argument(
+        "--fov",
+        type=_fov_deg,
+        help="full field of view, deg (default: all around); p_detect and clutter are for it, "
+        "and --out writes it",
+    )
+    fs.add_argument(
+        "--max-range",
+        type=_positive,
+        help="sensor range, m; p_detect and clutter are for it, and --out writes it",
+    )
     fs.add_argument("--mount", type=_mount_deg, metavar="X,Y,YAW", help=MOUNT_HELP)
     fs.add_argument(
         "--fit-mount",
