@@ -12,6 +12,7 @@ import functools
 import json
 import logging
 import math
+import re
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -1585,11 +1586,40 @@ _COMMANDS = {
 }
 
 
+#: Options whose value may start with a minus sign followed by a digit (a negative X):
+#: argparse takes ``--initial-pose -1,2,30`` for an option followed by another option
+#: (only plain numbers such as ``-1`` or ``-0.5`` count as negative numbers for it).
+NEGATIVE_VALUE_OPTIONS = frozenset({"--initial-pose", "--initial-sd", "--mount"})
+
+
+def _join_negative_values(argv: Sequence[str]) -> list[str]:
+    """``argv`` with each ``OPTION VALUE`` pair of :data:`NEGATIVE_VALUE_OPTIONS` whose value
+    starts with ``-`` and a digit (or ``-.`` and a digit) written ``OPTION=VALUE``, which
+    argparse reads as the option's value."""
+    out: list[str] = []
+    k = 0
+    while k < len(argv):
+        a = argv[k]
+        if a == "--":  # (the rest are arguments, as given)
+            return [*out, *argv[k:]]
+        if (
+            a in NEGATIVE_VALUE_OPTIONS
+            and k + 1 < len(argv)
+            and re.match(r"-\.?\d", argv[k + 1]) is not None
+        ):
+            out.append(f"{a}={argv[k + 1]}")
+            k += 2
+            continue
+        out.append(a)
+        k += 1
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     parser = _build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(_join_negative_values(sys.argv[1:] if argv is None else argv))
     except OmnilocError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
