@@ -6,6 +6,7 @@ across."""
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -28,6 +29,7 @@ from omniloc.track.backward import (
     kept_frames,
     refine,
     reverse_recording,
+    since_reported,
     sure_frames,
 )
 from omniloc.track.motion import compose, integrate
@@ -132,11 +134,18 @@ def test_the_frames_before_the_first_sure_one_are_localized_from_it(seed: int) -
     assert added and all(e.reason.startswith("from the pass backward") for e in added)
     assert all(e.backward == (not lf[i] and l2[i]) for i, e in enumerate(two))
     assert all(e.as_dict()["backward"] is e.backward for e in two)
-    assert all(0.0 <= e.since_localized <= 30.0 for e in added)
+    assert all(0.0 <= _ahead(e) <= 30.0 and e.since_localized == 0.0 for e in added)
     # A shorter horizon takes fewer of them, none beyond it.
     short = track(EXAMPLE_MAP, run.odometry, run.frames, backward_s=2.0, **kw).estimates
     assert l2.sum() > _localized(short).sum() >= lf.sum()
-    assert all(e.since_localized <= 2.0 for e, f in zip(short, fwd, strict=True) if not _same(e, f))
+    assert all(_ahead(e) <= 2.0 for e in short if e.backward)
+
+
+def _ahead(e: TrackEstimate) -> float:
+    """The seconds to its sure frame that a frame of the pass backward gives in its reason."""
+    m = re.match(r"from the pass backward, ([\d.]+) s before a sure frame", e.reason)
+    assert m is not None, e.reason
+    return float(m.group(1))
 
 
 def test_a_kidnapping_is_not_carried_back_across() -> None:
@@ -499,3 +508,79 @@ def test_a_backward_estimate_without_its_time_to_the_sure_frame_says_so_plainly(
     assert out.backward and out.reason == "from the pass backward: r"
     (out,) = combine([f], [replace(b, since_localized=2.5)])
     assert out.reason == "from the pass backward, 2.5 s before a sure frame: r"
+
+
+def test_since_localized_offline_counts_from_the_last_frame_reported_localized() -> None:
+    # hold kept the forward pass's 0 for a place given up, and the pass backward put the
+    # seconds *to* its sure frame: "seconds since the last localized frame" was wrong for
+    # both (72 frames of the example recording).
+    pose, cov = Pose(1.0, 2.0, 0.0), np.eye(3) * 1e-4
+
+    def est(t: float, state: str, since: float | None, kidnapped: bool = False):
+        p = None if state == "lost" else pose
+        c = None if state == "lost" else cov
+        return TrackEstimate(t, state, p, c, kidnapped=kidnapped, since_localized=since)
+
+    # forward: nothing, then localized at 2 (given up by hold), 3; lost from 4 (flagged at
+    # 5: its count starts again), localized again at 7.
+    fwd = [
+        est(0.0, "ambiguous", None),
+        est(1.0, "ambiguous", None),
+        est(2.0, "localized", 0.0),
+        est(3.0, "localized", 0.0),
+        est(4.0, "lost", 1.0),
+        est(5.0, "lost", None, kidnapped=True),
+        est(6.0, "lost", None),
+        est(7.0, "localized", 0.0),
+    ]
+    # offline: 1 from the pass backward (4.0 s to its sure frame), 2 given up.
+    offline = list(fwd)
+    offline[1] = replace(est(1.0, "localized", 4.0), backward=True)
+    offline[2] = est(2.0, "ambiguous", 0.0)
+    out = since_reported(offline, fwd)
+    assert [e.since_localized for e in out] == [None, 0.0, 1.0, 0.0, 1.0, None, None, 0.0]
+    # Nothing else changes; an estimate whose count was right is returned as it is.
+    assert [(e.t, e.state, e.pose, e.backward) for e in out] == [
+        (e.t, e.state, e.pose, e.backward) for e in offline
+    ]
+    assert [o is e for o, e in zip(out, offline, strict=True)] == [
+        True,
+        False,
+        False,
+        True,
+        True,
+        True,
+        True,
+        True,
+    ]
+    with pytest.raises(InputError, match="one estimate per frame"):
+        since_reported(offline, fwd[:-1])
+
+
+def test_since_localized_of_the_example_with_the_pass_backward_is_since_a_reported_frame() -> None:
+    ex = example_run()
+    run = ex.run
+    kw = dict(sensor=ex.sensor, motion=ex.motion)
+    fwd = track(ex.landmarks, run.odometry, run.frames, **kw).estimates
+    both = track(ex.landmarks, run.odometry, run.frames, backward_s=20.0, **kw).estimates
+    held = hold(fwd, run.odometry, motion=ex.motion)
+    behind = backward_pass(
+        ex.landmarks, run.odometry, run.frames, held, horizon_s=20.0, **kw, confirm_s=0.0
+    )
+    plain = combine(held, behind)
+
+    def fields(e: TrackEstimate) -> tuple:
+        return (e.t, e.state, e.pose, e.reason, e.probability, e.confidence, e.kidnapped)
+
+    # Only the count differs from the steps without it.
+    assert [fields(e) for e in both] == [fields(e) for e in plain]
+    assert (
+        sum(a.since_localized != b.since_localized for a, b in zip(both, plain, strict=True)) > 10
+    )
+    last = None
+    for e, f in zip(both, fwd, strict=True):
+        if f.kidnapped:
+            last = None
+        if e.state is TrackState.LOCALIZED:
+            last = e.t
+        assert e.since_localized == (None if last is None else e.t - last), e.t

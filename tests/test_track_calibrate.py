@@ -383,7 +383,9 @@ def test_a_simulated_sensor_gives_back_its_noise_detection_and_clutter() -> None
     assert fit.clutter == pytest.approx(0.5, abs=0.1)
     assert fit.turn_noise_s < 0.02  # the simulated camera's noise does not grow with the turn
     assert fit.frames == len(run.frames) and fit.matched <= fit.bearings
-    assert set(fit.settings()) == {"sigma", "p_detect", "clutter", "turn_noise_s"}
+    # The rates are for a 120 deg view: the settings say so.
+    assert set(fit.settings()) == {"sigma", "p_detect", "clutter", "turn_noise_s", "fov"}
+    assert fit.settings()["fov"] == math.radians(120.0)
     # The simulator's noise is one Gaussian, but the clutter within the gate (uniform over
     # 6 deg) is no landmark's noise: it comes out as a wide tail of 5 %, the core is the
     # sensor's noise.
@@ -437,6 +439,36 @@ def _write_recording(
         )
     )
     return lm, fr, gt
+
+
+def test_fit_sensor_writes_the_view_it_fitted_for_and_track_uses_that_sensor(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # p_detect is the share of the landmarks within --max-range that were reported: a tracker
+    # that expects it of every landmark, at any range, was localized at wrong places in a
+    # third of its localized frames on the example recording (the file left the range out).
+    import math
+    import re
+
+    from omniloc.cli import main
+    from omniloc.track import load_settings, preset, with_settings
+
+    grid = Path(__file__).resolve().parent.parent / "examples" / "grid-run"
+    files = ["--map", str(grid / "landmarks.csv"), "--frames", str(grid / "frames.csv")]
+    truth = ["--groundtruth", str(grid / "groundtruth.csv")]
+    out = tmp_path / "sensor.json"
+    view = ["--max-range", "5", "--fov", "300"]
+    assert main(["-q", "fit-sensor", *files, *truth, *view, "--out", str(out)]) == 0
+    capsys.readouterr()
+    written = load_settings(out)
+    assert written["max_range"] == 5.0 and written["fov"] == pytest.approx(math.radians(300))
+    s, _, _ = with_settings(*preset("generic"), written)
+    assert s.max_range == 5.0 and s.fov == pytest.approx(math.radians(300))
+    odometry = ["--odometry", str(grid / "odometry.csv")]
+    assert main(["-q", "track", *files, *odometry, *truth, "--config", str(out)]) == 0
+    text = capsys.readouterr().out
+    right = re.search(r"within 0\.3 m / 5 deg ([\d.]+) % of localized frames", text)
+    assert right is not None and float(right.group(1)) > 99.0, text
 
 
 def test_fit_sensor_on_the_command_line_writes_settings_for_track(

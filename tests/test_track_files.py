@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -99,6 +100,34 @@ def test_a_row_without_a_bearing_is_a_frame_in_which_nothing_was_seen(tmp_path: 
 
 
 @pytest.mark.parametrize(
+    "header",
+    [
+        "t,bearing",
+        "t,bearing_deg",
+        "frame_id,t,t_span,n_landmarks,landmarks,robot_detections",  # MRCLAM's columns
+    ],
+)
+def test_a_frames_file_with_a_header_alone_holds_no_frames_and_the_commands_say_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], header: str
+) -> None:
+    path = tmp_path / "f.csv"
+    path.write_text(f"{header}\n# nothing recorded\n")
+    assert load_frames(path) == []
+    grid = EXAMPLES / "grid-run"
+    common = ["--map", str(grid / "landmarks.csv"), "--frames", str(path)]
+    truth = ["--groundtruth", str(grid / "groundtruth.csv")]
+    odometry = ["--odometry", str(grid / "odometry.csv")]
+    for argv in (
+        ["track", *common, *odometry],
+        ["fit-sensor", *common, *truth],
+        ["fit-confidence", *common, *truth, *odometry],
+    ):
+        assert main(["-q", *argv]) == 1, argv[0]
+        err = capsys.readouterr().err
+        assert err == f"error: {path}: no frames\n", argv[0]
+
+
+@pytest.mark.parametrize(
     ("text", "warning"),
     [
         # odometry: a turn rate in degrees per second, a speed in mm/s, neither at the limits
@@ -130,6 +159,60 @@ def test_recordings_in_other_units_are_warned_of_with_their_line(
     assert values[-1] == float(text.splitlines()[-1].split(",")[-1])
 
 
+@pytest.mark.parametrize(
+    ("text", "warning"),
+    [
+        # headings in degrees: 2 deg in 0.25 s read as 8 rad/s, named by the later pose
+        (
+            "t,x,y,theta\n0,0,0,0\n0.25,0.1,0,0\n0.25,0.1,0,0\n0.5,0.2,0,2\n",
+            "o.csv:5: turn rate w 8 rad/s from the pose before this one, more than 6.28 rad/s: "
+            "are the headings in degrees? omniloc reads radians",
+        ),
+        # positions in mm: 100 mm in 0.5 s read as 200 m/s
+        (
+            "t,x,y,theta\n0,0,0,0\n0.5,100,0,0\n1.0,100,0,0.1\n",
+            "o.csv:3: speed v 200 m/s from the pose before this one",
+        ),
+        # the same track in radians and metres: quiet
+        ("t,x,y,theta\n0,0,0,0\n0.5,0.1,0,0\n1.0,0.2,0,0.5236\n", ""),
+    ],
+)
+def test_a_pose_track_in_other_units_is_warned_of_with_its_line(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, text: str, warning: str
+) -> None:
+    path = tmp_path / "o.csv"
+    path.write_text(text)
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        odo = load_odometry(path)
+    if not warning:
+        assert caplog.text == ""
+        assert np.max(np.abs(odo.w)) == pytest.approx(0.5236 / 0.5)
+        return
+    assert warning in caplog.text and caplog.text.count("WARNING") == 1
+
+
+@pytest.mark.parametrize(
+    ("name", "text"),
+    [
+        ("g.csv", "t,x,y,theta\n"),
+        ("g.csv", "t,x,y,theta\n0,1,2,0.5\n"),
+        ("g.tum", "0 1 2 0 0 0 0 1\n"),
+    ],
+)
+def test_a_ground_truth_of_fewer_than_two_samples_is_refused_naming_the_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, text: str
+) -> None:
+    path = tmp_path / name
+    path.write_text(text)
+    message = f"{path}: ground truth needs at least 2 samples"
+    with pytest.raises(InputError, match="^" + re.escape(message)):
+        load_groundtruth(path)
+    grid = EXAMPLES / "grid-run"
+    argv = ["-q", "fit-motion", "--odometry", str(grid / "odometry.csv")]
+    assert main([*argv, "--groundtruth", str(path)]) == 1
+    assert capsys.readouterr().err.startswith(f"error: {path}: ground truth needs at least 2")
+
+
 def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> None:
     # Read as radians, degrees would be wrapped into bearings the robot never saw.
     path = tmp_path / "f.csv"
@@ -138,6 +221,31 @@ def test_frames_in_degrees_without_saying_so_are_an_error(tmp_path: Path) -> Non
         load_frames(path)
     frames = load_frames(path, degrees=True)
     assert np.allclose(np.rad2deg(frames[1].bearings), [-0.2, 120])
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("t,bearing_rad\n0.5,0.1\n", r"f\.csv:1: the column says radians \(bearing_rad\)"),
+        (
+            "t,landmarks,robot_detections\n0.5,6:0.1:2.0,\n",
+            r"f\.csv:1: an MRCLAM frames file \(landmarks, robot_detections\) holds radians",
+        ),
+    ],
+)
+def test_degrees_for_a_file_whose_bearings_say_radians_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, message: str
+) -> None:
+    path = tmp_path / "f.csv"
+    path.write_text(text)
+    assert np.allclose(load_frames(path)[0].bearings, [0.1])
+    with pytest.raises(InputError, match=message):
+        load_frames(path, degrees=True)
+    grid = EXAMPLES / "grid-run"
+    argv = ["-q", "track", "--map", str(grid / "landmarks.csv"), "--degrees"]
+    argv += ["--odometry", str(grid / "odometry.csv"), "--frames", str(path)]
+    assert main(argv) == 1
+    assert "degrees=True" in capsys.readouterr().err
 
 
 def test_the_truth_as_tum_is_the_track_at_the_times_asked(tmp_path: Path) -> None:

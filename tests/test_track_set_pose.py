@@ -181,6 +181,32 @@ def test_omniloc_track_takes_an_initial_pose(
     assert "X,Y,THETA" in capsys.readouterr().err
 
 
+def test_a_negative_initial_pose_or_mount_is_read_as_a_value(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # (argparse took "-1,2,30" for an option: "expected one argument".)
+    grid = Path(__file__).resolve().parent.parent / "examples" / "grid-run"
+    argv = ["-q", "track", "--map", str(grid / "landmarks.csv"), "--json"]
+    argv += ["--odometry", str(grid / "odometry.csv"), "--frames", str(grid / "frames.csv")]
+    argv += ["--config", str(grid / "settings.json")]
+    assert main([*argv, "--initial-pose=-1,2,30", "--mount=-0.1,0,-5"]) == 0
+    joined = capsys.readouterr().out
+    assert main([*argv, "--initial-pose", "-1,2,30", "--mount", "-0.1,0,-5"]) == 0
+    out = capsys.readouterr()
+    assert out.err == "" and out.out == joined and joined.count("\n") == 240
+    # A negative spread is still refused, now for what it is.
+    assert main([*argv, "--initial-pose", "-1,2,30", "--initial-sd", "-0.5,15"]) == 1
+    assert "--initial-sd" in capsys.readouterr().err
+    from omniloc.cli import _join_negative_values
+
+    assert _join_negative_values(["--mount", "-.5,0,0", "--initial-pose", "--json"]) == [
+        "--mount=-.5,0,0",
+        "--initial-pose",
+        "--json",
+    ]
+    assert _join_negative_values(["--", "--mount", "-1,0,0"]) == ["--", "--mount", "-1,0,0"]
+
+
 def test_a_prior_told_before_any_frame_is_as_old_as_the_first_frame() -> None:
     # (Its age, which min_age_s asks of it, counts from the first frame, whenever that is.)
     tracker = Tracker(EXAMPLE_MAP, EXAMPLE_SENSOR, EXAMPLE_MOTION)

@@ -507,10 +507,53 @@ def test_odometry_latency_shifts_the_motion() -> None:
     assert d[0] == pytest.approx(0.1)  # the row stamped 0 moves the robot from 0.5 s on
 
 
+@pytest.mark.parametrize("late_s", [0.3, 0.05])
+def test_odometry_stamped_late_with_a_negative_delay_tracks_as_if_on_time(late_s: float) -> None:
+    # (track and the evaluation's run_stream refused it: the rows stamped after a frame but
+    # moving the robot before it came a frame too late.)
+    from omniloc import demo_room
+    from omniloc.evaluate.tracking import Segment, Stream, run_stream
+
+    room = demo_room()
+    run = simulate_run(
+        room, SENSOR, Pose(5.6, 2.1, 0.5), duration_s=12.0, speed=0.25, turn_rate=0.1, rng=5
+    )
+    on_time = run.odometry
+    late = Odometry(on_time.t + late_s, on_time.v, on_time.w)
+    fix = replace(MOTION, delay_s=-late_s)
+    want = track(room, on_time, run.frames, sensor=SENSOR, motion=MOTION, config=CONFIG)
+    got = track(room, late, run.frames, sensor=SENSOR, motion=fix, config=CONFIG)
+    segment = (Segment(0.0, 12.0, 0.0, run.truth, "test"),)
+    streamed, _ = run_stream(
+        Tracker(room, SENSOR, fix, CONFIG), Stream("late", room, late, run.frames, segment)
+    )
+    assert sum(e.state is TrackState.LOCALIZED for e in want.estimates) > 20
+    for estimates in (got.estimates, streamed):
+        assert [e.state for e in estimates] == [e.state for e in want.estimates]
+        for a, b in zip(estimates, want.estimates, strict=True):
+            assert (a.pose is None) == (b.pose is None)
+            if a.pose is not None and b.pose is not None:
+                assert np.allclose(a.pose.as_array(), b.pose.as_array(), atol=1e-9)
+
+
 def test_track_refuses_frames_out_of_order() -> None:
     fr = _frames(3)
     with pytest.raises(InputError, match=r"frame 2 at t=0\.1"):
         track(GRID, Odometry([0.0], [0.0], [0.0]), [fr[0], fr[2], Frame(0.1, fr[1].bearings)])
+
+
+def test_track_takes_frames_from_any_iterable_and_refuses_what_is_not_a_frame() -> None:
+    fr = _frames(6)
+    still = Odometry([0.0], [0.0], [0.0])
+    listed = track(GRID, still, fr, sensor=SENSOR, motion=MOTION, config=CONFIG)
+    for frames in ((f for f in fr), iter(fr), tuple(fr)):
+        run = track(GRID, still, frames, sensor=SENSOR, motion=MOTION, config=CONFIG)
+        assert len(run) == len(fr)
+        assert [e.state for e in run.estimates] == [e.state for e in listed.estimates]
+        assert [e.pose for e in run.estimates] == [e.pose for e in listed.estimates]
+    as_tuples = [fr[0], fr[1], (fr[2].t, fr[2].bearings)]
+    with pytest.raises(InputError, match=r"frames\[2\] must be a Frame .*, got tuple"):
+        track(GRID, still, as_tuples)
 
 
 def test_config_errors_name_the_option() -> None:

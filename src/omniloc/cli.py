@@ -12,6 +12,7 @@ import functools
 import json
 import logging
 import math
+import re
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -381,8 +382,17 @@ def _build_parser() -> argparse.ArgumentParser:
         "their order)",
     )
     fs.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
-    fs.add_argument("--fov", type=_fov_deg, help="full field of view, deg (default: all around)")
-    fs.add_argument("--max-range", type=_positive, help="sensor range, m")
+    fs.add_argument(
+        "--fov",
+        type=_fov_deg,
+        help="full field of view, deg (default: all around); p_detect and clutter are for it, "
+        "and --out writes it",
+    )
+    fs.add_argument(
+        "--max-range",
+        type=_positive,
+        help="sensor range, m; p_detect and clutter are for it, and --out writes it",
+    )
     fs.add_argument("--mount", type=_mount_deg, metavar="X,Y,YAW", help=MOUNT_HELP)
     fs.add_argument(
         "--fit-mount",
@@ -1347,6 +1357,9 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
             "ground-truth track per frames file, in the same order"
         )
     frames = [load_frames(path, degrees=args.degrees) for path in args.frames]
+    for path, run in zip(args.frames, frames, strict=True):
+        if not run:
+            raise InputError(f"{path}: no frames")
     truths = [load_groundtruth(path) for path in args.groundtruth]
     lm = LandmarkMap.load(args.map)
     fov = None if args.fov is None else float(np.deg2rad(args.fov))
@@ -1573,11 +1586,40 @@ _COMMANDS = {
 }
 
 
+#: Options whose value may start with a minus sign followed by a digit (a negative X):
+#: argparse takes ``--initial-pose -1,2,30`` for an option followed by another option
+#: (only plain numbers such as ``-1`` or ``-0.5`` count as negative numbers for it).
+NEGATIVE_VALUE_OPTIONS = frozenset({"--initial-pose", "--initial-sd", "--mount"})
+
+
+def _join_negative_values(argv: Sequence[str]) -> list[str]:
+    """``argv`` with each ``OPTION VALUE`` pair of :data:`NEGATIVE_VALUE_OPTIONS` whose value
+    starts with ``-`` and a digit (or ``-.`` and a digit) written ``OPTION=VALUE``, which
+    argparse reads as the option's value."""
+    out: list[str] = []
+    k = 0
+    while k < len(argv):
+        a = argv[k]
+        if a == "--":  # (the rest are arguments, as given)
+            return [*out, *argv[k:]]
+        if (
+            a in NEGATIVE_VALUE_OPTIONS
+            and k + 1 < len(argv)
+            and re.match(r"-\.?\d", argv[k + 1]) is not None
+        ):
+            out.append(f"{a}={argv[k + 1]}")
+            k += 2
+            continue
+        out.append(a)
+        k += 1
+    return out
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     parser = _build_parser()
     try:
-        args = parser.parse_args(argv)
+        args = parser.parse_args(_join_negative_values(sys.argv[1:] if argv is None else argv))
     except OmnilocError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1

@@ -66,6 +66,7 @@ from ..maps import LandmarkMap
 from ..pose import Pose
 from ..sensor import chi2_quantile
 from ..track.data import Frame, GroundTruth, Odometry
+from ..track.offline import rows_before
 from ..track.records import TrackEstimate, TrackState
 from .bounds import MRCLAM_BEARING_ERRORS, StreamBound, bearing_information, stream_bound
 from .common import (
@@ -338,13 +339,19 @@ def kidnap_streams(
 
 def run_stream(localizer: LocalizerOverTime, stream: Stream) -> tuple[list[TrackEstimate], float]:
     """Feed a stream to a localizer in time order; return its estimates and the CPU time
-    (process time, seconds) it took."""
+    (process time, seconds) it took.
+
+    Before each frame the odometry rows up to its time; for a localizer with a ``motion``
+    model (a :class:`~omniloc.track.Tracker`) whose ``delay_s`` is negative, also the rows
+    whose motion starts by then, as :func:`~omniloc.track.track` feeds them
+    (:func:`~omniloc.track.offline.rows_before`)."""
     o = stream.odometry
     out: list[TrackEstimate] = []
     k = 0
     c0 = time.process_time()
-    for f in stream.frames:
-        k1 = int(np.searchsorted(o.t, f.t, side="right"))
+    delay = float(getattr(getattr(localizer, "motion", None), "delay_s", 0.0))
+    cuts = rows_before(o.t, [f.t for f in stream.frames], delay)
+    for f, k1 in zip(stream.frames, cuts.tolist(), strict=True):
         if k1 > k:
             localizer.odometry(o.t[k:k1], o.v[k:k1], o.w[k:k1])
             k = k1

@@ -69,6 +69,7 @@ __all__ = [
     "kept_frames",
     "refine",
     "reverse_recording",
+    "since_reported",
     "sure_frames",
 ]
 
@@ -457,7 +458,8 @@ def refine(
     backward_s=horizon_s)`` reports: the places the forward pass gives up within
     ``confirm_s`` seconds not localized (:func:`hold`), then the pass backward over the
     frames within ``horizon_s`` before a sure frame (:func:`backward_pass`), the two
-    combined (:func:`combine`). A frame the forward pass localized is ``is`` the same
+    combined (:func:`combine`), with ``since_localized`` counted on what is reported
+    (:func:`since_reported`). A frame the forward pass localized is ``is`` the same
     estimate in the result unless it was given up.
 
     Raises
@@ -477,4 +479,54 @@ def refine(
         config=config,
         confirm_s=0.0,  # (hold left localized only the places the forward pass holds)
     )
-    return combine(held, behind)
+    return since_reported(combine(held, behind), forward)
+
+
+def since_reported(
+    estimates: Sequence[TrackEstimate], forward: Sequence[TrackEstimate]
+) -> list[TrackEstimate]:
+    """The offline ``estimates`` with their ``since_localized`` counted on themselves: the
+    seconds since the last frame they report ``localized``, at or before each one (0 when
+    it is), None when there is none since the start or since the forward pass last started
+    its count again (a kidnapping it flagged, an odometry gap: a frame it reports None for
+    where the frame before had a count, or one it flagged).
+
+    :func:`hold` leaves a place given up the forward pass's count (0: it was localized) and
+    the pass backward gives its frames the seconds *to* their sure frame (which
+    :func:`combine` puts in their reason); counted again, the field means what it does
+    online. Nothing else changes: an estimate whose count is the same is returned as it is.
+
+    Parameters
+    ----------
+    estimates : sequence of TrackEstimate
+        The offline estimates (:func:`combine`'s), one per frame, in time order.
+    forward : sequence of TrackEstimate
+        The forward pass's, one per frame (its counts and flags say where a count starts
+        again).
+
+    Returns
+    -------
+    list of TrackEstimate
+
+    Raises
+    ------
+    InputError
+        ``estimates`` and ``forward`` of different lengths.
+    """
+    if len(estimates) != len(forward):
+        raise InputError(
+            f"estimates and forward must hold one estimate per frame: {len(estimates)} and "
+            f"{len(forward)}"
+        )
+    out: list[TrackEstimate] = []
+    last: float | None = None  # the time of the last frame reported localized
+    counted = False  # whether the forward pass had a count at the frame before
+    for e, f in zip(estimates, forward, strict=True):
+        if f.kidnapped or (counted and f.since_localized is None):
+            last = None  # (the forward pass starts its count again here)
+        counted = f.since_localized is not None
+        if e.state is TrackState.LOCALIZED:
+            last = e.t
+        since = None if last is None else max(e.t - last, 0.0)
+        out.append(e if since == e.since_localized else replace(e, since_localized=since))
+    return out

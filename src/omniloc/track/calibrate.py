@@ -794,6 +794,11 @@ class SensorFit:
         Frames that saw nothing, inferred from the gaps of a log that lists only frames
         with a bearing (``frame_period_s``), among :attr:`frames`; not in
         :attr:`clutter_by_detections`, which is for frames that were listed.
+    fov, max_range : float or None
+        The field of view (full angle, rad) and the range (m) the landmarks in view were
+        counted within (:func:`estimate_frame_sensor`'s; None: all around, no limit):
+        ``p_detect`` and ``clutter`` are rates for that view, so :meth:`settings` writes
+        those given, for the tracker to use the same sensor.
     """
 
     sigma: float
@@ -809,17 +814,26 @@ class SensorFit:
     tail_sigma: float = 0.0
     bias_by_bearing: tuple[tuple[float, float, float, int], ...] = ()
     empty_frames: int = 0
+    fov: float | None = None
+    max_range: float | None = None
 
     def settings(self) -> dict[str, float | bool]:
         """As settings for :func:`~omniloc.track.with_settings` (``omniloc track --config``);
-        with frames that saw nothing inferred from the log's gaps (:attr:`empty_frames`),
-        ``nonempty_frames`` true, which the rates then are for."""
+        the :attr:`fov` and :attr:`max_range` the rates were measured for, where given (a
+        tracker that expects ``p_detect`` of the landmarks in another view is confidently
+        wrong: of the example recording's within 5 m, at any range); with frames that saw
+        nothing inferred from the log's gaps (:attr:`empty_frames`), ``nonempty_frames``
+        true, which the rates then are for."""
         out: dict[str, float | bool] = {
             "sigma": self.sigma,
             "p_detect": self.p_detect,
             "clutter": self.clutter,
             "turn_noise_s": self.turn_noise_s,
         }
+        if self.fov is not None:
+            out["fov"] = self.fov
+        if self.max_range is not None:
+            out["max_range"] = self.max_range
         if self.empty_frames:
             out["nonempty_frames"] = True
         return out
@@ -1095,6 +1109,8 @@ def estimate_frame_sensor(
         tail_sigma=mix.tail_sigma,
         bias_by_bearing=bias_by_bearing(np.array(where), err - np.median(err)),
         empty_frames=empty,
+        fov=None if fov is None else float(fov),
+        max_range=None if max_range is None else float(max_range),
     )
 
 

@@ -459,6 +459,45 @@ def _is_tum(path: PathLike) -> bool:
     return len(parts) == 8 and "," not in line and all(map(_looks_numeric, parts))
 
 
+def _warn_odometry_units(
+    src: str, lines: list[int], v: FloatArray, w: FloatArray, *, from_poses: bool = False
+) -> None:
+    """Log a warning naming the line (``lines[k]`` of row ``k``) of the fastest turn rate
+    ``w`` above :data:`ODOMETRY_W_WARN` and of the fastest speed ``v`` above
+    :data:`ODOMETRY_V_WARN`; ``from_poses``: the rates were derived from a pose track (each
+    named by the line of the pose that ends its interval), whose units are asked after."""
+    if from_poses:
+        how = " from the pose before this one"
+        units = (
+            "are the headings in degrees? omniloc reads radians",
+            "are the positions in mm or cm? omniloc reads metres",
+        )
+    else:
+        how = ""
+        units = (
+            "is the file in degrees per second? omniloc reads rad/s",
+            "is the file in mm/s or cm/s? omniloc reads m/s",
+        )
+    for values, limit, what, unit, question in (
+        (w, ODOMETRY_W_WARN, "turn rate w", "rad/s", units[0]),
+        (v, ODOMETRY_V_WARN, "speed v", "m/s", units[1]),
+    ):
+        k = int(np.argmax(np.abs(values)))
+        if abs(values[k]) > limit:
+            log.warning(
+                "%s:%d: %s %g %s%s, more than %.3g %s: %s",
+                src,
+                lines[k],
+                what,
+                values[k],
+                unit,
+                how,
+                limit,
+                unit,
+                question,
+            )
+
+
 def load_odometry(path: PathLike) -> Odometry:
     """Read an odometry file: velocities (``t,v,w``, and ``vy`` when there is a sideways
     part) or a pose track (``t,x,y,theta``, or a TUM file); see the module's documentation
@@ -466,7 +505,9 @@ def load_odometry(path: PathLike) -> Odometry:
 
     A turn rate above :data:`ODOMETRY_W_WARN` (a turn a second) or a speed above
     :data:`ODOMETRY_V_WARN` (10 m/s) is logged as a warning naming the line: the file is
-    probably in degrees per second or in mm/s, which are read as rad/s and m/s.
+    probably in degrees per second or in mm/s, which are read as rad/s and m/s. Of a pose
+    track the rates between poses are checked so, naming the line of the later pose: its
+    headings in degrees, or positions in mm, are read as radians and metres.
 
     Raises
     ------
@@ -501,9 +542,15 @@ def load_odometry(path: PathLike) -> Odometry:
                 "that differs from it: the robot cannot move in no time"
             )
         try:
-            return Odometry.from_poses(t, x, y, theta)
+            odo = Odometry.from_poses(t, x, y, theta)
         except InputError as exc:
             raise InputError(f"{src}: {exc}") from exc
+        # Row k of the odometry is the interval that ends at the pose of row k + 1, whose
+        # line (the first at its time) names a rate: a heading in degrees turns fast there.
+        ends = np.searchsorted(t, odo.t[1:], side="left")
+        end_lines = [lines[int(k)] for k in ends] + [lines[-1]]
+        _warn_odometry_units(src, end_lines, odo.v, odo.w, from_poses=True)
+        return odo
     if not {"t", "v", "w"} <= set(header):
         raise InputError(
             f"{src}:1: an odometry file has the columns t,v,w (velocities) or t,x,y,theta (a "
@@ -514,24 +561,7 @@ def load_odometry(path: PathLike) -> Odometry:
         raise InputError(f"{src}: no odometry rows")
     _check_times(src, t, strict=False, lines=[n for n, _ in rows])
     _warn_time_unit(src, t)
-    for values, limit, what, unit, other in (
-        (w, ODOMETRY_W_WARN, "turn rate w", "rad/s", "degrees per second"),
-        (v, ODOMETRY_V_WARN, "speed v", "m/s", "mm/s or cm/s"),
-    ):
-        k = int(np.argmax(np.abs(values)))
-        if abs(values[k]) > limit:
-            log.warning(
-                "%s:%d: %s %g %s, more than %.3g %s: is the file in %s? omniloc reads %s",
-                src,
-                rows[k][0],
-                what,
-                values[k],
-                unit,
-                limit,
-                unit,
-                other,
-                unit,
-            )
+    _warn_odometry_units(src, [n for n, _ in rows], v, w)
     vy = _columns(src, header, rows, ("vy",))[0] if "vy" in header else None
     return Odometry(t, v, w, vy)
 
@@ -550,7 +580,10 @@ def load_groundtruth(path: PathLike) -> GroundTruth:
             a = read_tum(path, max_tilt=TUM_MAX_TILT)
             _check_times(str(path), a[:, 0])
             _warn_time_unit(str(path), a[:, 0])
-            return GroundTruth(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
+            try:
+                return GroundTruth(a[:, 0], a[:, 1], a[:, 2], a[:, 3])
+            except InputError as exc:
+                raise InputError(f"{path}: {exc}") from exc  # (e.g. too few samples)
         except InputError as exc:
             raise InputError(
                 f"{exc}; the ground truth was read as a TUM file (t x y z qx qy qz qw)"
@@ -570,7 +603,10 @@ def load_groundtruth(path: PathLike) -> GroundTruth:
                 rows[k][0],
                 th[k],
             )
-    return GroundTruth(t, x, y, th, gap)
+    try:
+        return GroundTruth(t, x, y, th, gap)
+    except InputError as exc:
+        raise InputError(f"{src}: {exc}") from exc  # (e.g. too few samples)
 
 
 def _detections(text: str, where: str, what: str) -> list[tuple[str, float]]:
@@ -593,7 +629,8 @@ def load_frames(
     path : str or path-like
         A generic ``t,bearing`` file or an MRCLAM ``robotR_frames.csv``.
     degrees : bool
-        The generic file's bearings are in degrees (a ``bearing_deg`` column says so too).
+        The generic file's bearings are in degrees (a ``bearing_deg`` column says so too);
+        refused with a ``bearing_rad`` column or an MRCLAM file, whose bearings are radians.
     landmark_ids : dict, optional
         MRCLAM only: map from a landmark id (as written in the file) to its row in the map,
         to fill :attr:`Frame.truth` for evaluation (other robots' detections are None). The
@@ -602,18 +639,25 @@ def load_frames(
     Returns
     -------
     list of Frame
-        In time order; a generic file's frames each hold the rows sharing one ``t``.
+        In time order; a generic file's frames each hold the rows sharing one ``t``. Empty
+        for a file with a header and no rows, of either format (callers that need frames
+        say so, naming the file).
 
     Raises
     ------
     InputError
         The file cannot be read or is not a frames file, a value is not a number, times go
-        back, or a generic file read as radians has a bearing beyond a full turn (degrees
-        without ``degrees=True``: :func:`omniloc.io.check_radians`); the message names the
-        line.
+        back, ``degrees=True`` for a file whose bearings say radians, or a generic file read
+        as radians has a bearing beyond a full turn (degrees without ``degrees=True``:
+        :func:`omniloc.io.check_radians`); the message names the line.
     """
     src, header, rows = _table(path, "frames")
     if "landmarks" in header and "robot_detections" in header:
+        if degrees:
+            raise InputError(
+                f"{src}:1: an MRCLAM frames file (landmarks, robot_detections) holds radians "
+                "but degrees=True"
+            )
         return _mrclam_frames(src, header, rows, landmark_ids)
     col = next((c for c in ("bearing", "bearing_rad", "bearing_deg") if c in header), None)
     if col is None or "t" not in header:
@@ -636,6 +680,8 @@ def load_frames(
     else:
         lines = [n for (n, _), ok in zip(rows, seen, strict=True) if ok]
         check_radians(b, lambda k: f"{src}:{lines[k]}: bearing", InputError)
+    if t.size == 0:
+        return []  # (a header alone: no frames, as of an MRCLAM file)
     # Each bearing's place among the rows that have one: frame s..e holds b[at[s]:at[e]].
     at = np.concatenate([[0], np.cumsum(seen)])
     frames = []

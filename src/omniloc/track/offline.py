@@ -2,18 +2,18 @@
 
 The online :class:`~omniloc.track.Tracker` takes odometry and frames as they come;
 :func:`track` feeds it a whole recording in time order -- before each frame, the odometry
-rows up to the frame's time -- and returns one :class:`~omniloc.track.TrackEstimate` per
-frame.
+rows up to the frame's time, and with a negative latency those whose motion starts by then
+(:func:`rows_before`) -- and returns one :class:`~omniloc.track.TrackEstimate` per frame.
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from ..errors import InputError
 from ..io import finite_number
@@ -26,7 +26,47 @@ from .motion import MotionModel
 from .records import TrackEstimate, TrackState
 from .tracker import Tracker, TrackerConfig
 
-__all__ = ["TrackRun", "track"]
+__all__ = ["TrackRun", "rows_before", "track"]
+
+
+def rows_before(
+    odometry_t: NDArray[np.float64], frame_t: ArrayLike, delay_s: float
+) -> NDArray[np.intp]:
+    """How many odometry rows to feed a tracker before each frame, offline.
+
+    The rows stamped up to the frame's time; with a negative ``delay_s`` (odometry stamped
+    late: a row stamped ``t`` moves the robot from ``t + delay_s`` on) also those stamped
+    later whose motion starts by the frame, ``t + delay_s <= frame time`` (the tracker
+    refuses a row, fed after a frame, whose motion starts before that frame). With
+    ``delay_s >= 0`` only the rows stamped up to the frame, as ever.
+
+    Parameters
+    ----------
+    odometry_t : ndarray, shape (n,)
+        The odometry's times, seconds, not decreasing.
+    frame_t : array_like, shape (m,)
+        The frames' times, seconds, not decreasing.
+    delay_s : float
+        The odometry's latency (:attr:`MotionModel.delay_s`), seconds.
+
+    Returns
+    -------
+    ndarray of int, shape (m,)
+        Per frame, the number of rows (from the first) fed before it.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rows_before(np.array([0.0, 0.1, 0.2, 0.3]), [0.1, 0.2], 0.05).tolist()
+    [2, 3]
+    >>> rows_before(np.array([0.0, 0.1, 0.2, 0.3]), [0.1, 0.2], -0.1).tolist()
+    [3, 4]
+    """
+    ft = np.asarray(frame_t, dtype=np.float64)
+    if delay_s < 0.0:
+        # (The tracker's own sum, t + delay_s, so that no row is fed a frame too late.)
+        return np.searchsorted(odometry_t + delay_s, ft, side="right")
+    return np.searchsorted(odometry_t, ft, side="right")
 
 
 @dataclass(frozen=True)
@@ -74,7 +114,7 @@ class TrackRun:
 def track(
     landmarks: LandmarkMap | ArrayLike,
     odometry: Odometry,
-    frames: Sequence[Frame],
+    frames: Iterable[Frame],
     *,
     sensor: SensorModel | None = None,
     motion: MotionModel | None = None,
@@ -93,8 +133,9 @@ def track(
     odometry : Odometry
         Velocity odometry (``t, v, w``, and ``vy`` when it has a sideways part), in time
         order.
-    frames : sequence of Frame
-        Frames of bearings in time order (their ``truth``, if any, is not read).
+    frames : iterable of Frame
+        Frames of bearings in time order (their ``truth``, if any, is not read); any
+        iterable, a generator too (read once, into a list).
     sensor, motion, config
         See :class:`~omniloc.track.Tracker` (defaults: its defaults).
     progress : callable, optional
@@ -118,8 +159,9 @@ def track(
     Raises
     ------
     InputError
-        Frames out of time order (the message names the frame), frames and odometry that
-        share no time (two clocks), or what :meth:`Tracker.frame` refuses.
+        An item of ``frames`` that is not a :class:`Frame` or frames out of time order (the
+        message names the frame), frames and odometry that share no time (two clocks), or
+        what :meth:`Tracker.frame` refuses.
 
     Examples
     --------
@@ -139,6 +181,13 @@ def track(
     lm = as_landmark_map(landmarks)
     if not isinstance(odometry, Odometry):
         raise InputError(f"odometry must be an Odometry, got {type(odometry).__name__}")
+    frames = list(frames)  # (once: a generator read twice would be empty the second time)
+    for i, f in enumerate(frames):
+        if not isinstance(f, Frame):
+            raise InputError(
+                f"frames[{i}] must be a Frame (omniloc.track.Frame(t, bearings)), got "
+                f"{type(f).__name__}"
+            )
     times = np.array([f.t for f in frames], dtype=np.float64)
     back = np.flatnonzero(np.diff(times) < 0)
     if back.size:
@@ -165,8 +214,9 @@ def track(
     k = 0
     c0 = time.process_time()
     w0 = time.perf_counter()
+    cuts = rows_before(odometry.t, times, tracker.motion.delay_s)
     for n, f in enumerate(frames, 1):
-        k1 = int(np.searchsorted(odometry.t, f.t, side="right"))
+        k1 = int(cuts[n - 1])
         if k1 > k:
             vy = None if odometry.vy is None else odometry.vy[k:k1]
             tracker.odometry(odometry.t[k:k1], odometry.v[k:k1], odometry.w[k:k1], vy)

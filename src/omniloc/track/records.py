@@ -123,8 +123,10 @@ class TrackEstimate:
         Seconds since the localizer's last ``localized`` frame (0 when this one is). None
         when it has not been localized since it started, or since it last flagged a
         kidnapping or lost its motion to an odometry gap -- or from a localizer that does
-        not say. From the pass backward (``backward``): the seconds to the sure frame it
-        was carried back from.
+        not say. Offline, with the pass backward (``track(..., backward_s=)``), the same
+        counted on the frames reported: since the last one reported ``localized``, at or
+        before this one (:func:`~omniloc.track.backward.since_reported`); a frame of the
+        pass says in its ``reason`` how far before its sure frame it is.
     backward : bool
         True when the estimate comes from the second pass backward in time over a whole
         recording (:mod:`omniloc.track.backward`), not from the frames before it.
