@@ -83,6 +83,24 @@ def test_a_simulated_run_gives_back_its_model() -> None:
     assert fit.model.turn_slowdown == 0.0
 
 
+def test_a_jump_in_the_truth_is_left_out_of_the_latency_and_the_scales() -> None:
+    # The truth carried 3 m off at 300 s and 4 m at 600 s (a kidnapping in the recording, a
+    # tracking system's swap): least squares over every stretch followed the jumps (turns x
+    # 0.81 on the example recording); the stretches holding them are left out.
+    model = replace(TRUE, w_scale=0.94)
+    odometry, truth = _recording(model=model)
+    x, y = truth.x.copy(), truth.y.copy()
+    x[truth.t > 300.0] += 3.0
+    y[truth.t > 600.0] -= 4.0
+    fit = estimate_motion(odometry, GroundTruth(truth.t, x, y, truth.theta))
+    assert 1 <= fit.jumps <= 4
+    assert fit.model.w_scale == pytest.approx(0.94, abs=0.005)
+    assert fit.model.v_scale == pytest.approx(TRUE.v_scale, rel=0.01)
+    assert fit.model.delay_s == pytest.approx(TRUE.delay_s, abs=0.011)
+    # Without a jump nothing is left out.
+    assert estimate_motion(odometry, truth).jumps == 0
+
+
 def test_a_robot_that_turns_less_and_slows_in_turns() -> None:
     # As MRCLAM's robots: turns 6 % short of the odometry's, and 1.08 s/rad slower in turns
     # (at 0.5 rad/s the robot goes 46 % as far as the odometry says, before v_scale).

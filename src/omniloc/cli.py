@@ -1321,6 +1321,11 @@ def _cmd_fit_motion(args: argparse.Namespace) -> int:
             f"{len(odometry)} runs pooled; the stretches each gave, in their order (before "
             f"outliers were left out): {counts}{none if 0 in fit.stretches_by_run else ''}"
         )
+    if fit.jumps:
+        print(
+            f"{fit.jumps} stretches of the latency's length with a jump in the truth (a "
+            "kidnapping, a tracking system's swap) left out of the latency and the scales"
+        )
     print(
         f"fitted on {fit.stretches} stretches ({fit.left_out} left out as outliers): "
         f"the odometry's rows describe the motion {values['delay_s']:+.2f} s after their time "

@@ -118,6 +118,9 @@ class MotionFit:
         Stretches each run gave the noise fit (those without a gap in the truth, before the
         second pass; ``stretches + left_out`` in all), in the order the runs were given: a
         run that gave none did not count.
+    jumps : int
+        Stretches of the latency's length left out of the latency and the scales: a jump in
+        the truth (:data:`JUMP_SIGMAS`).
     """
 
     model: MotionModel
@@ -126,6 +129,7 @@ class MotionFit:
     stretches: int
     left_out: int
     stretches_by_run: tuple[int, ...] = ()
+    jumps: int = 0
 
 
 def _seconds(values: ArrayLike, name: str, what: str) -> FloatArray:
@@ -189,6 +193,43 @@ def _errors(true: FloatArray, pred: FloatArray) -> FloatArray:
     r = true - pred
     r[:, 2] = np.asarray(wrap(r[:, 2]))
     return np.asarray(r)
+
+
+#: A stretch whose relative motion misses the odometry's by more than this many robust
+#: standard deviations (1.4826 median absolute deviations, of its position or its heading
+#: error, over all stretches) holds a jump in the truth: it is left out of the latency and
+#: the scales (:func:`estimate_motion`). Odometry's own errors, heavy-tailed as they are,
+#: stay far within it (MRCLAM's five runs: none beyond).
+JUMP_SIGMAS = 20.0
+#: Floors of those standard deviations (m, rad): a simulated odometry without noise.
+JUMP_FLOOR = (0.01, 0.01)
+
+
+def _without_jumps(
+    runs: list[tuple[Odometry, FloatArray, FloatArray]], length: float, model: MotionModel
+) -> list[tuple[Odometry, FloatArray, FloatArray]]:
+    """``runs`` without the stretches (``[a, a + length]``) whose error at ``model`` is
+    beyond :data:`JUMP_SIGMAS` robust standard deviations (:data:`JUMP_FLOOR` at least), in
+    position or in heading; ``runs`` itself when there are none, or when they would leave
+    fewer than :data:`MIN_STRETCHES`."""
+    errs = [_errors(true, _predicted(o, a, a + length, model)[0]) for o, a, true in runs]
+    e = np.concatenate(errs)
+    if e.shape[0] == 0:
+        return runs
+    parts = (np.hypot(e[:, 0], e[:, 1]), np.abs(e[:, 2]))
+    limits = [
+        JUMP_SIGMAS * max(1.4826 * float(np.median(np.abs(x - np.median(x)))), floor)
+        + float(np.median(x))
+        for x, floor in zip(parts, JUMP_FLOOR, strict=True)
+    ]
+    out, kept = [], 0
+    for (o, a, true), r in zip(runs, errs, strict=True):
+        ok = (np.hypot(r[:, 0], r[:, 1]) <= limits[0]) & (np.abs(r[:, 2]) <= limits[1])
+        out.append((o, a[ok], true[ok]))
+        kept += int(ok.sum())
+    if kept == e.shape[0] or kept < MIN_STRETCHES:
+        return runs
+    return out
 
 
 def _delay_costs(
@@ -466,6 +507,18 @@ def estimate_motion(
     tried, cost = best_delay(model)
     model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
     model = _fit_scales(runs, delay_stretch_s, model, turn_scales)
+    # A jump in the truth (a kidnapping in the recording, a tracking system's swap) is a
+    # stretch off by metres, which least squares would follow: such stretches are left out
+    # and the latency and the scales fitted again without them.
+    clean = _without_jumps(runs, delay_stretch_s, model)
+    jumps = sum(a.size for _, a, _ in runs) - sum(a.size for _, a, _ in clean)
+    if jumps:
+        log.info("fit-motion: %d stretches with a jump in the truth left out of the scales", jumps)
+        runs = clean
+        model = MotionModel()
+        tried, cost = best_delay(model)
+        model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
+        model = _fit_scales(runs, delay_stretch_s, model, turn_scales)
     tried, cost = best_delay(model)
     model = replace(model, delay_s=float(tried[int(np.argmin(cost))]))
     # Noise: errors over each run's stretches of each length, and the covariance of each
@@ -523,7 +576,7 @@ def estimate_motion(
     # Values the likelihood cannot tell from zero come out as tiny ones: call them zero.
     noise = {f: (v if v > 1e-9 else 0.0) for f, v in noise.items()}
     model = replace(model, **noise)
-    return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()), tuple(by_run))
+    return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()), tuple(by_run), jumps)
 
 
 #: Turn-rate bins (rad/s) of :func:`turn_noise_fit`.
