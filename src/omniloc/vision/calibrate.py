@@ -326,6 +326,80 @@ def _rim_points(
     return np.column_stack([u, v])[ok]
 
 
+#: Sectors of the rim checked on both sides, and the share of the visible ones outside the
+#: fitted rim that must look like the image border.
+_SIDE_SECTORS = 32
+_MIN_OUTSIDE_LIKE_BORDER = 0.9
+
+
+def _check_rim_sides(gray: NDArray[np.float32], cx: float, cy: float, r: float, a: float) -> None:
+    """Refuse a fitted rim whose outside does not look like the image border.
+
+    The outside of the true rim owns the image border, so just outside it the image is at
+    the border's level, and just inside it mostly is not. A fit that locked onto something
+    inside the mirror (the camera's reflection, the hull of a few bright poles) has mirror
+    (walls) just outside it. The band from ``d1`` to ``d2`` px on each side is sampled in
+    `_SIDE_SECTORS` sectors; a sector's level is the median of its samples, and it looks
+    like the border when within ``3 * noise + 0.03 * contrast`` of the border's level
+    (``noise`` the border's MAD scale, ``contrast`` the inside band's median distance from
+    the border level). Sectors mostly off the image are skipped.
+
+    Raises
+    ------
+    VisionError
+        If fewer than `_MIN_OUTSIDE_LIKE_BORDER` of the visible sectors outside the rim
+        look like the border, or if none inside the rim is unlike it.
+    """
+    g = np.asarray(cv2.GaussianBlur(gray, (0, 0), 1.0), dtype=np.float32)
+    border = np.concatenate([g[0], g[-1], g[:, 0], g[:, -1]])
+    bg = float(np.median(border))
+    noise = 1.4826 * float(np.median(np.abs(border - bg)))
+    d1 = max(3.0, 0.04 * r)
+    d2 = d1 + max(4.0, 0.06 * r)
+    per_sector = 8
+    t = np.linspace(0.0, 2 * np.pi, _SIDE_SECTORS * per_sector, endpoint=False)
+
+    def sector_levels(lo: float, hi: float) -> NDArray[np.float64]:
+        rr = np.linspace(max(lo, 0.0), hi, 6)
+        map_x = (cx + a * np.cos(t)[:, None] * rr[None, :]).astype(np.float32)
+        map_y = (cy - np.sin(t)[:, None] * rr[None, :]).astype(np.float32)
+        prof = cv2.remap(
+            g,
+            map_x,
+            map_y,
+            cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+            borderValue=float("nan"),
+        ).reshape(_SIDE_SECTORS, -1)
+        levels = [
+            float(np.median(row[np.isfinite(row)]))
+            for row in prof
+            if np.isfinite(row).mean() >= 0.5
+        ]
+        return np.asarray(levels, dtype=np.float64)
+
+    outside = sector_levels(r + d1, r + d2)
+    inside = sector_levels(r - d2, r - d1)
+    if len(outside) < 4 or len(inside) < 4:
+        return  # too little of the rim's surroundings on the image to tell
+    contrast = float(np.median(np.abs(inside - bg)))
+    tol = 3.0 * noise + 0.05 * contrast
+    like_outside = float(np.mean(np.abs(outside - bg) <= tol))
+    unlike_inside = float(np.mean(np.abs(inside - bg) > tol))
+    fitted = f"the fitted ellipse (centre ({cx:.1f}, {cy:.1f}), aspect {a:.3g}, radius {r:.3g} px)"
+    if like_outside < _MIN_OUTSIDE_LIKE_BORDER:
+        raise VisionError(
+            f"no clear mirror rim: only {like_outside:.0%} of the band just outside {fitted} "
+            f"is at the image border's level (need {_MIN_OUTSIDE_LIKE_BORDER:.0%}); it is "
+            "probably something inside the mirror (the camera's reflection, bright poles). "
+            "Pass the calibration if it is known"
+        )
+    if unlike_inside == 0.0:
+        raise VisionError(
+            f"no clear mirror rim: the band just inside {fitted} is all at the image border's level"
+        )
+
+
 def _fit_ellipse(
     pts: NDArray[np.float64],
     init: tuple[float, float, float, float],
@@ -487,4 +561,5 @@ def calibrate_mirror(
         raise VisionError(f"no mirror rim found: fitted aspect {a:.3g} is implausible")
     if not 4 <= r <= 10 * max(h, w):
         raise VisionError(f"no mirror rim found: fitted radius {r:.3g} px is implausible")
+    _check_rim_sides(gray, cx, cy, r, a)
     return MirrorCalibration((cx, cy), a, r)
