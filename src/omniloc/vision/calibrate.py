@@ -239,8 +239,13 @@ def _rough_ellipse(gray: NDArray[np.float32]) -> tuple[float, float, float, floa
             "no mirror rim found: nothing in the image stands out from the border "
             f"(contrast {contrast:.3g}, border noise {noise:.3g})"
         )
-    # Anything clearly unlike the border is mirror: a dark wall sector must count too.
-    inside = np.abs(small - bg) > max(5.0 * noise, 0.12 * contrast)
+    # Anything clearly unlike the border is mirror: a dark wall sector must count too. The
+    # relative part of the threshold is taken from the typical mirror pixel, not from the
+    # extreme one: a bright camera reflection must not push a dim room's walls below it.
+    dev = np.abs(small - bg)
+    clear = dev > 5.0 * noise
+    typical = float(np.median(dev[clear])) if np.any(clear) else contrast
+    inside = dev > max(5.0 * noise, 0.12 * min(typical, contrast))
     inside_u8 = inside.astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(inside_u8, connectivity=8)
     if n < 2:
