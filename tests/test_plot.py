@@ -102,3 +102,12 @@ def test_plot_detections_and_demo(tmp_path: Path) -> None:
     assert (tmp_path / "demo" / "vision.png").exists()
     assert "14 found within 0.5 deg" in text
     assert "median bearing error" in text
+
+
+def test_vision_demo_saves_the_rendered_colour_image(tmp_path: Path) -> None:
+    cam = vision.OmniCamera(color=True)
+    vision_demo(tmp_path, rng=3, camera=cam)
+    rendered = vision.render_omni_image(vision.demo_scene(), vision.DEMO_POSE, cam, rng=3)
+    assert rendered.ndim == 3
+    assert not np.array_equal(rendered[:, :, 0], rendered[:, :, 2])  # red differs from blue
+    np.testing.assert_array_equal(vision.load_image(tmp_path / "vision-input.png"), rendered)

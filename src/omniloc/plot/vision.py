@@ -288,7 +288,12 @@ def vision_demo(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     image = render_omni_image(scn, p, cam, rng=rng)
-    cv2.imwrite(str(out / "vision-input.png"), image)
+    # OpenCV writes BGR(A): a colour camera's RGB must be swapped, or load_image reads the
+    # file back with red and blue exchanged.
+    cv2.imwrite(
+        str(out / "vision-input.png"),
+        cv2.cvtColor(image, cv2.COLOR_RGB2BGR) if image.ndim == 3 else image,
+    )
     det = extract_bearings(image, forward=cam.forward, mirrored=cam.mirrored)
     truth = true_features(scn, p, cam)
     plot_detections(image, det, out / "vision.png", title="omniloc vision demo")
