@@ -177,6 +177,28 @@ def test_bearings_and_localize_from_an_image(tmp_path, capsys) -> None:
     assert abs(np.angle(np.exp(1j * (best["theta"] - DEMO_POSE[2])))) < np.deg2rad(0.5)
 
 
+def test_bearings_reports_ambiguous_edges(tmp_path, capsys) -> None:
+    import cv2
+
+    from omniloc.vision import extract_bearings, render_omni_image
+    from omniloc.vision.render import random_stripe_scene
+
+    scene, pose = random_stripe_scene(7)
+    image = render_omni_image(scene, pose, rng=7)
+    det = extract_bearings(image)
+    assert 0 < det.ambiguous.sum() < len(det)
+    img_path = tmp_path / "stripes.png"
+    cv2.imwrite(str(img_path), image)
+    assert main(["bearings", str(img_path), "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)["detections"]
+    assert [d["ambiguous"] for d in found] == det.ambiguous.tolist()
+    assert main(["bearings", str(img_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    rows = lines[1 : 1 + len(det)]
+    assert [r.endswith("  ambiguous") for r in rows] == det.ambiguous.tolist()
+    assert lines[-1].startswith(f"({int(det.ambiguous.sum())} ambiguous:")
+
+
 def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
     assert main(["demo", "--out", str(tmp_path), "--no-vision"]) == 0
     out = capsys.readouterr().out

@@ -727,8 +727,15 @@ def _cmd_bearings(args: argparse.Namespace) -> int:
             "units": "degrees" if args.degrees else "radians",
             "calibration": {"center": cal.center, "aspect": cal.aspect, "radius": cal.radius},
             "detections": [
-                {"bearing": float(conv(b)), "strength": float(s), "kind": str(k)}
-                for b, s, k in zip(det.bearings, det.strength, det.kind, strict=True)
+                {
+                    "bearing": float(conv(b)),
+                    "strength": float(s),
+                    "kind": str(k),
+                    "ambiguous": bool(a),
+                }
+                for b, s, k, a in zip(
+                    det.bearings, det.strength, det.kind, det.ambiguous, strict=True
+                )
             ],
         }
         print(json.dumps(to_jsonable(out), indent=2))
@@ -738,8 +745,15 @@ def _cmd_bearings(args: argparse.Namespace) -> int:
         f"mirror rim: centre ({cal.center[0]:.2f}, {cal.center[1]:.2f}) px, "
         f"aspect {cal.aspect:.4f}, radius {cal.radius:.1f} px; {len(det)} detections"
     )
-    for b, s, k in zip(det.bearings, det.strength, det.kind, strict=True):
-        print(f"  {float(conv(b)):10.5f} {unit}  {k:4s}  strength {float(s):.1f}")
+    for b, s, k, a in zip(det.bearings, det.strength, det.kind, det.ambiguous, strict=True):
+        mark = "  ambiguous" if a else ""
+        print(f"  {float(conv(b)):10.5f} {unit}  {k:4s}  strength {float(s):.1f}{mark}")
+    n_amb = int(det.ambiguous.sum())
+    if n_amb:
+        print(
+            f"({n_amb} ambiguous: edges of a stripe that may be a pole; "
+            "allow them as spurious bearings)"
+        )
     return 0
 
 
