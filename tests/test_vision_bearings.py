@@ -147,6 +147,21 @@ def test_input_types_agree(demo_image: np.ndarray) -> None:
         np.testing.assert_allclose(det.bearings, ref.bearings, atol=np.deg2rad(0.02))
 
 
+@pytest.mark.parametrize(("seed", "color"), [(0, False), (1, False), (3, True)])
+def test_a_brightness_offset_changes_nothing(seed: int, color: bool) -> None:
+    # A zero-centred float image: only the sides' tolerance looked at absolute levels.
+    from omniloc.vision.render import random_scene, random_stripe_scene
+
+    scene, pose = (random_stripe_scene if seed % 2 else random_scene)(seed)
+    img = render_omni_image(scene, pose, OmniCamera(color=color), rng=seed).astype(np.float64)
+    ref = extract_bearings(img)
+    det = extract_bearings(img - 128.0)
+    assert len(ref) > 5
+    np.testing.assert_allclose(det.bearings, ref.bearings, atol=1e-9)
+    assert det.kind.tolist() == ref.kind.tolist()
+    assert det.ambiguous.tolist() == ref.ambiguous.tolist()
+
+
 def test_detections_container(demo_image: np.ndarray) -> None:
     det = extract_bearings(demo_image)
     assert len(det) == det.bearings.shape[0] == det.strength.shape[0] == det.kind.shape[0]

@@ -488,7 +488,8 @@ def _sides_differ(
     (which vary along the radius) cancel in the row's difference; the difference is the
     median over the rows (NaN samples, off the image, are left out). It must exceed
     ``floor + 3 se + 0.06 * level`` (``se`` its standard error from the rows' spread,
-    ``level`` the mean of the two sides) in at least one channel.
+    ``level`` the mean of the two sides, from the channel's black: 0, or the image's minimum
+    if that is negative) in at least one channel.
     """
     n = channels.shape[2]
     offsets = np.arange(_SIDE_WINDOW)
@@ -703,8 +704,13 @@ def extract_bearings(
     maps = _panorama_maps(cal, r0, r1, rows, cols)
     pano = _remap(gray, maps)
     channels = [pano]  # grey, then R, G, B for a colour image: compared beside stripes
+    blacks = [float(gray.min())]
     if rgb is not None:
         channels += _remap_colour(rgb, maps, scale, np.isnan(pano))
+        blacks += [float(v) * scale for v in rgb.min(axis=(0, 1))]
+    # The sides' tolerance grows with their level above black (_sides_differ): an image with
+    # negative values (a zero-centred float image) is measured from its minimum, not from 0.
+    channels = [c - np.float32(b) if b < 0 else c for c, b in zip(channels, blacks, strict=True)]
     valid_rows = np.isfinite(pano).all(axis=1)
     if not valid_rows.any():
         # Rim partly outside the image: keep rows, ignoring the missing samples.
