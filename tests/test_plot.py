@@ -111,3 +111,24 @@ def test_vision_demo_saves_the_rendered_colour_image(tmp_path: Path) -> None:
     assert rendered.ndim == 3
     assert not np.array_equal(rendered[:, :, 0], rendered[:, :, 2])  # red differs from blue
     np.testing.assert_array_equal(vision.load_image(tmp_path / "vision-input.png"), rendered)
+
+
+def test_plot_detections_shows_16_bit_and_float_colour_as_8_bit() -> None:
+    from matplotlib.figure import Figure
+
+    cam = vision.OmniCamera(color=True)
+    rgb = vision.render_omni_image(vision.demo_scene(), vision.DEMO_POSE, cam, rng=2)
+    det = vision.extract_bearings(rgb)
+
+    def shown(image: np.ndarray) -> np.ndarray:
+        ax = Figure().subplots()
+        plot_detections(image, det, ax)
+        return np.asarray(ax.get_images()[0].get_array())
+
+    ref = shown(rgb)
+    np.testing.assert_array_equal(ref, rgb)  # a uint8 image is drawn as it is
+    rgba = np.concatenate([rgb, np.zeros_like(rgb[:, :, :1])], axis=2)  # alpha 0
+    for image in (rgb.astype(np.uint16) * 257, rgb.astype(np.float32), rgb / 255.0, rgba):
+        np.testing.assert_array_equal(shown(image), ref)
+    grey = rgb[:, :, 1]
+    np.testing.assert_array_equal(shown(grey.astype(np.uint16) * 257), shown(grey))
