@@ -11,6 +11,7 @@ import pytest
 from omniloc import vision
 from omniloc.errors import InputError, VisionError
 from omniloc.plot import plot_detections, plot_localization, plot_solutions_grid, vision_demo
+from omniloc.pose import Pose, predict_bearings
 from omniloc.search import localize
 from omniloc.simulate import DEMO_POSE, DEMO_VISIBLE, demo_room, observe
 
@@ -47,12 +48,37 @@ def test_one_panel_per_solution_with_a_ray_per_bearing(tmp_path: Path) -> None:
         assert a is not None and tuple(np.round(lm.xy[a], 6)) in ends
 
 
+def _labels(ax: object) -> list[str]:
+    return [str(ln.get_label()) for ln in ax.get_lines()]  # type: ignore[attr-defined]
+
+
 def test_no_solution_gets_one_titled_panel() -> None:
     lm = demo_room()
     res = localize(lm, np.array([0.0, 0.01, 0.02, 3.0]), method="paper")
     assert not res
     fig = plot_localization(res, np.array([0.0, 0.01, 0.02, 3.0]))
     assert [ax.get_title() for ax in fig.get_axes()] == ["no solution"]
+    # No robot is drawn where there is no solution (it was one labelled "solution" at 0, 0).
+    assert "solution" not in _labels(fig.get_axes()[0])
+    fig = plot_localization(res, np.array([0.0, 0.01, 0.02, 3.0]), true_pose=DEMO_POSE)
+    labels = _labels(fig.get_axes()[0])
+    assert "solution" not in labels and labels.count("true pose") == 1
+    grid = plot_solutions_grid([("none", res, np.zeros(4), None)])
+    assert "solution" not in _labels(grid.get_axes()[0])
+
+
+def test_solutions_far_from_the_map_are_in_view() -> None:
+    lm = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0], [2.0, 6.0]])
+    bearings = predict_bearings(lm, Pose(80.0, -30.0, 0.4))
+    res = localize(lm, bearings)
+    sols = res.solutions[:6]
+    assert max(abs(s.pose.x) + abs(s.pose.y) for s in sols) > 50  # far outside the map
+    truth = Pose(60.0, 50.0, 0.0)
+    fig = plot_localization(res, bearings, true_pose=truth)
+    for ax, sol in zip(fig.get_axes(), sols, strict=True):
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        for p in (sol.pose, truth, Pose(0.0, 0.0, 0.0), Pose(4.0, 6.0, 0.0)):
+            assert x0 < p.x < x1 and y0 < p.y < y1
 
 
 def test_plot_input_is_checked(tmp_path: Path) -> None:
