@@ -288,3 +288,37 @@ def test_python_dash_m_runs_the_command_line() -> None:
         check=False,
     )
     assert bad.returncode == 1 and "no-such-map.csv" in bad.stderr
+
+
+@pytest.mark.parametrize("command", ["bearings", "localize"])
+def test_output_into_a_closed_pipe_ends_quietly(command: str, room_files, tmp_path) -> None:
+    # `omniloc ... | head -3`: the reader is gone before the output is written.
+    import os
+    import subprocess
+    import sys
+
+    import cv2
+
+    import omniloc
+    from omniloc.vision import DEMO_POSE, demo_scene, render_omni_image
+
+    m, b = room_files
+    if command == "bearings":
+        img_path = tmp_path / "omni.png"
+        cv2.imwrite(str(img_path), render_omni_image(demo_scene(), DEMO_POSE, rng=1))
+        argv = ["bearings", str(img_path), "--json"]
+    else:
+        argv = ["localize", "--map", str(m), "--bearings", str(b), "--degrees"]
+    env = {**os.environ, "PYTHONPATH": str(Path(omniloc.__file__).parents[1])}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omniloc", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    proc.stderr.close()
+    assert proc.wait(timeout=120) == 1
+    assert err == ""
