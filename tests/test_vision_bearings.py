@@ -200,8 +200,10 @@ def test_unreadable_files_raise(tmp_path: Path) -> None:
     empty.write_bytes(b"")
     with pytest.raises(VisionError, match="cannot read image"):
         load_image(empty)
-    with pytest.raises(VisionError, match="no such file"):
-        load_image(tmp_path)  # a directory
+    with pytest.raises(VisionError, match="is a directory"):
+        load_image(tmp_path)
+    with pytest.raises(VisionError, match="is a directory"):
+        bearings_from_image(tmp_path)
 
 
 @pytest.mark.parametrize(
@@ -235,11 +237,15 @@ def test_bad_parameters_raise(
         (np.full((200, 200), np.nan), "NaN"),
         (np.zeros((3, 4, 5, 6)), "2-D"),
         (None, "numbers"),
+        ([[1, 2], [3]], "not rectangular"),
+        ([[[1, 2, 3]] * 20] * 19 + [[[1, 2]] * 20], "not rectangular"),
     ],
 )
 def test_bad_images_raise(image: object, message: str) -> None:
     with pytest.raises(VisionError, match=message):
         extract_bearings(image)
+    with pytest.raises(VisionError, match=message):
+        calibrate_mirror(image)
 
 
 def test_panorama_layout(demo_image: np.ndarray) -> None:

@@ -50,6 +50,7 @@ from omniloc.vision.calibrate import (
     _count,
     _finite_float,
     as_gray,
+    as_image_array,
     calibrate_mirror,
     check_center,
 )
@@ -179,6 +180,8 @@ def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
         If the file does not exist or cannot be decoded as an image.
     """
     p = as_path(path, "image path", VisionError)
+    if p.is_dir():
+        raise VisionError(f"cannot read image {str(p)!r}: it is a directory")
     if not p.is_file():
         raise VisionError(f"cannot read image {str(p)!r}: no such file")
     try:
@@ -208,7 +211,7 @@ def _to_8bit(image: object) -> tuple[NDArray[np.float32], NDArray[Any] | None, f
     The scale takes the image to 8-bit units: uint16 is divided by 257, a float image is
     multiplied by 255 when its grey maximum is <= 1. The grey image is already scaled.
     """
-    arr = image if isinstance(image, np.ndarray) else np.asarray(image)
+    arr = as_image_array(image)
     gray = as_gray(arr)
     scale = 1.0
     if arr.dtype == np.uint16:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -27,7 +28,7 @@ from numpy.typing import NDArray
 from omniloc.errors import VisionError
 from omniloc.io import finite_number, shorten
 
-__all__ = ["MirrorCalibration", "as_gray", "calibrate_mirror", "check_center"]
+__all__ = ["MirrorCalibration", "as_gray", "as_image_array", "calibrate_mirror", "check_center"]
 
 _MAX_ASPECT = 10.0
 _MIN_ASPECT = 1e-3
@@ -154,6 +155,35 @@ class MirrorCalibration:
         )
 
 
+def as_image_array(image: object) -> NDArray[Any]:
+    """``image`` as a numpy array, or a VisionError (a ragged nested list cannot be one).
+
+    Parameters
+    ----------
+    image : array_like
+        The image.
+
+    Returns
+    -------
+    ndarray
+        ``image`` itself if it is an ndarray.
+
+    Raises
+    ------
+    VisionError
+        If numpy cannot make a rectangular array of it.
+    """
+    if isinstance(image, np.ndarray):
+        return image
+    try:
+        return np.asarray(image)
+    except (TypeError, ValueError):
+        raise VisionError(
+            f"image must be an array (H, W) or (H, W, C), got a {type(image).__name__} that is "
+            "not rectangular (rows of different lengths?)"
+        ) from None
+
+
 def as_gray(image: object) -> NDArray[np.float32]:
     """Validate an image and convert it to a float32 grey image.
 
@@ -173,12 +203,7 @@ def as_gray(image: object) -> NDArray[np.float32]:
     VisionError
         For a wrong shape or dtype, a too small image, or non-finite values.
     """
-    if not isinstance(image, np.ndarray):
-        try:
-            image = np.asarray(image)
-        except (TypeError, ValueError):
-            raise VisionError(f"image must be an array, got {type(image).__name__}") from None
-    arr: NDArray[np.generic] = image
+    arr = as_image_array(image)
     if arr.dtype == bool:
         arr = arr.astype(np.uint8)
     if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
