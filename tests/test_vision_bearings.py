@@ -189,6 +189,34 @@ def test_load_image_and_bearings_from_path(tmp_path: Path, demo_image: np.ndarra
     np.testing.assert_allclose(from_array.bearings, np.sort(np.asarray(wrap(ref.bearings - 0.2))))
 
 
+def _with_exif_orientation(jpeg: bytes, orientation: int) -> bytes:
+    """The JPEG with an APP1 Exif segment holding only the orientation tag (0x0112)."""
+    tiff = (
+        b"MM\x00\x2a\x00\x00\x00\x08"  # big-endian TIFF header, first IFD at 8
+        + b"\x00\x01"  # one entry
+        + b"\x01\x12\x00\x03\x00\x00\x00\x01"  # Orientation, SHORT, 1 value
+        + orientation.to_bytes(2, "big")
+        + b"\x00\x00"
+        + b"\x00\x00\x00\x00"  # no next IFD
+    )
+    body = b"Exif\x00\x00" + tiff
+    return jpeg[:2] + b"\xff\xe1" + (len(body) + 2).to_bytes(2, "big") + body + jpeg[2:]
+
+
+def test_load_image_reads_pixels_as_stored(tmp_path: Path) -> None:
+    # docs/vision.md: the EXIF orientation is not applied (u, v, phi are the stored pixels').
+    img = np.zeros((40, 60), np.uint8)
+    img[5:15, 10:50] = 200
+    ok, jpeg = cv2.imencode(".jpg", img)
+    assert ok
+    path = tmp_path / "rotated.jpg"
+    path.write_bytes(_with_exif_orientation(jpeg.tobytes(), 6))  # "rotate 90 deg to view"
+    assert cv2.imread(str(path), cv2.IMREAD_GRAYSCALE).shape == (60, 40)  # a viewer turns it
+    stored = load_image(path)
+    assert stored.shape == (40, 60)
+    assert np.abs(stored.astype(int) - img).max() < 20
+
+
 def test_unreadable_files_raise(tmp_path: Path) -> None:
     with pytest.raises(VisionError, match="no such file"):
         load_image(tmp_path / "missing.png")

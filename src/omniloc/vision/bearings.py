@@ -172,7 +172,8 @@ def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
     -------
     ndarray
         ``(H, W)`` grey or ``(H, W, 3)`` RGB (``(H, W, 4)`` RGBA), as stored: usually
-        uint8, uint16 for 16-bit PNG/TIFF.
+        uint8, uint16 for 16-bit PNG/TIFF. The pixels as stored: a JPEG's EXIF orientation
+        is not applied (a viewer may show the image rotated).
 
     Raises
     ------
