@@ -177,6 +177,28 @@ def test_bearings_and_localize_from_an_image(tmp_path, capsys) -> None:
     assert abs(np.angle(np.exp(1j * (best["theta"] - DEMO_POSE[2])))) < np.deg2rad(0.5)
 
 
+def test_bearings_reports_ambiguous_edges(tmp_path, capsys) -> None:
+    import cv2
+
+    from omniloc.vision import extract_bearings, render_omni_image
+    from omniloc.vision.render import random_stripe_scene
+
+    scene, pose = random_stripe_scene(7)
+    image = render_omni_image(scene, pose, rng=7)
+    det = extract_bearings(image)
+    assert 0 < det.ambiguous.sum() < len(det)
+    img_path = tmp_path / "stripes.png"
+    cv2.imwrite(str(img_path), image)
+    assert main(["bearings", str(img_path), "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)["detections"]
+    assert [d["ambiguous"] for d in found] == det.ambiguous.tolist()
+    assert main(["bearings", str(img_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    rows = lines[1 : 1 + len(det)]
+    assert [r.endswith("  ambiguous") for r in rows] == det.ambiguous.tolist()
+    assert lines[-1].startswith(f"({int(det.ambiguous.sum())} ambiguous:")
+
+
 def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
     assert main(["demo", "--out", str(tmp_path), "--no-vision"]) == 0
     out = capsys.readouterr().out
@@ -266,3 +288,37 @@ def test_python_dash_m_runs_the_command_line() -> None:
         check=False,
     )
     assert bad.returncode == 1 and "no-such-map.csv" in bad.stderr
+
+
+@pytest.mark.parametrize("command", ["bearings", "localize"])
+def test_output_into_a_closed_pipe_ends_quietly(command: str, room_files, tmp_path) -> None:
+    # `omniloc ... | head -3`: the reader is gone before the output is written.
+    import os
+    import subprocess
+    import sys
+
+    import cv2
+
+    import omniloc
+    from omniloc.vision import DEMO_POSE, demo_scene, render_omni_image
+
+    m, b = room_files
+    if command == "bearings":
+        img_path = tmp_path / "omni.png"
+        cv2.imwrite(str(img_path), render_omni_image(demo_scene(), DEMO_POSE, rng=1))
+        argv = ["bearings", str(img_path), "--json"]
+    else:
+        argv = ["localize", "--map", str(m), "--bearings", str(b), "--degrees"]
+    env = {**os.environ, "PYTHONPATH": str(Path(omniloc.__file__).parents[1])}
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "omniloc", *argv],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env=env,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    proc.stderr.close()
+    assert proc.wait(timeout=120) == 1
+    assert err == ""

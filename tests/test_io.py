@@ -159,6 +159,9 @@ def test_load_bearings_radians(tmp_path: Path, name: str, text: str) -> None:
         ("b.csv", "angle\n1\n", False, "b.csv line 1: header must contain a column named bearing"),
         ("b.csv", "bearing,bearing_deg\n1,2\n", False, "b.csv line 1: several bearing columns"),
         ("b.csv", "bearing\n1\n2\nabc\n", False, "b.csv line 4: bearing is not a number: 'abc'"),
+        # Python's float() reads digit separators: "1_0" would be 10.
+        ("b.csv", "bearing\n1\n2\n1_0\n", False, "b.csv line 4: bearing is not a number: '1_0'"),
+        ("b.csv", "1_0\n2\n3\n", False, "b.csv line 1: bearing is not a number: '1_0'"),
         ("b.csv", "bearing\n1\n\nnan\n", False, "b.csv line 4: bearing is not finite: 'nan'"),
         ("b.csv", "1\n2\ninf\n", False, "b.csv line 3: bearing is not finite: 'inf'"),
         ("b.csv", "t,bearing\n0,1\n0\n", False, "b.csv line 3: expected 2 fields, got 1"),
@@ -198,6 +201,7 @@ def test_load_bearings_radians(tmp_path: Path, name: str, text: str) -> None:
         ("b.txt", "# only\n  \n", False, "b.txt: no bearings found"),
         ("b.txt", "1 2\n3\n4 abc 5\n", False, "b.txt line 3: bearing is not a number: 'abc'"),
         ("b.txt", "1; 2\n", False, "b.txt line 1: bearing is not a number: '1;'"),
+        ("b.txt", "1 2\n3 4_5\n", False, "b.txt line 2: bearing is not a number: '4_5'"),
         ("b.txt", "1\n\n-nan\n", False, "b.txt line 3: bearing is not finite: '-nan'"),
     ],
 )

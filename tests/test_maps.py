@@ -402,6 +402,7 @@ GOOD_ROWS = "1,0,0\n2,5,0\n3,5,4\n"
         ("id,x,y,x\n1,0,0,0\n", "map.csv line 1: column 'x' appears more than once"),
         ('id,x,"y\n1,0,0\n', "map.csv line 1: malformed CSV"),
         ("id,x,y\n1,0,0\n2,5,0\n3,abc,4\n", "map.csv line 4: x is not a number: 'abc'"),
+        ("id,x,y\n1,0,0\n2,5,0\n3,1_0,4\n", "map.csv line 4: x is not a number: '1_0'"),
         ("id,x,y\n1,0,0\n2,5,0\n3,5,nan\n", "map.csv line 4: y is not finite: 'nan'"),
         ("id,x,y\n1,0,0\n2,5,0\n3,5,-inf\n", "map.csv line 4: y is not finite: '-inf'"),
         ("id,x,y\n1,0,0\n2,5,0\n3,5,\n", "map.csv line 4: y is not a number: ''"),

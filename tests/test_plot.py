@@ -11,6 +11,7 @@ import pytest
 from omniloc import vision
 from omniloc.errors import InputError, VisionError
 from omniloc.plot import plot_detections, plot_localization, plot_solutions_grid, vision_demo
+from omniloc.pose import Pose, predict_bearings
 from omniloc.search import localize
 from omniloc.simulate import DEMO_POSE, DEMO_VISIBLE, demo_room, observe
 
@@ -47,12 +48,37 @@ def test_one_panel_per_solution_with_a_ray_per_bearing(tmp_path: Path) -> None:
         assert a is not None and tuple(np.round(lm.xy[a], 6)) in ends
 
 
+def _labels(ax: object) -> list[str]:
+    return [str(ln.get_label()) for ln in ax.get_lines()]  # type: ignore[attr-defined]
+
+
 def test_no_solution_gets_one_titled_panel() -> None:
     lm = demo_room()
     res = localize(lm, np.array([0.0, 0.01, 0.02, 3.0]), method="paper")
     assert not res
     fig = plot_localization(res, np.array([0.0, 0.01, 0.02, 3.0]))
     assert [ax.get_title() for ax in fig.get_axes()] == ["no solution"]
+    # No robot is drawn where there is no solution (it was one labelled "solution" at 0, 0).
+    assert "solution" not in _labels(fig.get_axes()[0])
+    fig = plot_localization(res, np.array([0.0, 0.01, 0.02, 3.0]), true_pose=DEMO_POSE)
+    labels = _labels(fig.get_axes()[0])
+    assert "solution" not in labels and labels.count("true pose") == 1
+    grid = plot_solutions_grid([("none", res, np.zeros(4), None)])
+    assert "solution" not in _labels(grid.get_axes()[0])
+
+
+def test_solutions_far_from_the_map_are_in_view() -> None:
+    lm = np.array([[0.0, 0.0], [4.0, 0.0], [4.0, 4.0], [0.0, 4.0], [2.0, 6.0]])
+    bearings = predict_bearings(lm, Pose(80.0, -30.0, 0.4))
+    res = localize(lm, bearings)
+    sols = res.solutions[:6]
+    assert max(abs(s.pose.x) + abs(s.pose.y) for s in sols) > 50  # far outside the map
+    truth = Pose(60.0, 50.0, 0.0)
+    fig = plot_localization(res, bearings, true_pose=truth)
+    for ax, sol in zip(fig.get_axes(), sols, strict=True):
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        for p in (sol.pose, truth, Pose(0.0, 0.0, 0.0), Pose(4.0, 6.0, 0.0)):
+            assert x0 < p.x < x1 and y0 < p.y < y1
 
 
 def test_plot_input_is_checked(tmp_path: Path) -> None:
@@ -102,3 +128,33 @@ def test_plot_detections_and_demo(tmp_path: Path) -> None:
     assert (tmp_path / "demo" / "vision.png").exists()
     assert "14 found within 0.5 deg" in text
     assert "median bearing error" in text
+
+
+def test_vision_demo_saves_the_rendered_colour_image(tmp_path: Path) -> None:
+    cam = vision.OmniCamera(color=True)
+    vision_demo(tmp_path, rng=3, camera=cam)
+    rendered = vision.render_omni_image(vision.demo_scene(), vision.DEMO_POSE, cam, rng=3)
+    assert rendered.ndim == 3
+    assert not np.array_equal(rendered[:, :, 0], rendered[:, :, 2])  # red differs from blue
+    np.testing.assert_array_equal(vision.load_image(tmp_path / "vision-input.png"), rendered)
+
+
+def test_plot_detections_shows_16_bit_and_float_colour_as_8_bit() -> None:
+    from matplotlib.figure import Figure
+
+    cam = vision.OmniCamera(color=True)
+    rgb = vision.render_omni_image(vision.demo_scene(), vision.DEMO_POSE, cam, rng=2)
+    det = vision.extract_bearings(rgb)
+
+    def shown(image: np.ndarray) -> np.ndarray:
+        ax = Figure().subplots()
+        plot_detections(image, det, ax)
+        return np.asarray(ax.get_images()[0].get_array())
+
+    ref = shown(rgb)
+    np.testing.assert_array_equal(ref, rgb)  # a uint8 image is drawn as it is
+    rgba = np.concatenate([rgb, np.zeros_like(rgb[:, :, :1])], axis=2)  # alpha 0
+    for image in (rgb.astype(np.uint16) * 257, rgb.astype(np.float32), rgb / 255.0, rgba):
+        np.testing.assert_array_equal(shown(image), ref)
+    grey = rgb[:, :, 1]
+    np.testing.assert_array_equal(shown(grey.astype(np.uint16) * 257), shown(grey))

@@ -147,6 +147,21 @@ def test_input_types_agree(demo_image: np.ndarray) -> None:
         np.testing.assert_allclose(det.bearings, ref.bearings, atol=np.deg2rad(0.02))
 
 
+@pytest.mark.parametrize(("seed", "color"), [(0, False), (1, False), (3, True)])
+def test_a_brightness_offset_changes_nothing(seed: int, color: bool) -> None:
+    # A zero-centred float image: only the sides' tolerance looked at absolute levels.
+    from omniloc.vision.render import random_scene, random_stripe_scene
+
+    scene, pose = (random_stripe_scene if seed % 2 else random_scene)(seed)
+    img = render_omni_image(scene, pose, OmniCamera(color=color), rng=seed).astype(np.float64)
+    ref = extract_bearings(img)
+    det = extract_bearings(img - 128.0)
+    assert len(ref) > 5
+    np.testing.assert_allclose(det.bearings, ref.bearings, atol=1e-9)
+    assert det.kind.tolist() == ref.kind.tolist()
+    assert det.ambiguous.tolist() == ref.ambiguous.tolist()
+
+
 def test_detections_container(demo_image: np.ndarray) -> None:
     det = extract_bearings(demo_image)
     assert len(det) == det.bearings.shape[0] == det.strength.shape[0] == det.kind.shape[0]
@@ -174,6 +189,34 @@ def test_load_image_and_bearings_from_path(tmp_path: Path, demo_image: np.ndarra
     np.testing.assert_allclose(from_array.bearings, np.sort(np.asarray(wrap(ref.bearings - 0.2))))
 
 
+def _with_exif_orientation(jpeg: bytes, orientation: int) -> bytes:
+    """The JPEG with an APP1 Exif segment holding only the orientation tag (0x0112)."""
+    tiff = (
+        b"MM\x00\x2a\x00\x00\x00\x08"  # big-endian TIFF header, first IFD at 8
+        + b"\x00\x01"  # one entry
+        + b"\x01\x12\x00\x03\x00\x00\x00\x01"  # Orientation, SHORT, 1 value
+        + orientation.to_bytes(2, "big")
+        + b"\x00\x00"
+        + b"\x00\x00\x00\x00"  # no next IFD
+    )
+    body = b"Exif\x00\x00" + tiff
+    return jpeg[:2] + b"\xff\xe1" + (len(body) + 2).to_bytes(2, "big") + body + jpeg[2:]
+
+
+def test_load_image_reads_pixels_as_stored(tmp_path: Path) -> None:
+    # docs/vision.md: the EXIF orientation is not applied (u, v, phi are the stored pixels').
+    img = np.zeros((40, 60), np.uint8)
+    img[5:15, 10:50] = 200
+    ok, jpeg = cv2.imencode(".jpg", img)
+    assert ok
+    path = tmp_path / "rotated.jpg"
+    path.write_bytes(_with_exif_orientation(jpeg.tobytes(), 6))  # "rotate 90 deg to view"
+    assert cv2.imread(str(path), cv2.IMREAD_GRAYSCALE).shape == (60, 40)  # a viewer turns it
+    stored = load_image(path)
+    assert stored.shape == (40, 60)
+    assert np.abs(stored.astype(int) - img).max() < 20
+
+
 def test_unreadable_files_raise(tmp_path: Path) -> None:
     with pytest.raises(VisionError, match="no such file"):
         load_image(tmp_path / "missing.png")
@@ -185,8 +228,10 @@ def test_unreadable_files_raise(tmp_path: Path) -> None:
     empty.write_bytes(b"")
     with pytest.raises(VisionError, match="cannot read image"):
         load_image(empty)
-    with pytest.raises(VisionError, match="no such file"):
-        load_image(tmp_path)  # a directory
+    with pytest.raises(VisionError, match="is a directory"):
+        load_image(tmp_path)
+    with pytest.raises(VisionError, match="is a directory"):
+        bearings_from_image(tmp_path)
 
 
 @pytest.mark.parametrize(
@@ -220,11 +265,15 @@ def test_bad_parameters_raise(
         (np.full((200, 200), np.nan), "NaN"),
         (np.zeros((3, 4, 5, 6)), "2-D"),
         (None, "numbers"),
+        ([[1, 2], [3]], "not rectangular"),
+        ([[[1, 2, 3]] * 20] * 19 + [[[1, 2]] * 20], "not rectangular"),
     ],
 )
 def test_bad_images_raise(image: object, message: str) -> None:
     with pytest.raises(VisionError, match=message):
         extract_bearings(image)
+    with pytest.raises(VisionError, match=message):
+        calibrate_mirror(image)
 
 
 def test_panorama_layout(demo_image: np.ndarray) -> None:

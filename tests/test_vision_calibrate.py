@@ -10,10 +10,13 @@ from omniloc.vision import (
     DEMO_POSE,
     MirrorCalibration,
     OmniCamera,
+    OmniScene,
     calibrate_mirror,
     demo_scene,
+    random_scene,
     render_omni_image,
 )
+from omniloc.vision.calibrate import _check_rim_sides, as_gray
 
 
 def render(cam: OmniCamera, seed: int = 0) -> np.ndarray:
@@ -69,6 +72,50 @@ def test_bright_outside_dark_mirror() -> None:
     cam = OmniCamera(center=(330.0, 236.0), aspect=1.02, radius=200.0, background_level=250.0)
     img = 255 - render(cam, seed=8)  # everything inverted: the outside is now bright
     assert_close(calibrate_mirror(img), cam)
+
+
+def dim_room(seed: int, wall_levels: tuple[float, ...]) -> tuple[np.ndarray, OmniCamera]:
+    """A dim room (walls 6-36 grey levels above the outside) with a bright camera reflection."""
+    scene, pose = random_scene(seed)
+    dim = OmniScene(poles=scene.poles, edges=scene.edges, wall_levels=wall_levels)
+    cam = OmniCamera(camera_level=220.0, background_level=8.0)
+    return render_omni_image(dim, pose, cam, rng=seed), cam
+
+
+# Rooms of /work/diag/s36/h3/repro_dim_rim.py and its sweep: the first five were fitted
+# silently wrong (the camera disc, aspect 2, radius 98; the hull of bright poles); 0 was
+# refused, 1 was calibrated correctly.
+DIM_ROOMS = [
+    (5, (14.0, 28.0, 32.0, 36.0, 38.0)),
+    (8, (19.0, 20.0, 23.0, 33.0, 43.0)),
+    (24, (22.0, 24.0, 27.0, 31.0, 43.0)),
+    (25, (18.0, 21.0, 21.0, 23.0, 41.0)),
+    (28, (18.0, 26.0, 31.0, 32.0, 39.0)),
+    (0, (14.0, 15.0, 22.0, 33.0, 38.0)),
+    (1, (30.0, 32.0, 36.0, 41.0, 42.0)),
+]
+
+
+@pytest.mark.parametrize(("seed", "wall_levels"), DIM_ROOMS)
+def test_dim_walls_count_as_mirror(seed: int, wall_levels: tuple[float, ...]) -> None:
+    # Calibrated correctly, not just refused (before, five of these were fitted silently
+    # wrong, and then refused): the mirror mask's threshold comes from the typical mirror
+    # pixel, not from the bright camera disc.
+    img, cam = dim_room(seed, wall_levels)
+    assert_close(calibrate_mirror(img), cam)
+
+
+def test_fit_with_mirror_outside_it_is_refused() -> None:
+    img, cam = dim_room(5, DIM_ROOMS[0][1])
+    gray = as_gray(img)
+    (cx, cy), r = cam.center, cam.radius
+    _check_rim_sides(gray, cx, cy, r, 1.0)  # the true rim passes
+    # The camera's reflection: a perfect ellipse, with the room's walls just outside it.
+    with pytest.raises(VisionError, match="outside the fitted ellipse"):
+        _check_rim_sides(gray, cx, cy, cam.inner_radius * r, 1.0)
+    # The wrong fit the report found (centre (350.2, 195.4), aspect 1.997, radius 98.6).
+    with pytest.raises(VisionError, match="image border's level"):
+        _check_rim_sides(gray, 350.2, 195.4, 98.6, 1.997)
 
 
 def test_calibration_helpers() -> None:

@@ -12,6 +12,7 @@ import functools
 import json
 import logging
 import math
+import os
 import re
 import sys
 import time
@@ -737,8 +738,15 @@ def _cmd_bearings(args: argparse.Namespace) -> int:
             "units": "degrees" if args.degrees else "radians",
             "calibration": {"center": cal.center, "aspect": cal.aspect, "radius": cal.radius},
             "detections": [
-                {"bearing": float(conv(b)), "strength": float(s), "kind": str(k)}
-                for b, s, k in zip(det.bearings, det.strength, det.kind, strict=True)
+                {
+                    "bearing": float(conv(b)),
+                    "strength": float(s),
+                    "kind": str(k),
+                    "ambiguous": bool(a),
+                }
+                for b, s, k, a in zip(
+                    det.bearings, det.strength, det.kind, det.ambiguous, strict=True
+                )
             ],
         }
         print(json.dumps(to_jsonable(out), indent=2))
@@ -748,8 +756,15 @@ def _cmd_bearings(args: argparse.Namespace) -> int:
         f"mirror rim: centre ({cal.center[0]:.2f}, {cal.center[1]:.2f}) px, "
         f"aspect {cal.aspect:.4f}, radius {cal.radius:.1f} px; {len(det)} detections"
     )
-    for b, s, k in zip(det.bearings, det.strength, det.kind, strict=True):
-        print(f"  {float(conv(b)):10.5f} {unit}  {k:4s}  strength {float(s):.1f}")
+    for b, s, k, a in zip(det.bearings, det.strength, det.kind, det.ambiguous, strict=True):
+        mark = "  ambiguous" if a else ""
+        print(f"  {float(conv(b)):10.5f} {unit}  {k:4s}  strength {float(s):.1f}{mark}")
+    n_amb = int(det.ambiguous.sum())
+    if n_amb:
+        print(
+            f"({n_amb} ambiguous: edges of a stripe that may be a pole; "
+            "allow them as spurious bearings)"
+        )
     return 0
 
 
@@ -1621,7 +1636,27 @@ def _join_negative_values(argv: Sequence[str]) -> list[str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
+    """Run the command line; returns the exit status.
+
+    Output piped into a reader that stops early (``omniloc ... | head``) ends the command
+    quietly with status 1, as Python's documentation recommends for a broken pipe.
+    """
+    try:
+        status = _run(argv)
+        sys.stdout.flush()  # a closed pipe shows here, not at the interpreter's exit
+    except BrokenPipeError:
+        # Nothing more can be written: point stdout at devnull so that the flush at exit
+        # does not raise again (not possible where stdout has no file, e.g. under capture).
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):
+            pass
+        return 1
+    return status
+
+
+def _run(argv: Sequence[str] | None) -> int:
     parser = _build_parser()
     try:
         args = parser.parse_args(_join_negative_values(sys.argv[1:] if argv is None else argv))

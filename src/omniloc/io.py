@@ -266,8 +266,14 @@ def parse_json(text: str, src: str, error: type[InputError]) -> Any:
 
 
 def parse_float(token: str, where: str, what: str, error: type[InputError]) -> float:
-    """Parse a finite float from text, else raise ``error`` quoting the offending token."""
+    """Parse a finite float from text, else raise ``error`` quoting the offending token.
+
+    Python's digit separators are refused: ``float("1_0")`` is 10, but in a data file
+    ``1_0`` is a typo, not ten.
+    """
     try:
+        if "_" in token:
+            raise ValueError(token)
         value = float(token)
     except ValueError:
         raise error(f"{where}: {what} is not a number: {token!r}") from None

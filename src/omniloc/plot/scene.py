@@ -47,11 +47,39 @@ def _draw_robot(ax: Axes, pose: Pose, *, color: str, size: float, label: str | N
     )
 
 
+def _draw_rays(
+    ax: Axes,
+    L: np.ndarray,
+    bearings: np.ndarray,
+    eye: Pose,
+    assignment: Sequence[int | None] | None,
+    *,
+    color: str,
+    length: float,
+) -> None:
+    """A ray from ``eye`` along each bearing: to its landmark if matched, else dotted."""
+    for k, beta in enumerate(bearings):
+        ang = eye.theta + beta
+        lm_i = None if assignment is None else assignment[k]
+        if lm_i is None:
+            end = (eye.x + length * np.cos(ang), eye.y + length * np.sin(ang))
+        else:
+            end = (L[lm_i, 0], L[lm_i, 1])
+        ax.plot(
+            [eye.x, end[0]],
+            [eye.y, end[1]],
+            ":" if lm_i is None else "-",
+            color=color,
+            lw=1.0,
+            alpha=0.8,
+        )
+
+
 def draw_scene(
     ax: Axes,
     landmarks: LandmarkMap,
     bearings: ArrayLike,
-    pose: Pose,
+    pose: Pose | None,
     assignment: Sequence[int | None] | None = None,
     *,
     color: str = "tab:blue",
@@ -60,37 +88,30 @@ def draw_scene(
     sensor_pose: Pose | None = None,
 ) -> None:
     """Draw the map, a pose, its rays along the measured bearings and the matched landmarks
-    (the rays from ``sensor_pose`` when the sensor sits elsewhere on the robot)."""
+    (the rays from ``sensor_pose`` when the sensor sits elsewhere on the robot).
+
+    With ``pose`` None (no solution) only the map and the true pose are drawn. The axes
+    take in the landmarks and every pose drawn, however far from the map.
+    """
     L = landmarks.xy
     b = np.asarray(bearings, dtype=float)
-    span = float(np.ptp(L, axis=0).max()) or 1.0
+    drawn = [q for q in (pose, sensor_pose, true_pose) if q is not None]
+    pts = np.vstack([L, *([q.x, q.y] for q in drawn)])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    span = float((hi - lo).max()) or 1.0
     ax.plot(L[:, 0], L[:, 1], "ks", ms=6, label="landmarks")
     for i, lid in enumerate(landmarks.ids):
         ax.annotate(str(lid), L[i], textcoords="offset points", xytext=(4, 4), fontsize=8)
-    ray = 1.5 * span
     eye = pose if sensor_pose is None else sensor_pose
-    for k, beta in enumerate(b):
-        ang = eye.theta + beta
-        matched = assignment is not None and assignment[k] is not None
-        end = (eye.x + ray * np.cos(ang), eye.y + ray * np.sin(ang))
-        if matched and assignment is not None:
-            lm_i = assignment[k]
-            assert lm_i is not None
-            end = (L[lm_i, 0], L[lm_i, 1])
-        ax.plot(
-            [eye.x, end[0]],
-            [eye.y, end[1]],
-            "-" if matched else ":",
-            color=color,
-            lw=1.0,
-            alpha=0.8,
-        )
+    if eye is not None:
+        _draw_rays(ax, L, b, eye, assignment, color=color, length=1.5 * span)
     if true_pose is not None:
         _draw_robot(ax, true_pose, color="tab:green", size=0.08 * span, label="true pose")
-    _draw_robot(ax, pose, color=color, size=0.08 * span, label="solution")
+    if pose is not None:
+        _draw_robot(ax, pose, color=color, size=0.08 * span, label="solution")
     pad = 0.1 * span
-    ax.set_xlim(L[:, 0].min() - pad, L[:, 0].max() + pad)
-    ax.set_ylim(L[:, 1].min() - pad, L[:, 1].max() + pad)
+    ax.set_xlim(lo[0] - pad, hi[0] + pad)
+    ax.set_ylim(lo[1] - pad, hi[1] + pad)
     ax.set_aspect("equal")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -153,13 +174,7 @@ def plot_localization(
     n = max(1, len(sols))
     fig, axes = _new_figure(ncols=n, size=4.5)
     if not sols:
-        draw_scene(
-            axes[0],
-            lm,
-            np.zeros(0),
-            true_pose or Pose(0.0, 0.0, 0.0),
-            title="no solution",
-        )
+        draw_scene(axes[0], lm, np.zeros(0), None, true_pose=true_pose, title="no solution")
     palette = ["tab:blue", "tab:orange", "tab:red", "tab:purple", "tab:brown", "tab:pink"]
     for k, (ax, sol) in enumerate(zip(axes, sols, strict=False)):
         p = sol.pose
@@ -200,7 +215,7 @@ def plot_solutions_grid(
         lm = as_landmark_map(res.landmarks)
         best = res.best
         if best is None:
-            draw_scene(ax, lm, np.zeros(0), truth or Pose(0, 0, 0), title=f"{ttl}: none")
+            draw_scene(ax, lm, np.zeros(0), None, true_pose=truth, title=f"{ttl}: none")
             continue
         draw_scene(
             ax,

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from ..angles import wrap
 from ..errors import VisionError
-from ..vision.bearings import EdgeDetections, extract_bearings, unwrap_panorama
+from ..vision.bearings import EdgeDetections, _to_8bit, extract_bearings, unwrap_panorama
 from ..vision.calibrate import MirrorCalibration
 from ..vision.render import (
     DEMO_CAMERA,
@@ -59,6 +59,21 @@ def _draw_rim(ax: Axes, cal: MirrorCalibration, **kw: Any) -> None:
     ax.add_patch(Ellipse(cal.center, 2 * a_u, 2 * a_v, fill=False, **kw))
 
 
+def _display_image(image: NDArray[Any]) -> NDArray[np.uint8]:
+    """The image as the detector reads it, in 8-bit units: grey ``(H, W)`` or RGB ``(H, W, 3)``.
+
+    uint16 is divided by 257 and a float image in [0, 1] multiplied by 255, as for the
+    detections (:func:`~omniloc.vision.bearings.extract_bearings`), and like the panorama
+    below it; an image with negative values is shifted to start at 0. Alpha is dropped.
+    """
+    gray, rgb, scale = _to_8bit(image)
+    shown = gray if rgb is None else rgb.astype(np.float32) * np.float32(scale)
+    low = float(shown.min())
+    if low < 0:
+        shown = shown - np.float32(low)
+    return np.clip(np.rint(shown), 0, 255).astype(np.uint8)
+
+
 def plot_detections(
     image: NDArray[np.generic],
     detections: EdgeDetections,
@@ -72,7 +87,8 @@ def plot_detections(
     Parameters
     ----------
     image : ndarray
-        ``(H, W)`` grey or ``(H, W, 3)`` RGB image the detections come from.
+        ``(H, W)`` grey or ``(H, W, 3)`` RGB image the detections come from; drawn in 8-bit
+        units as the detector reads it (uint16 / 257, a float image in [0, 1] times 255).
     detections : EdgeDetections
         From :func:`~omniloc.vision.bearings.extract_bearings`.
     path_or_ax : str, path-like or matplotlib Axes
@@ -108,11 +124,7 @@ def plot_detections(
         fig = ax_img.figure  # type: ignore[assignment]
         ax_pan = ax_img.inset_axes((0.0, -0.42, 1.0, 0.3))
 
-    if img.ndim == 2:
-        vmax = 255 if img.dtype == np.uint8 else None
-        ax_img.imshow(img, cmap="gray", vmin=0 if vmax else None, vmax=vmax)
-    else:
-        ax_img.imshow(img[:, :, :3])
+    ax_img.imshow(_display_image(img), cmap="gray", vmin=0, vmax=255)
     _draw_rim(ax_img, cal, edgecolor="tab:green", linestyle="--", linewidth=0.8)
     ax_img.plot(*cal.center, "+", color="tab:green", markersize=8)
     fu, fv = cal.pixel(detections.forward, 1.05)
@@ -288,7 +300,12 @@ def vision_demo(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     image = render_omni_image(scn, p, cam, rng=rng)
-    cv2.imwrite(str(out / "vision-input.png"), image)
+    # OpenCV writes BGR(A): a colour camera's RGB must be swapped, or load_image reads the
+    # file back with red and blue exchanged.
+    cv2.imwrite(
+        str(out / "vision-input.png"),
+        cv2.cvtColor(image, cv2.COLOR_RGB2BGR) if image.ndim == 3 else image,
+    )
     det = extract_bearings(image, forward=cam.forward, mirrored=cam.mirrored)
     truth = true_features(scn, p, cam)
     plot_detections(image, det, out / "vision.png", title="omniloc vision demo")

@@ -50,6 +50,7 @@ from omniloc.vision.calibrate import (
     _count,
     _finite_float,
     as_gray,
+    as_image_array,
     calibrate_mirror,
     check_center,
 )
@@ -171,7 +172,8 @@ def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
     -------
     ndarray
         ``(H, W)`` grey or ``(H, W, 3)`` RGB (``(H, W, 4)`` RGBA), as stored: usually
-        uint8, uint16 for 16-bit PNG/TIFF.
+        uint8, uint16 for 16-bit PNG/TIFF. The pixels as stored: a JPEG's EXIF orientation
+        is not applied (a viewer may show the image rotated).
 
     Raises
     ------
@@ -179,6 +181,8 @@ def load_image(path: str | os.PathLike[str]) -> NDArray[Any]:
         If the file does not exist or cannot be decoded as an image.
     """
     p = as_path(path, "image path", VisionError)
+    if p.is_dir():
+        raise VisionError(f"cannot read image {str(p)!r}: it is a directory")
     if not p.is_file():
         raise VisionError(f"cannot read image {str(p)!r}: no such file")
     try:
@@ -208,7 +212,7 @@ def _to_8bit(image: object) -> tuple[NDArray[np.float32], NDArray[Any] | None, f
     The scale takes the image to 8-bit units: uint16 is divided by 257, a float image is
     multiplied by 255 when its grey maximum is <= 1. The grey image is already scaled.
     """
-    arr = image if isinstance(image, np.ndarray) else np.asarray(image)
+    arr = as_image_array(image)
     gray = as_gray(arr)
     scale = 1.0
     if arr.dtype == np.uint16:
@@ -488,7 +492,8 @@ def _sides_differ(
     (which vary along the radius) cancel in the row's difference; the difference is the
     median over the rows (NaN samples, off the image, are left out). It must exceed
     ``floor + 3 se + 0.06 * level`` (``se`` its standard error from the rows' spread,
-    ``level`` the mean of the two sides) in at least one channel.
+    ``level`` the mean of the two sides, from the channel's black: 0, or the image's minimum
+    if that is negative) in at least one channel.
     """
     n = channels.shape[2]
     offsets = np.arange(_SIDE_WINDOW)
@@ -703,8 +708,13 @@ def extract_bearings(
     maps = _panorama_maps(cal, r0, r1, rows, cols)
     pano = _remap(gray, maps)
     channels = [pano]  # grey, then R, G, B for a colour image: compared beside stripes
+    blacks = [float(gray.min())]
     if rgb is not None:
         channels += _remap_colour(rgb, maps, scale, np.isnan(pano))
+        blacks += [float(v) * scale for v in rgb.min(axis=(0, 1))]
+    # The sides' tolerance grows with their level above black (_sides_differ): an image with
+    # negative values (a zero-centred float image) is measured from its minimum, not from 0.
+    channels = [c - np.float32(b) if b < 0 else c for c, b in zip(channels, blacks, strict=True)]
     valid_rows = np.isfinite(pano).all(axis=1)
     if not valid_rows.any():
         # Rim partly outside the image: keep rows, ignoring the missing samples.

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
@@ -27,7 +28,7 @@ from numpy.typing import NDArray
 from omniloc.errors import VisionError
 from omniloc.io import finite_number, shorten
 
-__all__ = ["MirrorCalibration", "as_gray", "calibrate_mirror", "check_center"]
+__all__ = ["MirrorCalibration", "as_gray", "as_image_array", "calibrate_mirror", "check_center"]
 
 _MAX_ASPECT = 10.0
 _MIN_ASPECT = 1e-3
@@ -154,6 +155,35 @@ class MirrorCalibration:
         )
 
 
+def as_image_array(image: object) -> NDArray[Any]:
+    """``image`` as a numpy array, or a VisionError (a ragged nested list cannot be one).
+
+    Parameters
+    ----------
+    image : array_like
+        The image.
+
+    Returns
+    -------
+    ndarray
+        ``image`` itself if it is an ndarray.
+
+    Raises
+    ------
+    VisionError
+        If numpy cannot make a rectangular array of it.
+    """
+    if isinstance(image, np.ndarray):
+        return image
+    try:
+        return np.asarray(image)
+    except (TypeError, ValueError):
+        raise VisionError(
+            f"image must be an array (H, W) or (H, W, C), got a {type(image).__name__} that is "
+            "not rectangular (rows of different lengths?)"
+        ) from None
+
+
 def as_gray(image: object) -> NDArray[np.float32]:
     """Validate an image and convert it to a float32 grey image.
 
@@ -173,12 +203,7 @@ def as_gray(image: object) -> NDArray[np.float32]:
     VisionError
         For a wrong shape or dtype, a too small image, or non-finite values.
     """
-    if not isinstance(image, np.ndarray):
-        try:
-            image = np.asarray(image)
-        except (TypeError, ValueError):
-            raise VisionError(f"image must be an array, got {type(image).__name__}") from None
-    arr: NDArray[np.generic] = image
+    arr = as_image_array(image)
     if arr.dtype == bool:
         arr = arr.astype(np.uint8)
     if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
@@ -239,8 +264,13 @@ def _rough_ellipse(gray: NDArray[np.float32]) -> tuple[float, float, float, floa
             "no mirror rim found: nothing in the image stands out from the border "
             f"(contrast {contrast:.3g}, border noise {noise:.3g})"
         )
-    # Anything clearly unlike the border is mirror: a dark wall sector must count too.
-    inside = np.abs(small - bg) > max(5.0 * noise, 0.12 * contrast)
+    # Anything clearly unlike the border is mirror: a dark wall sector must count too. The
+    # relative part of the threshold is taken from the typical mirror pixel, not from the
+    # extreme one: a bright camera reflection must not push a dim room's walls below it.
+    dev = np.abs(small - bg)
+    clear = dev > 5.0 * noise
+    typical = float(np.median(dev[clear])) if np.any(clear) else contrast
+    inside = dev > max(5.0 * noise, 0.12 * min(typical, contrast))
     inside_u8 = inside.astype(np.uint8)
     n, labels, stats, _ = cv2.connectedComponentsWithStats(inside_u8, connectivity=8)
     if n < 2:
@@ -324,6 +354,80 @@ def _rim_points(
     u = cx + aspect * np.cos(t) * r_hit
     v = cy - np.sin(t) * r_hit
     return np.column_stack([u, v])[ok]
+
+
+#: Sectors of the rim checked on both sides, and the share of the visible ones outside the
+#: fitted rim that must look like the image border.
+_SIDE_SECTORS = 32
+_MIN_OUTSIDE_LIKE_BORDER = 0.9
+
+
+def _check_rim_sides(gray: NDArray[np.float32], cx: float, cy: float, r: float, a: float) -> None:
+    """Refuse a fitted rim whose outside does not look like the image border.
+
+    The outside of the true rim owns the image border, so just outside it the image is at
+    the border's level, and just inside it mostly is not. A fit that locked onto something
+    inside the mirror (the camera's reflection, the hull of a few bright poles) has mirror
+    (walls) just outside it. The band from ``d1`` to ``d2`` px on each side is sampled in
+    `_SIDE_SECTORS` sectors; a sector's level is the median of its samples, and it looks
+    like the border when within ``3 * noise + 0.03 * contrast`` of the border's level
+    (``noise`` the border's MAD scale, ``contrast`` the inside band's median distance from
+    the border level). Sectors mostly off the image are skipped.
+
+    Raises
+    ------
+    VisionError
+        If fewer than `_MIN_OUTSIDE_LIKE_BORDER` of the visible sectors outside the rim
+        look like the border, or if none inside the rim is unlike it.
+    """
+    g = np.asarray(cv2.GaussianBlur(gray, (0, 0), 1.0), dtype=np.float32)
+    border = np.concatenate([g[0], g[-1], g[:, 0], g[:, -1]])
+    bg = float(np.median(border))
+    noise = 1.4826 * float(np.median(np.abs(border - bg)))
+    d1 = max(3.0, 0.04 * r)
+    d2 = d1 + max(4.0, 0.06 * r)
+    per_sector = 8
+    t = np.linspace(0.0, 2 * np.pi, _SIDE_SECTORS * per_sector, endpoint=False)
+
+    def sector_levels(lo: float, hi: float) -> NDArray[np.float64]:
+        rr = np.linspace(max(lo, 0.0), hi, 6)
+        map_x = (cx + a * np.cos(t)[:, None] * rr[None, :]).astype(np.float32)
+        map_y = (cy - np.sin(t)[:, None] * rr[None, :]).astype(np.float32)
+        prof = cv2.remap(
+            g,
+            map_x,
+            map_y,
+            cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_CONSTANT,
+            borderValue=float("nan"),
+        ).reshape(_SIDE_SECTORS, -1)
+        levels = [
+            float(np.median(row[np.isfinite(row)]))
+            for row in prof
+            if np.isfinite(row).mean() >= 0.5
+        ]
+        return np.asarray(levels, dtype=np.float64)
+
+    outside = sector_levels(r + d1, r + d2)
+    inside = sector_levels(r - d2, r - d1)
+    if len(outside) < 4 or len(inside) < 4:
+        return  # too little of the rim's surroundings on the image to tell
+    contrast = float(np.median(np.abs(inside - bg)))
+    tol = 3.0 * noise + 0.05 * contrast
+    like_outside = float(np.mean(np.abs(outside - bg) <= tol))
+    unlike_inside = float(np.mean(np.abs(inside - bg) > tol))
+    fitted = f"the fitted ellipse (centre ({cx:.1f}, {cy:.1f}), aspect {a:.3g}, radius {r:.3g} px)"
+    if like_outside < _MIN_OUTSIDE_LIKE_BORDER:
+        raise VisionError(
+            f"no clear mirror rim: only {like_outside:.0%} of the band just outside {fitted} "
+            f"is at the image border's level (need {_MIN_OUTSIDE_LIKE_BORDER:.0%}); it is "
+            "probably something inside the mirror (the camera's reflection, bright poles). "
+            "Pass the calibration if it is known"
+        )
+    if unlike_inside == 0.0:
+        raise VisionError(
+            f"no clear mirror rim: the band just inside {fitted} is all at the image border's level"
+        )
 
 
 def _fit_ellipse(
@@ -487,4 +591,5 @@ def calibrate_mirror(
         raise VisionError(f"no mirror rim found: fitted aspect {a:.3g} is implausible")
     if not 4 <= r <= 10 * max(h, w):
         raise VisionError(f"no mirror rim found: fitted radius {r:.3g} px is implausible")
+    _check_rim_sides(gray, cx, cy, r, a)
     return MirrorCalibration((cx, cy), a, r)
