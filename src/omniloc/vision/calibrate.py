@@ -370,7 +370,7 @@ def _check_rim_sides(gray: NDArray[np.float32], cx: float, cy: float, r: float, 
     inside the mirror (the camera's reflection, the hull of a few bright poles) has mirror
     (walls) just outside it. The band from ``d1`` to ``d2`` px on each side is sampled in
     `_SIDE_SECTORS` sectors; a sector's level is the median of its samples, and it looks
-    like the border when within ``3 * noise + 0.03 * contrast`` of the border's level
+    like the border when within ``3 * noise + 0.05 * contrast`` of the border's level
     (``noise`` the border's MAD scale, ``contrast`` the inside band's median distance from
     the border level). Sectors mostly off the image are skipped.
 
