@@ -199,6 +199,35 @@ def test_bearings_reports_ambiguous_edges(tmp_path, capsys) -> None:
     assert lines[-1].startswith(f"({int(det.ambiguous.sum())} ambiguous:")
 
 
+def test_bearings_json_feeds_localize_as_the_image_does(tmp_path, capsys) -> None:
+    # The two steps (bearings --json, then localize --bearings on that file) give the answer
+    # of localize --image: the same bearings, and the ambiguous edges allowed as spurious.
+    import cv2
+
+    from omniloc.maps import LandmarkMap
+    from omniloc.vision import render_omni_image
+    from omniloc.vision.render import random_stripe_scene
+
+    scene, pose = random_stripe_scene(7)
+    img_path = tmp_path / "stripes.png"
+    cv2.imwrite(str(img_path), render_omni_image(scene, pose, rng=7))
+    map_path = tmp_path / "scene.csv"
+    LandmarkMap(scene.landmarks_xy).to_csv(map_path)
+    for units in ([], ["--degrees"]):
+        assert main(["bearings", str(img_path), "--json", *units]) == 0
+        det_path = tmp_path / "det.json"
+        det_path.write_text(capsys.readouterr().out)
+        answers = []
+        for source in (["--image", str(img_path)], ["--bearings", str(det_path)]):
+            argv = ["localize", "--map", str(map_path), *source, "--sigma", "0.1", "--json"]
+            assert main(argv) == 0
+            out = json.loads(capsys.readouterr().out)
+            answers.append((out["bearings"], out["solutions"][0], out["ambiguous"]))
+        np.testing.assert_allclose(answers[1][0], answers[0][0], atol=1e-12)
+        assert answers[1][1]["assignment"] == answers[0][1]["assignment"]
+        assert answers[1][2] == answers[0][2]
+
+
 def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
     assert main(["demo", "--out", str(tmp_path), "--no-vision"]) == 0
     out = capsys.readouterr().out

@@ -18,6 +18,7 @@ from omniloc.io import (
     content_lines,
     first_content_line,
     load_bearings,
+    read_bearings,
     read_text,
     save_bearings,
     to_jsonable,
@@ -358,6 +359,45 @@ class Colour(enum.Enum):
 class Point:
     x: float
     y: np.float64
+
+
+def test_the_detections_of_omniloc_bearings_json_are_bearings(tmp_path: Path) -> None:
+    det = {
+        "units": "degrees",
+        "calibration": {"center": [320.0, 240.0], "aspect": 1.0, "radius": 200.0},
+        "detections": [
+            {"bearing": -170.0, "strength": 30.0, "kind": "edge", "ambiguous": False},
+            {"bearing": 10.0, "strength": 40.0, "kind": "edge", "ambiguous": True},
+            {"bearing": 95.0, "strength": 50.0, "kind": "pole", "ambiguous": False},
+        ],
+    }
+    p = tmp_path / "det.json"
+    p.write_text(json.dumps(det))
+    b, amb = read_bearings(p)
+    np.testing.assert_allclose(np.rad2deg(b), [-170.0, 10.0, 95.0])
+    assert amb.tolist() == [False, True, False]
+    np.testing.assert_array_equal(load_bearings(p), b)
+    # Radians said in words; any other file flags nothing.
+    det["units"] = "radians"
+    det["detections"] = [{"bearing": x} for x in (0.1, -0.2, 3.0)]
+    p.write_text(json.dumps(det))
+    b, amb = read_bearings(p)
+    np.testing.assert_allclose(b, [0.1, -0.2, 3.0])
+    assert not amb.any()
+    with pytest.raises(ObservationError, match="declares radians"):
+        read_bearings(p, degrees=True)
+    q = tmp_path / "b.txt"
+    q.write_text("0.1 0.2 0.3\n")
+    assert read_bearings(q)[1].tolist() == [False, False, False]
+    for bad, message in (
+        ({"detections": [{"strength": 3}]}, r"detections\[0\] must be an object with a 'bearing'"),
+        ({"detections": [{"bearing": 0.1, "ambiguous": "yes"}]}, r"ambiguous must be true"),
+        ({"detections": {"bearing": 0.1}}, "'detections' must be a list"),
+        ({"units": "grads", "bearings": [1.0]}, "units must be 'deg' or 'rad'"),
+    ):
+        p.write_text(json.dumps(bad))
+        with pytest.raises(ObservationError, match=message):
+            read_bearings(p)
 
 
 def test_to_jsonable_and_write_json(tmp_path: Path) -> None:

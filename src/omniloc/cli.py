@@ -575,7 +575,7 @@ def _fmt_angle(rad: float, degrees: bool) -> str:
 
 
 def _cmd_localize(args: argparse.Namespace) -> int:
-    from .io import load_bearings, to_jsonable
+    from .io import read_bearings, to_jsonable
     from .maps import LandmarkMap
     from .search import localize
 
@@ -599,8 +599,9 @@ def _cmd_localize(args: argparse.Namespace) -> int:
         # was a pole, both are wrong, so each flagged edge may be spurious.
         flagged = int(np.count_nonzero(det.ambiguous))
     else:
-        bearings = load_bearings(args.bearings, degrees=args.degrees)
-        flagged = 0
+        # (A file of omniloc bearings --json flags its ambiguous edges, as --image does.)
+        bearings, ambiguous = read_bearings(args.bearings, degrees=args.degrees)
+        flagged = int(np.count_nonzero(ambiguous))
     ms = args.max_spurious
     max_spurious: int | float = int(ms) if float(ms).is_integer() else float(ms)
     if flagged:

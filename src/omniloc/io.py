@@ -11,7 +11,9 @@ File formats understood by :func:`load_bearings` (chosen by extension):
     (other columns are allowed and ignored), or a single column of numbers without header.
     ``bearing_deg`` means degrees, ``bearing_rad`` radians, ``bearing`` follows ``degrees``.
 ``.json``
-    A list of numbers, or ``{"bearings": [...], "units": "deg" | "rad"}``.
+    A list of numbers, ``{"bearings": [...], "units": "deg" | "rad"}``, or what ``omniloc
+    bearings --json`` writes (``{"units": "radians" | "degrees", "detections": [{"bearing":
+    ..., "ambiguous": ...}, ...]}``; :func:`read_bearings` returns the flags too).
 anything else
     Plain text: numbers separated by whitespace, commas or newlines; ``#`` starts a comment.
 
@@ -53,6 +55,7 @@ __all__ = [
     "make_folder",
     "parse_float",
     "parse_json",
+    "read_bearings",
     "read_map_csv",
     "read_map_file",
     "read_map_json",
@@ -512,27 +515,61 @@ def _looks_numeric(token: str) -> bool:
     return True
 
 
-def _bearings_from_json(text: str, src: str, degrees: bool) -> tuple[list[float], bool]:
+#: Units a JSON bearings file may declare, as ``"deg"`` or ``"rad"`` (``omniloc bearings
+#: --json`` writes the words).
+_JSON_UNITS = {"deg": "deg", "degrees": "deg", "rad": "rad", "radians": "rad"}
+
+
+def _bearings_from_json(
+    text: str, src: str, degrees: bool
+) -> tuple[list[float], bool, list[bool] | None]:
+    """The bearings of a JSON file, whether they are degrees, and for the detections that
+    ``omniloc bearings --json`` writes, their ``ambiguous`` flags (else None)."""
     data = parse_json(text, src, ObservationError)
     in_degrees = degrees
+    flags: list[bool] | None = None
     if isinstance(data, dict):
-        if "bearings" not in data:
+        if "bearings" not in data and "detections" not in data:
             keys = ", ".join(repr(k) for k in data) or "none"
             raise ObservationError(
-                f"{src}: expected a list of numbers or an object with a 'bearings' list; "
-                f"got an object with keys {keys}"
+                f"{src}: expected a list of numbers, an object with a 'bearings' list or the "
+                f"'detections' of omniloc bearings --json; got an object with keys {keys}"
             )
         units = data.get("units")
         if units is not None:
-            if units not in ("deg", "rad"):
-                raise ObservationError(f"{src}: units must be 'deg' or 'rad', got {units!r}")
-            _units_conflict(src, units, degrees)
-            in_degrees = units == "deg"
-        items = data["bearings"]
-        if not isinstance(items, list):
-            raise ObservationError(
-                f"{src}: 'bearings' must be a list of numbers, got {type_name(items)}"
-            )
+            if units not in _JSON_UNITS:
+                raise ObservationError(
+                    f"{src}: units must be 'deg' or 'rad', got {units!r} ('degrees' and "
+                    "'radians' are read too)"
+                )
+            _units_conflict(src, _JSON_UNITS[units], degrees)
+            in_degrees = _JSON_UNITS[units] == "deg"
+        if "bearings" in data:
+            items = data["bearings"]
+            if not isinstance(items, list):
+                raise ObservationError(
+                    f"{src}: 'bearings' must be a list of numbers, got {type_name(items)}"
+                )
+        else:
+            dets = data["detections"]
+            if not isinstance(dets, list):
+                raise ObservationError(
+                    f"{src}: 'detections' must be a list of objects, got {type_name(dets)}"
+                )
+            items, flags = [], []
+            for k, d in enumerate(dets):
+                if not isinstance(d, dict) or "bearing" not in d:
+                    raise ObservationError(
+                        f"{src}: detections[{k}] must be an object with a 'bearing', got "
+                        f"{type_name(d)}"
+                    )
+                amb = d.get("ambiguous", False)
+                if not isinstance(amb, bool):
+                    raise ObservationError(
+                        f"{src}: detections[{k}].ambiguous must be true or false, got {amb!r}"
+                    )
+                items.append(d["bearing"])
+                flags.append(amb)
     elif isinstance(data, list):
         items = data
     else:
@@ -541,7 +578,7 @@ def _bearings_from_json(text: str, src: str, degrees: bool) -> tuple[list[float]
             f"got {type_name(data)}"
         )
     values = [json_float(v, src, f"bearings[{k}]", ObservationError) for k, v in enumerate(items)]
-    return values, in_degrees
+    return values, in_degrees, flags
 
 
 def _bearings_from_text(text: str, src: str) -> list[float]:
@@ -591,14 +628,40 @@ def load_bearings(path: PathLike, *, degrees: bool = False) -> NDArray[np.float6
     >>> np.rad2deg(load_bearings(d / "b.txt", degrees=True))
     array([  0.,  90., -90.])
     """
+    return read_bearings(path, degrees=degrees)[0]
+
+
+def read_bearings(
+    path: PathLike, *, degrees: bool = False
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """:func:`load_bearings`, and which bearings are flagged ``ambiguous``.
+
+    A JSON file may also be what ``omniloc bearings --json`` writes (``{"units": "radians" |
+    "degrees", "detections": [{"bearing": ..., "ambiguous": ...}, ...]}``): its flags mark
+    the edges of a stripe that could be a pole or a narrow wall segment, which a search may
+    take as spurious (``omniloc localize --bearings`` adds them to ``--max-spurious``, as
+    ``--image`` does). Every other file flags none.
+
+    Returns
+    -------
+    bearings : ndarray of float64, shape (m,)
+        As :func:`load_bearings`.
+    ambiguous : ndarray of bool, shape (m,)
+
+    Raises
+    ------
+    ObservationError
+        As :func:`load_bearings`.
+    """
     src = os.fspath(as_path(path, "path", ObservationError))
     text = read_text(src, ObservationError)
     suffix = Path(src).suffix.lower()
     in_degrees = degrees
+    flags: list[bool] | None = None
     if suffix == ".csv":
         values, in_degrees = _bearings_from_csv(text, src, degrees)
     elif suffix == ".json":
-        values, in_degrees = _bearings_from_json(text, src, degrees)
+        values, in_degrees, flags = _bearings_from_json(text, src, degrees)
     else:
         values = _bearings_from_text(text, src)
     if not values:
@@ -608,7 +671,8 @@ def load_bearings(path: PathLike, *, degrees: bool = False) -> NDArray[np.float6
         arr = np.deg2rad(arr)
     else:
         check_radians(arr, lambda k: f"{src}: bearings[{k}]")
-    return _wrap_keep_in_range(arr)
+    amb = np.zeros(arr.size, dtype=bool) if flags is None else np.array(flags, dtype=bool)
+    return _wrap_keep_in_range(arr), amb
 
 
 #: Largest magnitude (rad) a bearing read from a file as radians may have: a full turn.
