@@ -106,6 +106,18 @@ def test_a_pole_on_the_forward_axis_is_at_bearing_zero(mirrored: bool, forward_d
         assert abs(float(angdiff(poles[0], expected))) < np.deg2rad(0.2)
 
 
+def test_a_calibration_whose_annulus_is_off_the_image_is_refused(demo_image: np.ndarray) -> None:
+    # Another camera's calibration (or a smaller image): a rim of 2,000 px, whose annulus
+    # has no pixel on this image, gave no detections and no error.
+    far = MirrorCalibration((320.0, 240.0), 1.0, 2000.0)
+    with pytest.raises(VisionError, match="wholly outside the 640 x 480 image"):
+        extract_bearings(demo_image, calibration=far)
+    # Partly off the image is read as far as it goes.
+    cal = calibrate_mirror(demo_image)
+    half = MirrorCalibration((cal.center[0] + 300.0, cal.center[1]), cal.aspect, cal.radius)
+    extract_bearings(demo_image, calibration=half)
+
+
 def test_pole_reported_once_at_its_centre() -> None:
     pose = (0.2, -0.1, 0.3)
     for bearing_deg, radius, intensity in ((25.0, 0.09, 20.0), (-140.0, 0.05, 245.0)):

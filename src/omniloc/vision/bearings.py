@@ -707,6 +707,14 @@ def extract_bearings(
     rows, cols = _panorama_size(cal, (r0, r1))
     maps = _panorama_maps(cal, r0, r1, rows, cols)
     pano = _remap(gray, maps)
+    if not np.isfinite(pano).any():
+        h, w = gray.shape
+        raise VisionError(
+            f"the mirror annulus ({r0:g}-{r1:g} of the rim: centre ({cal.center[0]:.1f}, "
+            f"{cal.center[1]:.1f}) px, radius {cal.radius:.3g} px, aspect {cal.aspect:.3g}) lies "
+            f"wholly outside the {w} x {h} image: no pixel to read bearings from (a "
+            "calibration of another camera or image size?)"
+        )
     channels = [pano]  # grey, then R, G, B for a colour image: compared beside stripes
     blacks = [float(gray.min())]
     if rgb is not None:
