@@ -349,6 +349,26 @@ def test_a_spurious_bearing_in_a_landmarks_gate_is_also_tried_as_spurious() -> N
     assert fast.best.assignment[3] == 5 and not fast.ambiguous
 
 
+@pytest.mark.parametrize("seed", range(12))
+def test_the_order_of_the_bearings_does_not_change_the_answer(seed: int) -> None:
+    # The same bearings in any order: the same solutions, their assignments in the order
+    # given. (The gates follow the pose built up along each path: taken in the order given,
+    # one order could let a true bearing at the edge of its gate through and another not.)
+    rng = np.random.default_rng(seed)
+    L = rng.uniform(0.0, 20.0, size=(int(rng.integers(8, 16)), 2))
+    truth = Pose(*rng.uniform(4.0, 16.0, 2), float(rng.uniform(-np.pi, np.pi)))
+    seen = rng.choice(len(L), size=int(rng.integers(4, 8)), replace=False)
+    z = predict_bearings(L[seen], truth) + rng.normal(0.0, math.radians(0.5), seen.size)
+    z = np.append(z, rng.uniform(-np.pi, np.pi, 1))
+    kw = {"sigma": math.radians(0.5), "max_spurious": 1}
+    first = localize(L, z, **kw)
+    perm = rng.permutation(z.size)
+    other = localize(L, z[perm], **kw)
+    assert len(other) == len(first) and other.ambiguous == first.ambiguous
+    np.testing.assert_array_equal(other.poses, first.poses)
+    np.testing.assert_array_equal(other.assignments, first.assignments[:, perm])
+
+
 def test_symmetric_map_is_ambiguous_with_equal_confidence() -> None:
     lm = symmetric_map("square", size=6.0)
     truth = Pose(1.5, 2.0, 0.7)

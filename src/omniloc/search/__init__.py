@@ -398,6 +398,17 @@ def localize(
         log.warning("localize: %s", default_budget)
         opt = dataclasses.replace(opt, budget=Budget(timeout_s=DEFAULT_TIMEOUT_S))
     engine = choose_engine(strategy, meth, opt, exhaustive, lm.n)
+    # The robust search looks at the bearings in ascending order, whatever order they come
+    # in: its gates follow the pose built up along each path, and a true bearing at the edge
+    # of its gate could pass in one order and not in another -- the same bearings would give
+    # other answers. (The paper's method takes them as given, as the paper does.) The
+    # assignments are returned in the caller's order.
+    given_order: NDArray[np.intp] | None = None
+    if meth is Method.ROBUST:
+        perm = np.argsort(b, kind="stable")
+        if (perm != np.arange(m)).any():
+            given_order = np.argsort(perm, kind="stable")
+            b = b[perm]
     # The robust tree starts with the best-spread triple; the paper's takes the given order.
     robust_tree = engine in ("paper", "tree") and meth is Method.ROBUST
     order = robust_order(b) if robust_tree else np.arange(m)
@@ -455,6 +466,8 @@ def localize(
         default_budget=default_budget,
     )
     solutions = scored.solutions
+    if given_order is not None:
+        solutions = solutions.with_columns(given_order)
     if opt.sensor.mount is not None and len(solutions):
         # The search finds the sensor's pose (the bearings are measured from it); the caller
         # asked for the robot's.

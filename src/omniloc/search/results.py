@@ -226,6 +226,14 @@ class Solutions(Sequence[Solution]):
         a = self._arrays
         return Solutions(poses, a[1], a[2], a[3], covariances, a[5], a[6], a[7])
 
+    def with_columns(self, order: NDArray[np.intp]) -> Solutions:
+        """The same solutions with their assignments' columns taken in ``order`` (column
+        ``j`` of the result is column ``order[j]`` of these): the bearings' order given back
+        after a search that took them in another."""
+        a = self._arrays
+        assign = np.ascontiguousarray(a[1][:, order])
+        return Solutions(a[0], assign, a[2], a[3], a[4], a[5], a[6], a[7])
+
     def __len__(self) -> int:
         return len(self._made)
 
