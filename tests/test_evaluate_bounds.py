@@ -430,6 +430,25 @@ def _scored(name: str, jump: float, ttl: float, rate: float, recovery: float) ->
     )  # fmt: skip
 
 
+def test_correct_after_is_given_as_the_runs_mean_and_as_their_frames_pooled() -> None:
+    # A short run right in 9 of its 10 frames after its first correct one, a long one in 10
+    # of 1,000: the mean of the runs' shares says 45.5 %, their frames pooled 1.9 %; a run
+    # never correct counts in neither.
+    from dataclasses import replace
+
+    nan = math.nan
+    runs = [
+        replace(
+            _scored(n, nan, nan, nan, nan), correct_after_rate=k / a, n_after=a, n_correct_after=k
+        )
+        for n, a, k in (("short", 10, 9), ("long", 1000, 10))
+    ]
+    never = _scored("never", nan, nan, nan, nan)
+    tot = TrackingResult("x", [*runs, never]).totals()
+    assert tot["correct_after_rate"] == pytest.approx(0.455)
+    assert tot["correct_after_pooled_rate"] == pytest.approx(19 / 1010)
+
+
 def test_the_bounds_totals_are_the_runs_medians_and_mean() -> None:
     runs = [
         _scored("a", math.nan, 30.0, 0.2, math.nan),

@@ -15,9 +15,12 @@ Definitions (``pos_tol_m``, ``heading_tol_deg``: 0.3 m and 5 degrees by default)
 * A frame is *correct* when the localizer's state is ``localized`` and its pose is within
   tolerance of the truth at the frame's time. Frames where the truth is unreliable (its
   ``gap`` above ``max_gap_s``, or outside the track) are left out of every figure.
-* *time to localize*: from the start of the stream to its first correct frame.
+* *time to localize*: from the start of the stream to its first correct frame (on a
+  kidnapped stream, before its jump; after it, *recovery* below).
 * *localized and correct after*: the share of frames from the first correct frame on that
-  are correct.
+  are correct. Over several streams, ``correct_after_rate`` is the mean of the streams'
+  shares (a stream never correct left out), ``correct_after_pooled_rate`` the share of all
+  their frames from each one's first correct frame on.
 * *confidently wrong*: frames whose state is ``localized`` but whose pose is not correct.
 * *weight calibration*: over the frames with hypotheses, the weight of the strongest one
   (the localizer's probability that the robot is there) against whether it is within
@@ -405,6 +408,10 @@ class RunScore:
     #: whose last estimate before the jump was ``localized``; NaN otherwise (no jump, or no
     #: place to leave); inf: never flagged.
     flag_delay_s: float = NAN
+    #: Scored frames from the first correct frame on, and of them the correct ones (the
+    #: counts of ``correct_after_rate``, which the totals pool).
+    n_after: int = 0
+    n_correct_after: int = 0
     #: Of the false alarms, those that left a place that was right: all but those whose last
     #: localized frame before the flag was scored and wrong (those left a wrong place).
     false_alarms_left_right: int = 0
@@ -525,6 +532,8 @@ def score_run(
         cov_inside_50=int((nees <= CHI2_3DOF_50).sum()),
         cov_inside_99=int((nees <= CHI2_3DOF_99).sum()),
         flag_delay_s=flag_delay,
+        n_after=int(after.sum()),
+        n_correct_after=int(correct[after].sum()),
     )
 
 
@@ -817,6 +826,7 @@ class TrackingResult:
         scored = sum(r.n_scored for r in rs)
         loc = sum(r.n_localized for r in rs)
         wrong = sum(r.n_confidently_wrong for r in rs)
+        n_after = sum(r.n_after for r in rs)
         ttl = [r.time_to_localize_s for r in rs]
 
         def pooled(attr: str) -> float:
@@ -851,6 +861,9 @@ class TrackingResult:
             "time_to_localize_max_s": max(ttl) if ttl and all(map(math.isfinite, ttl)) else NAN,
             "never_localized": float(sum(not math.isfinite(x) for x in ttl)),
             "correct_after_rate": float(np.mean(after)) if after else NAN,
+            "correct_after_pooled_rate": (
+                sum(r.n_correct_after for r in rs) / n_after if n_after else NAN
+            ),
             "localized_rate": loc / scored if scored else NAN,
             "confidently_wrong_rate": wrong / scored if scored else NAN,
             "pos_rmse_m": pooled("pos_rmse_m"),
@@ -1216,7 +1229,9 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
     lines.append(
         f"all runs: time to localize median {_seconds(tot['time_to_localize_median_s'])}, "
         f"{worst}; correct after "
-        f"{_fmt(100 * tot['correct_after_rate'], '.1f')} %; confidently wrong "
+        f"{_fmt(100 * tot['correct_after_rate'], '.1f')} % (mean over runs; "
+        f"{_fmt(100 * tot['correct_after_pooled_rate'], '.1f')} % of their frames); "
+        "confidently wrong "
         f"{_fmt(100 * tot['confidently_wrong_rate'], '.2f')} % of frames; position RMSE "
         f"{_fmt(tot['pos_rmse_m'], '.3f')} m, heading RMSE {_fmt(tot['heading_rmse_deg'])} deg; "
         f"{_fmt(tot['realtime_factor'], '.0f')}x real time"
