@@ -87,6 +87,30 @@ def test_a_wrong_pose_told_is_not_reported_right(
     assert first == _scored(run)[0]
 
 
+def test_a_wrong_pose_told_mid_run_is_not_localized_on_bearings_it_does_not_explain() -> None:
+    # The example recording, told surely at frame 80 a pose 0.6 m off: two of that frame's
+    # three bearings miss its predictions by 6 and 29 deg. It was localized there (the
+    # default fit_explained is 0); a pose told must explain half the bearings (TOLD_FIT).
+    from omniloc.track.simulate import example_run
+
+    ex = example_run()
+    run, odo = ex.run, ex.run.odometry
+    tr = Tracker(ex.landmarks, ex.sensor, ex.motion)
+    k = 0
+    for i, f in enumerate(run.frames[:81]):
+        k1 = int(np.searchsorted(odo.t, f.t, side="right"))
+        if k1 > k:
+            tr.odometry(odo.t[k:k1], odo.v[k:k1], odo.w[k:k1])
+            k = k1
+        if i == 80:
+            p = run.truth.pose_at(run.frames[79].t)
+            tr.set_pose(
+                (p.x, p.y + 0.6, p.theta), np.diag([0.05**2, 0.05**2, math.radians(1.5) ** 2])
+            )
+        e = tr.frame(f.t, f.bearings)
+    assert not e.localized
+
+
 def test_the_pose_told_is_the_robot_s_when_the_sensor_has_a_mount() -> None:
     mount = (0.3, 0.1, 0.5)
     sensor = EXAMPLE_SENSOR.replace(mount=mount)
