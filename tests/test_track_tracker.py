@@ -808,6 +808,16 @@ def test_a_frame_of_too_many_bearings_is_refused_and_changes_nothing() -> None:
     tr.frame(0.5, np.linspace(-3.0, 3.0, MAX_FRAME_BEARINGS))  # the limit itself is taken
 
 
+def test_a_frame_time_of_true_or_false_is_refused() -> None:
+    # float(True) is 1.0: a flag passed for a time was taken as one second.
+    tr = Tracker(GRID, SENSOR, MOTION, CONFIG)
+    tr.odometry([0.0, 1.0], [0.0, 0.0], [0.0, 0.0])
+    for t in (True, np.True_):
+        with pytest.raises(InputError, match="frame time must be a number of seconds"):
+            tr.frame(t, [])
+    assert tr._t is None
+
+
 def test_a_search_that_finds_one_place_twice_adds_it_once(monkeypatch: pytest.MonkeyPatch) -> None:
     # Candidates at the same pose are one place: the first is tracked, its twins add neither
     # hypotheses nor mass (merged afterwards, their masses would have been summed).

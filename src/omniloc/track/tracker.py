@@ -213,6 +213,7 @@ class Tracker:
     Examples
     --------
     >>> import numpy as np, omniloc
+    >>> from omniloc.sensor import SensorModel
     >>> from omniloc.track import Tracker
     >>> room = omniloc.demo_room()
     >>> tracker = Tracker(room, SensorModel(sigma=np.deg2rad(0.3)))
@@ -1115,6 +1116,8 @@ class Tracker:
             finite numbers or more than :data:`MAX_FRAME_BEARINGS` of them. Nothing is
             changed then.
         """
+        if isinstance(t, (bool, np.bool_)):
+            raise InputError(f"frame time must be a number of seconds, got {t!r}")
         try:
             tf = float(t)
         except (TypeError, ValueError, OverflowError) as exc:
