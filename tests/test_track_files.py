@@ -8,6 +8,7 @@ import math
 import re
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -127,6 +128,22 @@ def test_a_frames_file_with_a_header_alone_holds_no_frames_and_the_commands_say_
         assert err == f"error: {path}: no frames\n", argv[0]
 
 
+def _read_warned(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture, text: str, load: Any, warning: str
+) -> Any:
+    """``text`` written to o.csv and read by ``load``: the warning logged is ``warning``
+    alone (one, naming its line), or none for ""."""
+    path = tmp_path / "o.csv"
+    path.write_text(text)
+    with caplog.at_level("WARNING", logger="omniloc.track.data"):
+        rec = load(path)
+    if warning:
+        assert warning in caplog.text and caplog.text.count("WARNING") == 1
+    else:
+        assert caplog.text == ""
+    return rec
+
+
 @pytest.mark.parametrize(
     ("text", "warning"),
     [
@@ -145,15 +162,10 @@ def test_a_frames_file_with_a_header_alone_holds_no_frames_and_the_commands_say_
 def test_recordings_in_other_units_are_warned_of_with_their_line(
     tmp_path: Path, caplog: pytest.LogCaptureFixture, text: str, warning: str
 ) -> None:
-    path = tmp_path / "o.csv"
-    path.write_text(text)
     load = load_odometry if text.startswith("t,v,w") else load_groundtruth
-    with caplog.at_level("WARNING", logger="omniloc.track.data"):
-        rec = load(path)
+    rec = _read_warned(tmp_path, caplog, text, load, warning)
     if not warning:
-        assert caplog.text == ""
         return
-    assert warning in caplog.text and caplog.text.count("WARNING") == 1
     # Read as written: a warning, not an error.
     values = rec.w if isinstance(rec, Odometry) else rec.theta
     assert values[-1] == float(text.splitlines()[-1].split(",")[-1])
@@ -180,15 +192,9 @@ def test_recordings_in_other_units_are_warned_of_with_their_line(
 def test_a_pose_track_in_other_units_is_warned_of_with_its_line(
     tmp_path: Path, caplog: pytest.LogCaptureFixture, text: str, warning: str
 ) -> None:
-    path = tmp_path / "o.csv"
-    path.write_text(text)
-    with caplog.at_level("WARNING", logger="omniloc.track.data"):
-        odo = load_odometry(path)
+    odo = _read_warned(tmp_path, caplog, text, load_odometry, warning)
     if not warning:
-        assert caplog.text == ""
         assert np.max(np.abs(odo.w)) == pytest.approx(0.5236 / 0.5)
-        return
-    assert warning in caplog.text and caplog.text.count("WARNING") == 1
 
 
 @pytest.mark.parametrize(

@@ -118,6 +118,22 @@ def test_fit_with_mirror_outside_it_is_refused() -> None:
         _check_rim_sides(gray, 350.2, 195.4, 98.6, 1.997)
 
 
+def test_calibrate_mirror_refuses_a_rim_fitted_on_the_camera_s_reflection(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The rough ellipse put on the camera's bright reflection (as a dim room made it before
+    # the mask's threshold came from the typical mirror pixel): the refinement fits that
+    # disc to the pixel, and only the check of the rim's two sides tells it is no rim.
+    import omniloc.vision.calibrate as calibrate
+
+    img, cam = dim_room(5, DIM_ROOMS[0][1])
+    rough = calibrate._rough_ellipse(as_gray(img))
+    disc = (cam.center[0], cam.center[1], cam.inner_radius * cam.radius, 1.0, rough[4])
+    monkeypatch.setattr(calibrate, "_rough_ellipse", lambda gray: disc)
+    with pytest.raises(VisionError, match="no clear mirror rim"):
+        calibrate_mirror(img)
+
+
 def test_calibration_helpers() -> None:
     cal = MirrorCalibration((100.0, 80.0), 1.25, 40.0)
     assert cal.semi_axes == (50.0, 40.0)

@@ -24,6 +24,7 @@ from typing import Any
 import cv2
 import numpy as np
 from numpy.typing import NDArray
+from scipy.stats import median_abs_deviation
 
 from omniloc.errors import VisionError
 from omniloc.io import finite_number, shorten
@@ -252,10 +253,7 @@ def _rough_ellipse(gray: NDArray[np.float32]) -> tuple[float, float, float, floa
         )
         scale = 2.0
     small = np.asarray(cv2.GaussianBlur(small, (0, 0), 1.0), dtype=np.float32)
-    # The outside of the rim owns the image border: its level and noise come from there.
-    border = np.concatenate([small[0], small[-1], small[:, 0], small[:, -1]])
-    bg = float(np.median(border))
-    noise = 1.4826 * float(np.median(np.abs(border - bg)))
+    bg, noise = _border_level(small)
     outside_bright = bg > float(np.median(small))
     far = float(np.percentile(small[::2, ::2], 1 if outside_bright else 99))
     contrast = abs(far - bg)
@@ -362,6 +360,13 @@ _SIDE_SECTORS = 32
 _MIN_OUTSIDE_LIKE_BORDER = 0.9
 
 
+def _border_level(img: NDArray[np.float32]) -> tuple[float, float]:
+    """The level of the image border (its median) and its noise (the normal-scaled median
+    absolute deviation): the outside of the rim owns the border."""
+    border = np.concatenate([img[0], img[-1], img[:, 0], img[:, -1]])
+    return float(np.median(border)), float(median_abs_deviation(border, scale="normal"))
+
+
 def _check_rim_sides(gray: NDArray[np.float32], cx: float, cy: float, r: float, a: float) -> None:
     """Refuse a fitted rim whose outside does not look like the image border.
 
@@ -381,9 +386,7 @@ def _check_rim_sides(gray: NDArray[np.float32], cx: float, cy: float, r: float, 
         look like the border, or if none inside the rim is unlike it.
     """
     g = np.asarray(cv2.GaussianBlur(gray, (0, 0), 1.0), dtype=np.float32)
-    border = np.concatenate([g[0], g[-1], g[:, 0], g[:, -1]])
-    bg = float(np.median(border))
-    noise = 1.4826 * float(np.median(np.abs(border - bg)))
+    bg, noise = _border_level(g)
     d1 = max(3.0, 0.04 * r)
     d2 = d1 + max(4.0, 0.06 * r)
     per_sector = 8
