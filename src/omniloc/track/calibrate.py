@@ -51,7 +51,6 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
-from scipy.stats import median_abs_deviation
 
 from ..angles import wrap
 from ..errors import InputError
@@ -219,7 +218,7 @@ def _without_jumps(
         return runs
     parts = (np.hypot(e[:, 0], e[:, 1]), np.abs(e[:, 2]))
     limits = [
-        JUMP_SIGMAS * max(float(median_abs_deviation(x, scale="normal")), floor)
+        JUMP_SIGMAS * max(1.4826 * float(np.median(np.abs(x - np.median(x)))), floor)
         + float(np.median(x))
         for x, floor in zip(parts, JUMP_FLOOR, strict=True)
     ]
