@@ -1822,6 +1822,7 @@ def _tracker_targets() -> list[Target]:
         ("empty", ()),
     )
     cfg: dict[str, Arg] = {}
+    LEVELS = ("search_miss", "model_check")  # (probabilities that may be None)
     for f in dataclasses.fields(TrackerConfig):
         if f.name == "region":
             pool = regions
@@ -1829,7 +1830,7 @@ def _tracker_targets() -> list[Target]:
             pool = tables
         elif f.name in _INTS or f.name in _COUNTS:
             pool = COUNTS
-        elif f.name in _PROBABILITIES or f.name in _SHARES or f.name == "search_miss":
+        elif f.name in _PROBABILITIES or f.name in _SHARES or f.name in LEVELS:
             pool = PROBABILITIES
         else:
             pool = NUMBERS

@@ -1457,7 +1457,8 @@ def test_the_landmarks_seen_are_the_distinct_ones_named_along_the_odometry() -> 
 
 def test_a_place_named_by_too_few_landmarks_is_held_back(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr("omniloc.track.tracker.within_tolerance", lambda *a: 1.0)
-    cfg = replace(CONFIG, min_landmarks=4, fit_explained=0.0, min_age_s=1.0)
+    # (model_check off: these frames are made up to name landmarks, not to fit a sensor.)
+    cfg = replace(CONFIG, min_landmarks=4, fit_explained=0.0, min_age_s=1.0, model_check=None)
     tr, _ = _seen_by(cfg, [[5], [5, 6], [6], [5, 6]])
     state, reason, best = tr._decide(tr._t)
     assert state is TrackState.AMBIGUOUS and best == 0
@@ -1679,7 +1680,8 @@ def test_min_confirmations_alone_is_checked(v: object) -> None:
 
 def test_a_place_must_lead_for_min_best_s(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr("omniloc.track.tracker.within_tolerance", lambda *a: 1.0)
-    cfg = replace(CONFIG, min_best_s=1.0)
+    # (model_check off: the window's frames are empty, made up for the lead's count.)
+    cfg = replace(CONFIG, min_best_s=1.0, model_check=None)
     tr = _two_places(cfg, 0.9999)
 
     def at(t: float, first: float, ids: tuple[int, int] = (7, 8)) -> tuple[TrackState, str]:

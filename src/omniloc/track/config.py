@@ -39,7 +39,7 @@ _PROBABILITIES = {
     "elsewhere_inject",
 }
 #: Probabilities that may be None (off).
-_OPTIONAL_PROBABILITIES = {"search_miss", "keep_probability"}
+_OPTIONAL_PROBABILITIES = {"search_miss", "keep_probability", "model_check"}
 #: Angles (rad) of the configuration that a heading or bearing error is compared with or
 #: spread by: beyond a half turn they take every error, a sure sign of degrees.
 _HALF_TURN_ANGLES = (
@@ -212,6 +212,24 @@ class TrackerConfig:
         ``localized`` needs the best hypothesis to explain at least this share of the
         recent bearings (a wrong pose can hold the mass by explaining a few and calling the
         rest clutter when the rivals explain fewer).
+    model_check : float or None
+        ``localized`` (by the full tests) needs the best place's recent frames to fit the
+        sensor model, each test at this level (a p-value): the landmarks plainly in view
+        from the place (a gate's width inside the view's edges, 5 % inside the range's) seen
+        no less often than the sensor's ``p_detect`` allows (binomial), and the bearings
+        that no landmark in view explains no more numerous than its clutter rate allows
+        (Poisson). The weights only compare the places the tracker holds: when the true
+        place is in none of them (a search that missed it, a look-alike left after a
+        kidnapping) the best of them can hold all the mass, and it is seen through by what
+        it predicts and the camera does not see. None: no such test (the ``mrclam``
+        preset, whose sensor model is the recordings' average, not a frame's). Each count
+        is tested only if the sensor states its rate (``SensorModel.p_detect``,
+        ``clutter``; the frame model's defaults for an unstated one are a guess). A sensor
+        whose stated rates or range are too optimistic makes the test hold true places back
+        too; the reason says which count failed.
+    model_check_s : float
+        The seconds of frames (since the place was found, at most this many) that
+        ``model_check`` tests.
     clutter_persistence : float
         Clutter with memory (0, the default: none). The chance that a bearing a place
         explains as clutter -- another robot, say -- is seen again in the next frame with
@@ -423,6 +441,8 @@ class TrackerConfig:
     candidate_min_sd_heading: float = float(np.deg2rad(1.0))
     fit_window_s: float = 10.0
     fit_explained: float = 0.0
+    model_check: float | None = 1e-3
+    model_check_s: float = 5.0
     clutter_persistence: float = 0.0
     clutter_persistence_sd: float = float(np.deg2rad(1.0))
     clutter_memory_s: float = 2.0

@@ -325,6 +325,7 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
             min_landmarks=5,
             min_best_s=0.5,
             fit_explained=0.6,
+            model_check=None,
             split_clutter=0.02,
             evidence_weight=0.7,
             core_share=0.43,

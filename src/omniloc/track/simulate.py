@@ -16,7 +16,7 @@ apart from its half turn, a robot that wakes up there, is kidnapped half way and
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -30,7 +30,7 @@ from ..simulate import symmetric_map
 from .data import Frame, GroundTruth, Odometry
 from .motion import MotionModel
 
-__all__ = ["Example", "SimulatedRun", "example_run", "simulate_run"]
+__all__ = ["Example", "SimulatedRun", "example_run", "lookalike_run", "simulate_run"]
 
 FloatArray = NDArray[np.float64]
 RngLike = np.random.Generator | int | None
@@ -249,3 +249,50 @@ def example_run(seed: int = 9, duration_s: float = 60.0) -> Example:
         rng=seed,
     )
     return Example(EXAMPLE_MAP, EXAMPLE_SENSOR, EXAMPLE_MOTION, run)
+
+
+def lookalike_run(seed: int) -> Example:
+    """Run ``seed`` of the battery of maps with look-alike places
+    (``benchmarks/track_lookalikes.py``), one of three scenes by ``seed % 3``: 0, 14 landmarks
+    uniform on 12 m x 12 m and :data:`EXAMPLE_SENSOR`; 1, :data:`EXAMPLE_MAP` and that
+    sensor; 2, 20 landmarks uniform on 12 m x 12 m and a 180-degree camera 0.2 m ahead of
+    the robot. 60 s from a random pose at 0.25 m/s (a new turn rate every 4 s); an odd
+    ``seed`` is carried to a random pose at 30 s.
+
+    Parameters
+    ----------
+    seed : int
+
+    Returns
+    -------
+    Example
+    """
+    gen = np.random.default_rng(1000 + seed)
+    kind = seed % 3
+    sensor = EXAMPLE_SENSOR
+    if kind == 0:
+        lm = LandmarkMap(gen.uniform(0, 12, size=(14, 2)))
+    elif kind == 1:
+        lm = EXAMPLE_MAP
+    else:
+        lm = LandmarkMap(gen.uniform(0, 12, size=(20, 2)))
+        sensor = replace(EXAMPLE_SENSOR, fov=math.radians(180), mount=(0.2, 0.0, 0.0))
+    x0, y0, x1, y1 = lm.bounds
+    start = Pose(gen.uniform(x0, x1), gen.uniform(y0, y1), gen.uniform(-math.pi, math.pi))
+    kidnap = None
+    if seed % 2:
+        to = Pose(gen.uniform(x0, x1), gen.uniform(y0, y1), gen.uniform(-math.pi, math.pi))
+        kidnap = (30.0, to)
+    run = simulate_run(
+        lm,
+        sensor,
+        start,
+        duration_s=60.0,
+        speed=0.25,
+        turn_rate=0.3,
+        v_noise=0.02,
+        w_noise=0.01,
+        kidnap=kidnap,
+        rng=seed,
+    )
+    return Example(lm, sensor, EXAMPLE_MOTION, run)

@@ -101,6 +101,7 @@ from .likelihood import (
     log_ratios_clutter,
     shared_pool,
 )
+from .modelcheck import misfit
 from .motion import MotionModel, between, compose, integrate, inverse, move, twist_of
 from .records import Hypothesis, TrackEstimate, TrackState
 from .relocalize import search_window
@@ -1457,6 +1458,28 @@ class Tracker:
         j = np.argmin(diff, axis=1)
         return np.where(diff[np.arange(j.size), j] <= gate, idx[j], -1)
 
+    def _misfit(self, t: float, mu: FloatArray, P: FloatArray, born: float) -> str | None:
+        """Whether the frames since ``born`` (the first frame of the replay of the search
+        that found the place; at most the last ``model_check_s`` seconds) fit the sensor
+        model from the place ``mu`` (a sensor pose, covariance ``P``, at the newest frame;
+        ``model_check``, :func:`~omniloc.track.modelcheck.misfit`): None if they do, else
+        why not. After a kidnapping the frames from before it count too: a place found just
+        after it is held until they have left the window."""
+        c = self.config
+        if c.model_check is None:
+            return None
+        return misfit(
+            self.landmarks,
+            self.sensor,
+            self._model,
+            mu,
+            P,
+            self._window.since(max(t - c.model_check_s, born)),
+            level=c.model_check,
+            tolerance_m=c.tolerance_m,
+            tolerance_heading=c.tolerance_heading,
+        )
+
     def _unexplained(self, mu: FloatArray, P: FloatArray) -> int:
         """The newest frame's bearings if it holds ``keep_unexplained`` of them or more and
         the place ``mu`` (covariance ``P``) explains none of them (see :meth:`_named`); else
@@ -1569,6 +1592,10 @@ class Tracker:
                     f"explained by {n_lm} landmark{'s' if n_lm != 1 else ''}, "
                     f"{c.min_landmarks} needed (within tolerance with probability {p:.4f})"
                 )
+            elif c.model_check is not None and (
+                misfit := self._misfit(t, mu_i, P, float(self._born[place].min()))
+            ):
+                held = f"{misfit} (within tolerance with probability {p:.4f})"
         full = p >= c.localized_probability and held is None
         keep = (
             c.keep_probability is not None
