@@ -13,10 +13,12 @@ import pytest
 
 from omniloc import LandmarkMap
 from omniloc.errors import InputError
+from omniloc.sensor import SensorModel
 from omniloc.track import MotionModel, SimulatedRun, TrackerConfig, TrackRun, track
 from omniloc.track.modelcheck import misfit
 from omniloc.track.simulate import EXAMPLE_MOTION, EXAMPLE_SENSOR, lookalike_run
 from omniloc.track.tracker import Tracker
+from omniloc.track.window import WindowFrame
 
 
 def _wrong(run: SimulatedRun, result: TrackRun) -> list[float]:
@@ -155,7 +157,6 @@ def test_a_place_right_within_the_tolerances_but_not_the_gate_fits() -> None:
         return misfit(
             lm,
             EXAMPLE_SENSOR,
-            tr._model,
             pose,
             P,
             window,
@@ -168,3 +169,46 @@ def test_a_place_right_within_the_tolerances_but_not_the_gate_fits() -> None:
     assert check(mu + np.array([0.0, 0.0, np.deg2rad(2.5)])) is None
     why = check(mu + np.array([0.0, 0.0, np.deg2rad(15.0)]))
     assert why is not None and why.startswith("the best place does not fit the sensor")
+
+
+def _still_frames(bearings: list[list[float]]) -> list[WindowFrame]:
+    """Frames 0.25 s apart, taken from one pose (the odometry says the robot stood)."""
+    return [
+        WindowFrame(
+            0.25 * k, np.asarray(b, dtype=float), np.zeros(3), np.zeros(3), np.zeros((3, 3))
+        )
+        for k, b in enumerate(bearings)
+    ]
+
+
+def test_only_landmarks_plainly_in_view_are_expected() -> None:
+    # From the origin facing +x, a 180-degree camera with a 5 m range: one landmark ahead
+    # at 3 m, reported in every frame; one 89.5 deg to the left (within a gate of the view's
+    # edge) and one 4.9 m ahead-right (within 5 % of the range's end), never reported.
+    # Neither of those two is plainly in view: the place fits. Brought 2 deg and 0.3 m
+    # inside, they are, and twenty frames that never report them do not fit.
+    sensor = SensorModel(sigma=np.deg2rad(0.5), fov=np.pi, max_range=5.0, p_detect=0.9, clutter=0.3)
+    frames = _still_frames([[0.0]] * 20)
+    mu, P = np.zeros(3), np.diag([1e-4, 1e-4, 1e-6])
+    kw = dict(level=1e-3, tolerance_m=0.3, tolerance_heading=np.deg2rad(5.0))
+
+    def at(edge_deg: float, far_m: float) -> LandmarkMap:
+        a = np.deg2rad(edge_deg)
+        return LandmarkMap(
+            [[3.0, 0.0], [2.0 * np.cos(a), 2.0 * np.sin(a)], [far_m * 0.8, -far_m * 0.6]]
+        )
+
+    assert misfit(at(89.5, 4.9), sensor, mu, P, frames, **kw) is None
+    why = misfit(at(87.5, 4.9), sensor, mu, P, frames, **kw)
+    assert why is not None and "of the 40 sightings" in why and "20 were seen" in why
+    why = misfit(at(89.5, 4.6), sensor, mu, P, frames, **kw)
+    assert why is not None and "of the 40 sightings" in why
+    # A sensor that states neither rate is not tested; one that states only the clutter is
+    # tested on the unexplained bearings alone.
+    unstated = SensorModel(sigma=np.deg2rad(0.5), fov=np.pi, max_range=5.0)
+    assert misfit(at(87.5, 4.9), unstated, mu, P, frames, **kw) is None
+    clutter_only = replace(unstated, clutter=0.3)
+    assert misfit(at(87.5, 4.9), clutter_only, mu, P, frames, **kw) is None
+    noisy = _still_frames([[0.0, 1.0, -1.0]] * 20)  # two bearings a frame nothing explains
+    why = misfit(at(87.5, 4.9), clutter_only, mu, P, noisy, **kw)
+    assert why is not None and "leaves 40 of the 60 bearings" in why

@@ -37,7 +37,6 @@ from scipy.special import bdtr, pdtrc
 from ..angles import wrap
 from ..maps import LandmarkMap
 from ..sensor import SensorModel
-from .likelihood import FrameModel
 from .motion import between, compose
 from .relocalize import refine_on_frames
 from .window import WindowFrame
@@ -54,7 +53,6 @@ RANGE_MARGIN = 0.05
 def misfit(
     landmarks: LandmarkMap,
     sensor: SensorModel,
-    model: FrameModel,
     mu: FloatArray,
     P: FloatArray,
     frames: list[WindowFrame],
@@ -67,9 +65,10 @@ def misfit(
     sensor pose at the newest frame, covariance ``P``): None if they do, else why not.
 
     Each count is tested at ``level`` (a p-value) and only against a rate the sensor states
-    (``sensor.p_detect``, ``sensor.clutter``: the frame model's defaults for an unstated one
-    are a guess, not a model to hold a place to); ``model`` gives the rates as the tracker
-    weighs them.
+    (``sensor.p_detect``, ``sensor.clutter`` bearings a frame: the frame model's defaults
+    for an unstated one are a guess, not a model to hold a place to). A stated rate of 0 or
+    1 is taken a hair inside it, as the frame model takes it: a sensor said never to miss
+    a landmark in view, or never to report clutter, has a place held by one such frame.
     """
     if not frames or (sensor.p_detect is None and sensor.clutter is None):
         return None
@@ -90,9 +89,8 @@ def misfit(
     after = np.cumsum(Qs[::-1], axis=0)[::-1] - Qs  # (the motion after each frame)
     var0 = sensor.noise**2 + max(float(P[2, 2]), 0.0) + after[:, 2, 2][:, None]
     var_xy = (after[:, 0, 0] + after[:, 1, 1])[:, None]
-    rate = math.exp(model.log_kappa) * (
-        2.0 * math.pi if model.half_fov is None else 2.0 * model.half_fov
-    )
+    p_detect = min(max(sensor.p_detect, 1e-9), 1.0 - 1e-9) if sensor.p_detect is not None else 0.0
+    rate = max(sensor.clutter, 1e-12) if sensor.clutter is not None else 0.0
 
     def geometry(m: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, NDArray[np.bool_]]:
         """From the place ``m``: the landmarks' ranges, predicted bearings and bearing
@@ -133,13 +131,13 @@ def misfit(
                 match = maximum_bipartite_matching(csr_matrix(hit[fidx == k]), perm_type="column")
                 seen += int(np.count_nonzero(match >= 0))
         if sensor.p_detect is not None and expected:
-            p_low = float(bdtr(seen, expected, model.p_detect))
+            p_low = float(bdtr(seen, expected, p_detect))
             if p_low < level:
                 return (
                     f"the best place does not fit the sensor: of the {expected} sightings of "
                     f"landmarks plainly in view it predicts over the last {len(frames)} "
                     f"frames, {seen} were seen (p = {p_low:.2g} at p_detect "
-                    f"{model.p_detect:.2g})"
+                    f"{p_detect:.2g})"
                 )
         clutter = rate * len(frames)
         if sensor.clutter is not None and unexplained:

@@ -1471,7 +1471,6 @@ class Tracker:
         return misfit(
             self.landmarks,
             self.sensor,
-            self._model,
             mu,
             P,
             self._window.since(max(t - c.model_check_s, born)),
@@ -1592,9 +1591,7 @@ class Tracker:
                     f"explained by {n_lm} landmark{'s' if n_lm != 1 else ''}, "
                     f"{c.min_landmarks} needed (within tolerance with probability {p:.4f})"
                 )
-            elif c.model_check is not None and (
-                misfit := self._misfit(t, mu_i, P, float(self._born[place].min()))
-            ):
+            elif misfit := self._misfit(t, mu_i, P, float(self._born[place].min())):
                 held = f"{misfit} (within tolerance with probability {p:.4f})"
         full = p >= c.localized_probability and held is None
         keep = (
