@@ -240,13 +240,13 @@ def test_demo_runs_and_writes_figures(tmp_path, capsys) -> None:
     states = [ln.split()[2] for ln in lines[1:] if ln.startswith("  ") and " s  " in ln]
     assert states == ["ambiguous", "localized", "ambiguous", "KIDNAPPED", "ambiguous", "localized"]
     # The flag says what the old place and the places held now explain of the bearings since.
-    assert "explains 1 of the 4 bearings since (the places it holds now: 2): kidnapped" in out
-    assert "localized in 207 of 240 frames, right (0.3 m, 5 deg) in 207 of them" in out
+    assert "explains 2 of the 8 bearings since (the places it holds now: 5): kidnapped" in out
+    assert "localized in 216 of 240 frames, right (0.3 m, 5 deg) in 216 of them" in out
     # Offline, the pass backward localizes the frames before each sure one as well.
     assert (
-        "offline, with the pass backward (--backward 20): localized in 227 of 240 frames "
-        "(59 by the pass backward; 39 localized forward at a place given up within 10 s "
-        "after), right in 227 of them" in out
+        "offline, with the pass backward (--backward 20): localized in 228 of 240 frames "
+        "(52 by the pass backward; 40 localized forward at a place given up within 10 s "
+        "after), right in 228 of them" in out
     )
     assert (tmp_path / "track.png").stat().st_size > 10_000
 

@@ -50,7 +50,13 @@ _HALF_TURN_ANGLES = (
     "core_sigma",
 )
 _SHARES = {"fit_explained", "core_share", "miss_weight", "kidnap_fit"}
-_BOOLS = {"core_update", "temper_update", "nonempty_frames", "exclusive_landmarks"}
+_BOOLS = {
+    "core_update",
+    "temper_update",
+    "nonempty_frames",
+    "exclusive_landmarks",
+    "entry_replay",
+}
 #: The confidence tables (:mod:`omniloc.track.confidence`).
 _CONFIDENCE_TABLES = (
     "confidence_localized",
@@ -318,6 +324,16 @@ class TrackerConfig:
         this factor of their mass. Conservative: it says ``localized`` far less often.
     replay_s : float
         New hypotheses are replayed through the frames of the last this many seconds.
+    entry_replay : bool
+        True (default): when elsewhere held the most mass at a later frame of the replay than
+        its first (the tracked places stopped explaining the frames: a kidnapping, or a
+        place lost), the candidates are replayed again from that frame, and their entries
+        from it on are weighed by that replay. The replay from the first frame reaches a
+        later entry with a state shaped by the frames before it, without their evidence: a
+        look-alike sharpened by frames from before a jump that it happened to explain took
+        the mass from the truth, which those frames had pulled off (the example grid's
+        half-turn twins after a kidnapping). Costs at most one replay more per search.
+        False: each entry weighed with the one replay from the first frame.
     max_candidates : int
         At most this many search solutions are replayed (the search's best).
     merge_chi2 : float
@@ -458,6 +474,7 @@ class TrackerConfig:
     covariance_inflation: float = 1.0
     search_miss: float | None = None
     replay_s: float = 4.0
+    entry_replay: bool = True
     max_candidates: int = 3000
     merge_chi2: float = 9.0
     merge_position_m: float = 0.3

@@ -953,6 +953,51 @@ class Tracker:
             mem_w = np.zeros((mu.shape[0], self._mem_b.size))
         return mu, P, volume, to_end, fit_m, fit_n, mem_w
 
+    def _replay_entries(
+        self,
+        poses: FloatArray,
+        covs: FloatArray,
+        rframes: list[WindowFrame],
+        entry: FloatArray,
+        to_end: FloatArray,
+        volume: FloatArray,
+        logw: FloatArray,
+        state: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray],
+    ) -> None:
+        """Weigh the candidates again, in place, for entries from the frame at which
+        elsewhere held the most mass, if that is not the replay's first: replayed from that
+        frame, as places that left elsewhere there. ``state`` (the replay's poses,
+        covariances, fit counts, clutter memory and the times the places are held since) is
+        replaced, in place, by the second replay's for the candidates whose late entries
+        weigh more than their early ones.
+
+        The replay from the first frame reaches each later entry with a state shaped by the
+        frames before it, without their evidence: sharpened by frames a look-alike happened
+        to explain, or pulled off by frames from before a kidnapping that the true place
+        cannot explain. A place entering after the frames that emptied the tracked places
+        would not have seen them."""
+        k = int(np.argmax(entry))
+        if k == 0 or not np.isfinite(entry[k]):
+            return
+        sub = rframes[k:]
+        Q = np.zeros((3, 3))
+        for f in sub[1:]:
+            Q = Q + f.Q
+        mu2, P2, vol2, end2, fm2, fn2, mw2 = self._replay(poses, covs + Q, sub)
+        before = _logsumexp_rows(entry[None, :k] + to_end[:, :k]) + volume
+        after = _logsumexp_rows(entry[None, k:] + end2) + vol2
+        logw[:] = np.logaddexp(before, after) - self._norm
+        late = after >= before
+        mu, P, fit_m, fit_n, mem_w, born = state
+        mu[late], P[late], fit_m[late], fit_n[late], mem_w[late] = (
+            mu2[late],
+            P2[late],
+            fm2[late],
+            fn2[late],
+            mw2[late],
+        )
+        born[late] = sub[0].t
+
     def _frame_model(self, turn_rate: float) -> FrameModel:
         """The frame model of a frame taken while turning at ``turn_rate`` (rad/s): the
         bearing variance grows by ``(turn_rate * turn_noise_s)^2`` (both components' with a
@@ -1016,8 +1061,7 @@ class Tracker:
         Q = np.zeros((3, 3))
         for f in rframes[1:]:
             Q = Q + f.Q
-        covs = covs + Q
-        mu, P, volume, to_end, fit_m, fit_n, mem_w = self._replay(poses, covs, rframes)
+        mu, P, volume, to_end, fit_m, fit_n, mem_w = self._replay(poses, covs + Q, rframes)
         # A candidate is a part of elsewhere that has come to light: it may have left
         # elsewhere at any frame of the replay (elsewhere's mass then, which holds the chance
         # of a kidnapping, times its evidence from that frame on), not only at the first --
@@ -1027,6 +1071,10 @@ class Tracker:
             [hist[f.t][1] + hist[f.t][2] if f.t in hist else -math.inf for f in rframes]
         )
         logw = _logsumexp_rows(entry[None, :] + to_end) + volume - self._norm
+        born = np.full(mu.shape[0], rframes[0].t)
+        if c.entry_replay:
+            state = (mu, P, fit_m, fit_n, mem_w, born)
+            self._replay_entries(poses, covs, rframes, entry, to_end, volume, logw, state)
         ok = np.isfinite(logw) & np.isfinite(mu).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
         ok &= self._inside(mu)
         idx = np.flatnonzero(ok)
@@ -1078,7 +1126,7 @@ class Tracker:
             self._P = np.concatenate([self._P, P[new]])
             self._logw = np.concatenate([self._logw, logw[new]])
             self._ids = np.concatenate([self._ids, self._next_id + np.arange(k)])
-            self._born = np.concatenate([self._born, np.full(k, rframes[0].t)])
+            self._born = np.concatenate([self._born, born[new]])
             self._conf = np.concatenate([self._conf, np.ones(k, dtype=self._conf.dtype)])
             self._conf_t = np.concatenate([self._conf_t, np.full(k, t)])
             self._fit_m = np.concatenate([self._fit_m, fit_m[new]])
