@@ -986,6 +986,9 @@ class Tracker:
         mu2, P2, vol2, end2, fm2, fn2, mw2 = self._replay(poses, covs + Q, sub)
         before = _logsumexp_rows(entry[None, :k] + to_end[:, :k]) + volume
         after = _logsumexp_rows(entry[None, k:] + end2) + vol2
+        # (A candidate the second replay lost -- its pose or covariance no longer finite --
+        # keeps its early entries.)
+        after = np.where(np.isnan(after), -math.inf, after)
         logw[:] = np.logaddexp(before, after) - self._norm
         late = after >= before
         mu, P, fit_m, fit_n, mem_w, born = state
