@@ -323,7 +323,8 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # seeds 0-4 on the whole runs it localizes 7,265 frames against 6,928, 11 wrong
         # against 8 -- every one of them, on or off, a heading near miss (5.1-6.2 deg) of the
         # true place at the same two moments of robots 1 and 3: seed 0 is its worst draw.
-        # Not switched until the streams are measured under the seeds too (docs/tracking-
+        # On the 20 + 20 streams under those seeds it was right more often but flagged a
+        # kidnapping without a jump twice (none off) and recovered fewer (docs/tracking-
         # notebook.md, "A place that enters late is replayed from there").
         config = TrackerConfig(
             region=(-1.0, 5.5, -6.0, 6.5),
