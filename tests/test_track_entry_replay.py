@@ -8,6 +8,7 @@ from functools import cache
 
 import pytest
 
+from omniloc.errors import InputError
 from omniloc.evaluate.tracking import errors_against
 from omniloc.track import SimulatedRun, TrackerConfig, TrackRun, track
 from omniloc.track.simulate import lookalike_run
@@ -56,5 +57,5 @@ def test_the_twin_after_a_kidnapping_is_not_localized(seed: int) -> None:
 
 def test_entry_replay_defaults_and_validation() -> None:
     assert TrackerConfig().entry_replay is True
-    with pytest.raises(Exception, match="entry_replay"):
+    with pytest.raises(InputError, match="entry_replay"):
         TrackerConfig(entry_replay="yes")  # type: ignore[arg-type]
