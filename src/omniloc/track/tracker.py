@@ -886,8 +886,10 @@ class Tracker:
     def _replay(
         self, poses: FloatArray, covs: FloatArray, frames: list[WindowFrame]
     ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Candidates at the last frame of ``frames``: moved back to the first frame by the
-        odometry, then filtered forward through every frame with the exact model. Returns
+        """Candidates at the last frame of ``frames`` (poses, covariances): moved back to the
+        first frame by the odometry, their covariances grown there by the odometry's noise
+        over the replay (roughly: summed in the robot's frames), then filtered forward
+        through every frame with the exact model. Returns
         their poses and covariances at the last frame, the ln of their prior volume, their
         log-likelihood ratios summed from each frame of the replay to its end (C, K), their
         counts of bearings explained and seen (with the recent-fit forgetting), and their
@@ -898,6 +900,10 @@ class Tracker:
         (each candidate is replayed alone, so the results are the same bit for bit): one
         hand-off for the whole replay instead of one per frame, and the frames' own steps
         run in parallel too."""
+        Q = np.zeros((3, 3))
+        for f in frames[1:]:
+            Q = Q + f.Q
+        covs = covs + Q
         pool = shared_pool() if poses.shape[0] >= REPLAY_PARALLEL_MIN else None
         if pool is None:
             return self._replay_part(poses, covs, frames, parallel=True)
@@ -980,10 +986,7 @@ class Tracker:
         if k == 0 or not np.isfinite(entry[k]):
             return
         sub = rframes[k:]
-        Q = np.zeros((3, 3))
-        for f in sub[1:]:
-            Q = Q + f.Q
-        mu2, P2, vol2, end2, fm2, fn2, mw2 = self._replay(poses, covs + Q, sub)
+        mu2, P2, vol2, end2, fm2, fn2, mw2 = self._replay(poses, covs, sub)
         before = _logsumexp_rows(entry[None, :k] + to_end[:, :k]) + volume
         after = _logsumexp_rows(entry[None, k:] + end2) + vol2
         # (A candidate the second replay lost -- its pose or covariance no longer finite --
@@ -1059,12 +1062,7 @@ class Tracker:
             rframes = rframes[1:]
         if not rframes:
             return 0
-        # Candidate covariances are for the last frame; at the first one the odometry's noise
-        # over the replay is added (roughly: summed in the robot's frames).
-        Q = np.zeros((3, 3))
-        for f in rframes[1:]:
-            Q = Q + f.Q
-        mu, P, volume, to_end, fit_m, fit_n, mem_w = self._replay(poses, covs + Q, rframes)
+        mu, P, volume, to_end, fit_m, fit_n, mem_w = self._replay(poses, covs, rframes)
         # A candidate is a part of elsewhere that has come to light: it may have left
         # elsewhere at any frame of the replay (elsewhere's mass then, which holds the chance
         # of a kidnapping, times its evidence from that frame on), not only at the first --
@@ -1510,12 +1508,13 @@ class Tracker:
         return np.where(diff[np.arange(j.size), j] <= gate, idx[j], -1)
 
     def _misfit(self, t: float, mu: FloatArray, P: FloatArray, born: float) -> str | None:
-        """Whether the frames since ``born`` (the first frame of the replay of the search
-        that found the place; at most the last ``model_check_s`` seconds) fit the sensor
-        model from the place ``mu`` (a sensor pose, covariance ``P``, at the newest frame;
-        ``model_check``, :func:`~omniloc.track.modelcheck.misfit`): None if they do, else
-        why not. After a kidnapping the frames from before it count too: a place found just
-        after it is held until they have left the window."""
+        """Whether the frames since ``born`` (the frame since which the place is held: the
+        first frame of the replay of the search that found it, or with ``entry_replay`` the
+        frame its late entry was replayed from; at most the last ``model_check_s`` seconds)
+        fit the sensor model from the place ``mu`` (a sensor pose, covariance ``P``, at the
+        newest frame; ``model_check``, :func:`~omniloc.track.modelcheck.misfit`): None if
+        they do, else why not. A place held since before a kidnapping is checked on the
+        frames from before it too, and held until they have left the window."""
         c = self.config
         if c.model_check is None:
             return None
