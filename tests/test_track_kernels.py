@@ -337,8 +337,10 @@ def test_a_places_estimate_is_the_moment_matching_of_its_hypotheses(seed: int, H
 
 
 def _kernel_without_faint_readings():  # type: ignore[no-untyped-def]
-    """The frame kernel compiled again with no reading faint (every one computed): the
-    oracle of its faint-reading skip."""
+    """The frame kernel compiled again with no reading faint (every one computed) and every
+    landmark's chance of being in view computed when it is predicted (no ``lazy_view``):
+    the oracle of its faint-reading skip and of the view it computes only for the readings
+    it weighs."""
     import types
 
     from numba import njit
@@ -349,8 +351,14 @@ def _kernel_without_faint_readings():  # type: ignore[no-untyped-def]
     def no_cut(fresh: float, share: float, rho_max: float, root_min: float, norm: float) -> float:
         return -math.inf
 
+    predict = kt._predict_one
+
+    @njit
+    def eager(mu, P, L, pd, hf, r2, rmin2, q, h, J, var, d, tan_out, exact, lazy_view=False):  # type: ignore[no-untyped-def]
+        predict(mu, P, L, pd, hf, r2, rmin2, q, h, J, var, d, tan_out, exact, False)
+
     f = kt.frame_update_kernel.py_func
-    namespace = {**f.__globals__, "_faint_cut": no_cut}
+    namespace = {**f.__globals__, "_faint_cut": no_cut, "_predict_one": eager}
     return njit(error_model="numpy")(types.FunctionType(f.__code__, namespace, f.__name__))
 
 
@@ -379,9 +387,11 @@ def test_faint_readings_are_skipped_without_changing_a_bit(
     K: int,
 ) -> None:
     # The frame kernel does not compute a reading below fresh * 2^-60 (it rounds away in the
-    # bearing's sum): every output must be the kernel's that computes them all, bit for
-    # bit, for bearings from on a landmark to many sigmas off it (around the cut), with a
-    # core narrower than the tail and one wider (each reading's cut is its own).
+    # bearing's sum), nor, after a bearing moved a hypothesis, the chance of being in view
+    # of a landmark whose readings are faint: every output must be the kernel's that
+    # computes them all, bit for bit, for bearings from on a landmark to many sigmas off it
+    # (around the cut), with a core narrower than the tail and one wider (each reading's
+    # cut is its own).
     from omniloc._kernels.track import frame_update_kernel
 
     if not _PLAIN_KERNEL:

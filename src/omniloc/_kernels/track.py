@@ -483,12 +483,18 @@ def _predict_one(
     d: FloatArray,
     tan_out: float,
     exact: bool,
+    lazy_view: bool = False,
 ) -> None:
     """One hypothesis's predicted bearings ``h``, their Jacobians ``J`` (N, 3), variances
     from the pose ``var`` and detection probabilities ``d``, written in place
     (``half_fov`` < 0: no field of view). For a landmark out of range only ``d`` (0) is
     written. ``exact`` (``P`` zero, an exactly known pose): ``J`` is not written and every
     variance is 0.
+
+    ``lazy_view``: a landmark in range whose chance of being in view needs the edge's
+    ``erfc`` (a variance from the pose, a field of view) gets ``d`` -1 instead, for the
+    caller to compute with :func:`_view_d` when it needs it (most bearings read no
+    landmark but one or two, and the others' ``d`` is then never read).
 
     ``tan_out`` >= 0 (an exactly known pose, ``P`` zero, and a field of view narrower than
     a half turn): a landmark whose direction is more than ``atan(tan_out)`` (a shade beyond
@@ -531,9 +537,20 @@ def _predict_one(
             # gives with its 1e-9 floor, without computing it).
             e = half_fov - abs(h[n])
             vis = 1.0 if e > 0.0 else (0.5 if e == 0.0 else 0.0)
+        elif lazy_view:
+            d[n] = -1.0
+            continue
         else:
             vis = _in_view(half_fov - abs(h[n]), math.sqrt(var[n]) + 1e-9)
         d[n] = p_detect * vis
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _view_d(p_detect: float, half_fov: float, h: float, var: float) -> float:
+    """A landmark's detection probability from its predicted bearing ``h`` and variance
+    ``var`` > 0 in a field of view of half-width ``half_fov`` >= 0: what
+    :func:`_predict_one` writes without ``lazy_view``, bit for bit."""
+    return p_detect * _in_view(half_fov - abs(h), math.sqrt(var) + 1e-9)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -847,6 +864,7 @@ def frame_update_kernel(
                     d,
                     -1.0,
                     False,
+                    True,
                 )
                 moved = False
             base = fresh
@@ -890,6 +908,11 @@ def frame_update_kernel(
                     a[n] = 0.0
                     ac[n] = 0.0
                     continue
+                if d[n] < 0.0:
+                    # (Its chance of being in view, not computed since the bearing before
+                    # moved the hypothesis: see _predict_one's lazy_view. Out of view, d 0
+                    # gives readings of 0, as the test of d above would.)
+                    d[n] = _view_d(p_detect, half_fov, h[n], var[n])
                 rho = _odds(d[n], miss_weight)
                 if core_share > 0.0:
                     a[n] = _reading(wide, rho, nu[n], S, norm)
