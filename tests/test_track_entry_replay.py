@@ -59,3 +59,55 @@ def test_entry_replay_defaults_and_validation() -> None:
     assert TrackerConfig().entry_replay is True
     with pytest.raises(InputError, match="entry_replay"):
         TrackerConfig(entry_replay="yes")  # type: ignore[arg-type]
+
+
+def test_a_candidate_the_second_replay_loses_keeps_its_early_entries(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The second replay (from the frame where elsewhere held the most mass) may lose a
+    # candidate: a weight that is NaN. That candidate is weighed by its early entries alone
+    # and keeps the first replay's state; the other, whose late entries weigh more, takes
+    # the second replay's state and is held since the frame it was replayed from.
+    import numpy as np
+
+    from omniloc.track import Tracker
+    from omniloc.track.window import WindowFrame
+
+    tracker = Tracker([[0.0, 3.0], [3.0, 0.0], [-3.0, 0.0], [0.0, -3.0]])
+    zero3, Q = np.zeros(3), np.eye(3) * 1e-4
+    frames = [WindowFrame(t, np.zeros(0), zero3, zero3, Q) for t in (1.0, 1.25, 1.5)]
+    C = 2
+    second = (
+        np.array([[0.5, 0.5, 0.1], [0.6, 0.6, 0.2]]),  # poses
+        np.stack([np.eye(3) * 0.02] * C),  # covariances
+        np.array([0.0, np.nan]),  # the ln of the prior volume: candidate 1 lost
+        np.array([[5.0, 4.0], [5.0, 4.0]]),  # evidence to the end from frames 1 and 2
+        np.array([3.0, 3.0]),
+        np.array([4.0, 4.0]),
+        np.full((C, 0), 0.0),
+    )
+    calls = []
+
+    def fake_replay(poses, covs, sub):  # type: ignore[no-untyped-def]
+        calls.append([f.t for f in sub])
+        return tuple(np.copy(x) for x in second)
+
+    monkeypatch.setattr(tracker, "_replay", fake_replay)
+    entry = np.array([-20.0, -1.0, -3.0])  # elsewhere's mass highest at the second frame
+    to_end = np.array([[-2.0, -1.0, 0.0], [-2.0, -1.0, 0.0]])
+    volume = np.zeros(C)
+    logw = np.zeros(C)
+    mu = np.array([[1.0, 1.0, 0.0], [2.0, 2.0, 0.0]])
+    P = np.stack([np.eye(3) * 0.01] * C)
+    fit_m, fit_n = np.array([1.0, 1.0]), np.array([2.0, 2.0])
+    mem_w, born = np.zeros((C, 0)), np.full(C, 1.0)
+    state = (mu, P, fit_m, fit_n, mem_w, born)
+    tracker._replay_entries(np.zeros((C, 3)), P.copy(), frames, entry, to_end, volume, logw, state)
+    assert calls == [[1.25, 1.5]]
+    before = -20.0 - 2.0  # the entry at the first frame alone
+    assert logw[1] == pytest.approx(before)
+    assert logw[0] > before and np.isfinite(logw).all()
+    # Candidate 0 took the second replay's state and its entry time; 1 kept its own.
+    assert np.array_equal(mu[0], second[0][0]) and born[0] == 1.25
+    assert np.array_equal(mu[1], [2.0, 2.0, 0.0]) and born[1] == 1.0
+    assert fit_m[1] == 1.0 and fit_n[1] == 2.0 and np.array_equal(P[1], np.eye(3) * 0.01)
