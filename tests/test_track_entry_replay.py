@@ -6,12 +6,14 @@ from __future__ import annotations
 
 from functools import cache
 
+import numpy as np
 import pytest
 
 from omniloc.errors import InputError
 from omniloc.evaluate.tracking import errors_against
-from omniloc.track import SimulatedRun, TrackerConfig, TrackRun, track
+from omniloc.track import SimulatedRun, Tracker, TrackerConfig, TrackRun, track
 from omniloc.track.simulate import lookalike_run
+from omniloc.track.window import WindowFrame
 
 
 def _wrong_after(run: SimulatedRun, result: TrackRun, t0: float) -> list[float]:
@@ -68,11 +70,6 @@ def test_a_candidate_the_second_replay_loses_keeps_its_early_entries(
     # candidate: a weight that is NaN. That candidate is weighed by its early entries alone
     # and keeps the first replay's state; the other, whose late entries weigh more, takes
     # the second replay's state and is held since the frame it was replayed from.
-    import numpy as np
-
-    from omniloc.track import Tracker
-    from omniloc.track.window import WindowFrame
-
     tracker = Tracker([[0.0, 3.0], [3.0, 0.0], [-3.0, 0.0], [0.0, -3.0]])
     zero3, Q = np.zeros(3), np.eye(3) * 1e-4
     frames = [WindowFrame(t, np.zeros(0), zero3, zero3, Q) for t in (1.0, 1.25, 1.5)]
@@ -86,7 +83,7 @@ def test_a_candidate_the_second_replay_loses_keeps_its_early_entries(
         np.array([4.0, 4.0]),
         np.full((C, 0), 0.0),
     )
-    calls = []
+    calls: list[list[float]] = []
 
     def fake_replay(poses, covs, sub):  # type: ignore[no-untyped-def]
         calls.append([f.t for f in sub])
