@@ -37,6 +37,7 @@ sys.path.insert(0, str(HERE.parent / "src"))
 sys.path.insert(0, str(HERE))
 
 from _results import run_meta, write_results  # noqa: E402
+from omniloc.errors import InputError  # noqa: E402
 from omniloc.track import preset, track, with_settings  # noqa: E402
 from omniloc.track.simulate import lookalike_run  # noqa: E402
 
@@ -112,7 +113,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", type=Path, default=HERE / "results_track_lookalikes")
     args = ap.parse_args(argv)
     settings = parse_set(args.set)
-    with_settings(*preset("generic"), settings)  # (a bad name or value fails here, once)
+    try:  # (a bad name or value fails here, once)
+        with_settings(*preset("generic"), settings)
+    except InputError as exc:
+        ap.error(f"--set: {exc}")
     t0 = time.perf_counter()
     jobs = [(s, settings) for s in range(*args.seeds)]
     with ProcessPoolExecutor(args.workers) as ex:

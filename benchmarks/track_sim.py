@@ -1,6 +1,6 @@
 """The tracker on simulated runs where the truth is known and the sensor model is right.
 
-Run:  python benchmarks/track_sim.py [--runs N] [--seed S] [--out PATH]
+Run:  python benchmarks/track_sim.py [--runs N] [--seed S] [--set NAME=VALUE ...] [--out PATH]
 
 MRCLAM (``benchmarks/track_baselines.py``) is one hard case: a 65-degree camera, one or two
 bearings per frame, a map of near-symmetric clusters. This script measures the tracker where
@@ -15,7 +15,9 @@ frame cannot break, scored by the same code (``omniloc.evaluate.tracking``):
 Each scenario has ``--runs`` runs of 60 s from random poses inside the grid (0.25 m/s, a new
 turn rate every 4 s), half of them kidnapped at 30 s to a random pose at least 2 m away.
 The tracker uses the sensor model the frames were simulated with and the default
-configuration. Writes ``results_track_sim.json`` and ``.md`` beside this file.
+configuration; ``--set`` changes a setting (``omniloc.track.with_settings`` names, as in
+``track_lookalikes.py``), e.g. ``--set search_miss=0.1``. Writes ``results_track_sim.json``
+and ``.md`` beside this file.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import sys
 import time
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -39,6 +42,7 @@ import dataclasses  # noqa: E402
 
 from _results import libraries  # noqa: E402
 from omniloc import Pose  # noqa: E402
+from omniloc.errors import InputError  # noqa: E402
 from omniloc.evaluate.tracking import (  # noqa: E402
     Segment,
     Stream,
@@ -47,8 +51,9 @@ from omniloc.evaluate.tracking import (  # noqa: E402
     score_run,
 )
 from omniloc.sensor import SensorModel  # noqa: E402
-from omniloc.track import Tracker, simulate_run  # noqa: E402
+from omniloc.track import Tracker, TrackerConfig, simulate_run, with_settings  # noqa: E402
 from omniloc.track.simulate import EXAMPLE_MAP, EXAMPLE_MOTION, EXAMPLE_SENSOR  # noqa: E402
+from track_lookalikes import parse_set  # noqa: E402
 
 # The scenario of omniloc's example recording (omniloc.track.simulate.example_run).
 GRID = EXAMPLE_MAP
@@ -70,8 +75,13 @@ def _stream(name: str, run: object, kidnap_t: float) -> Stream:
     return Stream(name, GRID, odo, frames, segs)
 
 
-def run_scenario(name: str, sensor: SensorModel, n: int, seed: int) -> TrackingResult:
+def run_scenario(
+    name: str, sensor: SensorModel, n: int, seed: int, settings: dict[str, Any] | None = None
+) -> TrackingResult:
     gen = np.random.default_rng(seed)
+    motion, config = MOTION, TrackerConfig()
+    if settings:
+        sensor, motion, config = with_settings(sensor, MOTION, config, settings)
     x0, y0, x1, y1 = GRID.bounds
     scores = []
     for k in range(n):
@@ -96,7 +106,7 @@ def run_scenario(name: str, sensor: SensorModel, n: int, seed: int) -> TrackingR
             rng=int(gen.integers(2**31)),
         )
         stream = _stream(f"{name}-{k}", run, JUMP_S if kidnap else math.nan)
-        est, cpu = run_stream(Tracker(GRID, sensor, MOTION), stream)
+        est, cpu = run_stream(Tracker(GRID, sensor, motion, config), stream)
         scores.append(score_run(stream, est, cpu_s=cpu))
         print(f"  {stream.name}: localized {sum(e.localized for e in est)}/{len(est)}", flush=True)
     return TrackingResult(name, scores)
@@ -144,15 +154,21 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=12, help="runs per scenario (half kidnapped)")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--set", action="append", default=[], metavar="NAME=VALUE")
     ap.add_argument("--out", type=Path, default=HERE / "results_track_sim.json")
     args = ap.parse_args(argv)
     if args.runs < 2:
         ap.error("--runs must be at least 2 (half of them are kidnapped)")
+    settings = parse_set(args.set)
+    try:  # (a bad name or value fails here, once)
+        with_settings(EXAMPLE_SENSOR, MOTION, TrackerConfig(), settings)
+    except InputError as exc:
+        ap.error(f"--set: {exc}")
     t0 = time.time()
     results = {}
     for k, (name, sensor) in enumerate(SCENARIOS.items()):
         print(name, flush=True)
-        results[name] = run_scenario(name, sensor, args.runs, args.seed + k)
+        results[name] = run_scenario(name, sensor, args.runs, args.seed + k, settings)
     md = table(results)
     meta = {
         "when": datetime.now(timezone.utc).isoformat(timespec="seconds"),
@@ -161,6 +177,7 @@ def main(argv: list[str] | None = None) -> int:
         "machine": platform.processor() or platform.machine(),
         "libraries": libraries(),
         "wall_s": round(time.time() - t0, 1),
+        "settings": settings,
     }
     args.out.write_text(
         json.dumps(
