@@ -15,8 +15,9 @@ frame cannot break, scored by the same code (``omniloc.evaluate.tracking``):
 Each scenario has ``--runs`` runs of 60 s from random poses inside the grid (0.25 m/s, a new
 turn rate every 4 s), half of them kidnapped at 30 s to a random pose at least 2 m away.
 The tracker uses the sensor model the frames were simulated with and the default
-configuration; ``--set`` changes a setting (``omniloc.track.with_settings`` names, as in
-``track_lookalikes.py``), e.g. ``--set search_miss=0.1``. Writes ``results_track_sim.json``
+configuration; ``--set`` changes a setting of the tracker's models, not of the simulation
+(``omniloc.track.with_settings`` names, as in ``track_lookalikes.py``), e.g. ``--set
+search_miss=0.1``. Writes ``results_track_sim.json``
 and ``.md`` beside this file.
 """
 
@@ -79,9 +80,10 @@ def run_scenario(
     name: str, sensor: SensorModel, n: int, seed: int, settings: dict[str, Any] | None = None
 ) -> TrackingResult:
     gen = np.random.default_rng(seed)
-    motion, config = MOTION, TrackerConfig()
+    # (A setting changes the tracker's models, never the simulation's.)
+    tracked, motion, config = sensor, MOTION, TrackerConfig()
     if settings:
-        sensor, motion, config = with_settings(sensor, MOTION, config, settings)
+        tracked, motion, config = with_settings(sensor, MOTION, config, settings)
     x0, y0, x1, y1 = GRID.bounds
     scores = []
     for k in range(n):
@@ -106,7 +108,7 @@ def run_scenario(
             rng=int(gen.integers(2**31)),
         )
         stream = _stream(f"{name}-{k}", run, JUMP_S if kidnap else math.nan)
-        est, cpu = run_stream(Tracker(GRID, sensor, motion, config), stream)
+        est, cpu = run_stream(Tracker(GRID, tracked, motion, config), stream)
         scores.append(score_run(stream, est, cpu_s=cpu))
         print(f"  {stream.name}: localized {sum(e.localized for e in est)}/{len(est)}", flush=True)
     return TrackingResult(name, scores)
