@@ -15,8 +15,9 @@ of three scenes by ``s % 3``:
 60 s from a random pose (0.25 m/s, turning at up to 0.3 rad/s); odd runs are carried to a
 random pose at 30 s. The figures: frames localized, right (0.3 m, 5 deg) and wrong, the
 wrong ones away from a jump (more than 3 s after it, or in a run without one) apart, and
-the runs they fall in. ``--set`` changes a tracker setting (``omniloc.track.with_settings``
-names), e.g. ``--set model_check=None`` for the tracker without the model check.
+the runs they fall in. ``--set`` changes a setting of the tracker's models, not of the
+simulation (``omniloc.track.with_settings`` names), e.g. ``--set model_check=None`` for the
+tracker without the model check.
 
 Writes ``results_track_lookalikes.json`` and ``.md`` beside this file (or ``--out``).
 """
@@ -50,10 +51,10 @@ def one(job: tuple[int, dict[str, Any]]) -> dict[str, Any]:
     seed, settings = job
     ex = lookalike_run(seed)
     run = ex.run
-    _, _, config = with_settings(*preset("generic"), settings)
-    res = track(
-        ex.landmarks, run.odometry, run.frames, sensor=ex.sensor, motion=ex.motion, config=config
-    )
+    # (A setting changes the tracker's models -- the run's own sensor and motion, the
+    # generic preset's configuration -- never the simulation's.)
+    sensor, motion, config = with_settings(ex.sensor, ex.motion, preset("generic")[2], settings)
+    res = track(ex.landmarks, run.odometry, run.frames, sensor=sensor, motion=motion, config=config)
     out: dict[str, Any] = {"seed": seed, "frames": len(res.estimates), "localized": 0, "right": 0}
     wrong = []
     for e in res.estimates:
@@ -114,7 +115,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     settings = parse_set(args.set)
     try:  # (a bad name or value fails here, once)
-        with_settings(*preset("generic"), settings)
+        ex = lookalike_run(args.seeds[0])
+        with_settings(ex.sensor, ex.motion, preset("generic")[2], settings)
     except InputError as exc:
         ap.error(f"--set: {exc}")
     t0 = time.perf_counter()
