@@ -450,6 +450,44 @@ def test_compiled_merge_matches_numpy(seed: int) -> None:
     assert 6 <= len(fast) < K - 50  # merges happened, and not everything merged
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    K=st.integers(2, 400),
+    spread=st.sampled_from([0.3, 3.0, 30.0, 300.0, 1e150]),
+    wide=st.floats(0.0, 0.5),
+    bad=st.booleans(),
+    line=st.booleans(),
+)
+def test_the_merges_grid_keeps_what_the_plain_loop_keeps(
+    seed: int, K: int, spread: float, wide: float, bad: bool, line: bool
+) -> None:
+    """The compiled merge files the kept poses in a grid and tests a pose only against
+    those within its reach's cells: the same kept poses, each merged into the same one, as
+    the plain loop, whether the poses crowd into one cell or spread over many (or over
+    1e150 m, a grid of more cells than an integer counts; on one line, a grid of no
+    area), whatever share of them reach beyond a cell (wide covariances), and with a pose
+    that is not finite (no grid then)."""
+    rng = np.random.default_rng(seed)
+    n_centres = int(rng.integers(1, 12))
+    centres = rng.uniform(0, spread, (n_centres, 3))
+    poses = centres[rng.integers(0, n_centres, K)] + rng.normal(0, [0.08, 0.08, 0.02], (K, 3))
+    poses[:, 2] = np.angle(np.exp(1j * poses[:, 2]))
+    if line:
+        poses[:, 1] = poses[0, 1]
+    scale = np.where(rng.uniform(size=K) < wide, rng.uniform(1.0, 50.0, K), 1e-3)
+    A = rng.normal(size=(K, 3, 3))
+    cov = (A @ A.transpose(0, 2, 1) + 0.1 * np.eye(3)) * scale[:, None, None]
+    if bad:
+        poses[rng.integers(K), int(rng.integers(0, 2))] = np.nan
+    rank = rng.permutation(K).astype(np.int64)
+    with np.errstate(all="ignore"):
+        fast, owner = scoring._merge(rank, poses, cov)
+        slow, slow_owner = scoring.merge_numpy(rank, poses, cov)
+    assert fast == slow
+    assert owner.tolist() == slow_owner.tolist()
+
+
 @settings(max_examples=80, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), log_cond=st.floats(0.0, 16.0))
 def test_fixed_covariances_are_what_their_eigenvalues_say(seed: int, log_cond: float) -> None:
@@ -1000,3 +1038,4 @@ def test_unique_rows_is_numpys_unique(shape: tuple[int, int], rng: np.random.Gen
     rows, first = hyp_search.unique_rows(extreme)
     want_rows, want_first = np.unique(extreme, axis=0, return_index=True)
     assert np.array_equal(rows, want_rows) and np.array_equal(first, want_first)
+
