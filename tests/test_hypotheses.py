@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 import math
+import os
 import time
 from typing import Any
 
@@ -1039,3 +1040,57 @@ def test_unique_rows_is_numpys_unique(shape: tuple[int, int], rng: np.random.Gen
     want_rows, want_first = np.unique(extreme, axis=0, return_index=True)
     assert np.array_equal(rows, want_rows) and np.array_equal(first, want_first)
 
+
+# ---- the search's pool of threads --------------------------------------------------------------
+
+
+def test_a_chunk_that_raises_leaves_no_chunk_running() -> None:
+    """The chunks run on the process's pool: when one raises, its error reaches the caller,
+    the chunks still queued are dropped and the one running is waited for (none outlives
+    the call)."""
+    from types import SimpleNamespace
+
+    started: list[int] = []
+    finished: list[int] = []
+
+    def call(part: slice, chunk: int, first: int, cap: tuple[int, int]) -> Any:
+        started.append(chunk)
+        if chunk == 1:
+            raise RuntimeError("chunk 1 failed")
+        time.sleep(0.05)
+        finished.append(chunk)
+        return (None, None, None, SimpleNamespace(nodes=0, work=0, stopped=False))
+
+    chunks = [(slice(0, 1), k, 0) for k in range(6)]
+    out = SimpleNamespace(time_left=lambda timeout: None, complete=True)
+    opt = SimpleNamespace(budget=SimpleNamespace(timeout_s=None))
+    with pytest.raises(RuntimeError, match="chunk 1 failed"):
+        hyp_search._run_chunks(call, chunks, (0, 0), out, opt)  # type: ignore[arg-type]
+    started_then, finished_then = list(started), list(finished)
+    assert sorted(started_then) == sorted([*finished_then, 1])  # each one started had ended
+    time.sleep(0.3)
+    assert started == started_then  # and none starts after the call
+    assert len(started) < len(chunks)
+
+
+@pytest.mark.skipif(
+    "fork" not in __import__("multiprocessing").get_all_start_methods(), reason="no fork"
+)
+def test_a_forked_child_searches_on_its_own_pool() -> None:
+    # The parent's search threads do not exist in a child made by fork (evaluation workers
+    # forked after a search in the parent): the child's chunks must not wait for them.
+    import multiprocessing as mp
+
+    import omniloc._pools as pools
+
+    lm = demo_room()
+    sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=7, n_spurious=1, rng=3)
+    want = localize(lm, sc.bearings, max_spurious=2, sigma=np.deg2rad(1.0))
+    if (os.cpu_count() or 1) >= 2:
+        assert any(name == "omniloc-search" for name, _ in pools._pools)  # chunks ran on it
+    ctx = mp.get_context("fork")
+    with ctx.Pool(1) as pool:
+        got = pool.apply_async(
+            localize, (lm, sc.bearings), {"max_spurious": 2, "sigma": np.deg2rad(1.0)}
+        ).get(timeout=60)
+    np.testing.assert_array_equal(got.poses, want.poses)

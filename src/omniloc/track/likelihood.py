@@ -39,8 +39,6 @@ nothing, so the numbers are those of the whole map, bit for bit (:func:`_cell_gr
 from __future__ import annotations
 
 import math
-import os
-import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -48,6 +46,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from .. import _pools
 from .._kernels.track import frame_update_kernel
 from ..sensor import SensorModel
 
@@ -78,35 +77,13 @@ PARALLEL_MIN = 512
 #: Threads for the halves (at most the machine's cores).
 THREADS = 2
 
-#: The machine's cores (asked once: ``os.cpu_count`` reads /proc each time).
-_CORES = os.cpu_count() or 1
-
-_pool: ThreadPoolExecutor | None = None
-_pool_lock = threading.Lock()
-
 
 def shared_pool() -> ThreadPoolExecutor | None:
-    """The module's pool of one helper thread (the caller runs the other half), made at
-    first use; None on a machine with one core."""
-    global _pool
-    if min(THREADS, _CORES) < 2:
+    """The pool of one helper thread for a frame's other half (the caller runs one half;
+    :func:`omniloc._pools.pool`), made at first use; None on a machine with one core."""
+    if min(THREADS, _pools.CORES) < 2:
         return None
-    with _pool_lock:
-        if _pool is None:
-            _pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="omniloc-frame")
-        return _pool
-
-
-def _forget_pool() -> None:
-    """In a forked child: the parent's pool has no thread here (work handed to it would
-    wait for ever), so the child makes its own at first use."""
-    global _pool, _pool_lock
-    _pool = None
-    _pool_lock = threading.Lock()
-
-
-if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_forget_pool)
+    return _pools.pool("omniloc-frame", 1)
 
 
 #: Smallest distance (m) from a pose to a landmark for which a bearing is predicted.
