@@ -1085,12 +1085,54 @@ def test_a_forked_child_searches_on_its_own_pool() -> None:
 
     lm = demo_room()
     sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=7, n_spurious=1, rng=3)
-    want = localize(lm, sc.bearings, max_spurious=2, sigma=np.deg2rad(1.0))
+    # (A time budget on a small map runs a chunk per seed, as the tracker's searches do.)
+    kw = {"max_spurious": 2, "sigma": np.deg2rad(1.0), "timeout_s": 30.0}
+    want = localize(lm, sc.bearings, **kw)
     if (os.cpu_count() or 1) >= 2:
-        assert any(name == "omniloc-search" for name, _ in pools._pools)  # chunks ran on it
+        assert any(name == "omniloc-search" for name, _ in pools._local.pools)  # ran on it
     ctx = mp.get_context("fork")
     with ctx.Pool(1) as pool:
-        got = pool.apply_async(
-            localize, (lm, sc.bearings), {"max_spurious": 2, "sigma": np.deg2rad(1.0)}
-        ).get(timeout=60)
+        got = pool.apply_async(localize, (lm, sc.bearings), kw).get(timeout=60)
     np.testing.assert_array_equal(got.poses, want.poses)
+
+
+def test_each_thread_searches_on_pools_of_its_own_that_leave_with_it() -> None:
+    # Searches run from several threads at once do not queue behind each other's chunks,
+    # and a thread's pool does not outlive it (its workers leave once it is collected).
+    import gc
+    import threading
+
+    lm = demo_room()
+    sc = observe(lm, DEMO_POSE, visible=DEMO_VISIBLE, n_obs=7, n_spurious=1, rng=3)
+    kw = {"max_spurious": 2, "sigma": np.deg2rad(1.0), "timeout_s": 30.0}  # chunks per seed
+    want = localize(lm, sc.bearings, **kw)
+
+    def workers() -> int:
+        return sum(t.name.startswith("omniloc-search") for t in threading.enumerate())
+
+    before = workers()
+    got: list[Any] = []
+    seen: list[object] = []
+
+    def run() -> None:
+        import omniloc._pools as pools
+
+        got.append(localize(lm, sc.bearings, **kw))
+        seen.append(pools.pool("omniloc-search", hyp_search.THREADS))
+
+    threads = [threading.Thread(target=run) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(got) == 3
+    for res in got:
+        np.testing.assert_array_equal(res.poses, want.poses)
+    if (os.cpu_count() or 1) >= 2:
+        assert len({id(p) for p in seen}) == 3  # one pool per thread (all alive here)
+    seen.clear()
+    deadline = time.monotonic() + 10.0
+    while workers() > before and time.monotonic() < deadline:
+        gc.collect()
+        time.sleep(0.05)
+    assert workers() == before
