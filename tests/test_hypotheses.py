@@ -1135,4 +1135,4 @@ def test_each_thread_searches_on_pools_of_its_own_that_leave_with_it() -> None:
     while workers() > before and time.monotonic() < deadline:
         gc.collect()
         time.sleep(0.05)
-    assert workers() == before
+    assert workers() <= before  # (other tests' threads' pools may leave meanwhile too)
