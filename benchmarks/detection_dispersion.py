@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -49,6 +49,16 @@ def reported(frame: Frame, n: int) -> NDArray[np.bool_]:
     return seen
 
 
+def frames_with_truth(stream: Stream) -> Iterator[tuple[Frame, NDArray[np.float64]]]:
+    """The frames of ``stream`` whose ground truth is known (no gap in the track longer than
+    ``MAX_GAP_S`` around them), each with its true pose."""
+    ts = np.array([f.t for f in stream.frames])
+    truth, gaps = stream.truth_at(ts)
+    for f, x, gap in zip(stream.frames, truth, gaps, strict=True):
+        if gap <= MAX_GAP_S and np.isfinite(x).all():
+            yield f, x
+
+
 def counts_in_view(streams: Sequence[Stream], sensor: SensorModel) -> dict[int, list[int]]:
     """For each number of landmarks in view of the true pose, the number of them reported in
     each such frame (frames without ground truth are skipped)."""
@@ -56,12 +66,8 @@ def counts_in_view(streams: Sequence[Stream], sensor: SensorModel) -> dict[int, 
     if sensor.fov is not None:
         sensor = replace(sensor, fov=sensor.fov - 2.0 * EDGE)
     for st in streams:
-        ts = np.array([f.t for f in st.frames])
-        truth, gaps = st.truth_at(ts)
         L = st.landmarks.xy
-        for f, x, gap in zip(st.frames, truth, gaps, strict=True):
-            if not (gap <= MAX_GAP_S and np.isfinite(x).all()):
-                continue
+        for f, x in frames_with_truth(st):
             vis = sensor.visible(L, x)
             seen = {t for t in (f.truth or ()) if t is not None and vis[t]}
             out.setdefault(int(vis.sum()), []).append(len(seen))

@@ -41,8 +41,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 from _results import run_meta, write_results  # noqa: E402
-from detection_dispersion import EDGE, reported  # noqa: E402  (the same view as its counts)
-from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
+from detection_dispersion import EDGE, frames_with_truth, reported  # noqa: E402  (the same view)
+from omniloc.evaluate.tracking import Stream, mrclam_streams  # noqa: E402
 from omniloc.sensor import SensorModel  # noqa: E402
 from omniloc.track import preset  # noqa: E402
 
@@ -67,11 +67,7 @@ def sightings(streams: Sequence[Stream], sensor: SensorModel) -> NDArray[np.floa
     rows: list[tuple[float, float, float, float, float]] = []
     for k, st in enumerate(streams):
         L = st.landmarks.xy
-        ts = np.array([f.t for f in st.frames])
-        truth, gaps = st.truth_at(ts)
-        for f, x, gap in zip(st.frames, truth, gaps, strict=True):
-            if not (gap <= MAX_GAP_S and np.isfinite(x).all()):
-                continue
+        for f, x in frames_with_truth(st):
             vis = sensor.visible(L, x)
             seen = reported(f, len(L))
             for j in np.flatnonzero(vis):

@@ -374,6 +374,7 @@ _PLAIN_KERNEL: list[object] = []
     fresh=st.sampled_from([1.0, 0.25, 1e-3]),
     miss_weight=st.sampled_from([1.0, 0.5]),
     exclusive=st.booleans(),
+    occlusion=st.sampled_from([0.0, 0.4]),
     K=st.integers(0, 3),
 )
 def test_faint_readings_are_skipped_without_changing_a_bit(
@@ -384,6 +385,7 @@ def test_faint_readings_are_skipped_without_changing_a_bit(
     fresh: float,
     miss_weight: float,
     exclusive: bool,
+    occlusion: float,
     K: int,
 ) -> None:
     # The frame kernel does not compute a reading below fresh * 2^-60 (it rounds away in the
@@ -415,7 +417,7 @@ def test_faint_readings_are_skipped_without_changing_a_bit(
     args = (
         bearings, L, sigma**2, 0.2, 0.6, math.radians(60.0), 49.0, 0.0, 1e-12, 1e-6, update,
         fresh, core_share, (sigma * core_scale) ** 2, core_update, 1.0, True, miss_weight,
-        exclusive, obj_b, obj_w, (sigma * 2) ** 2,
+        exclusive, occlusion, obj_b, obj_w, (sigma * 2) ** 2,
     )  # fmt: skip
     got = frame_update_kernel(mu, P, *args)
     expect = plain(mu, P, *args)  # type: ignore[operator]

@@ -731,3 +731,64 @@ def test_exclusive_landmarks_stay_finite_where_the_clutter_is_nearly_all_memory(
     got = log_ratios_clutter(mu, zs, L, ex, objects)[0][0]
     assert np.isfinite(plain) and np.isfinite(got)
     assert got < plain - 100.0
+
+
+def _occluded_cost(gap: float, width: float, update: bool) -> float:
+    """ln ratio of an empty frame with a landmark 2 m ahead and one 4 m ahead whose line of
+    sight passes ``gap`` metres beside the first (at the first's distance)."""
+    model = dataclasses.replace(_model(fov=np.deg2rad(90.0), max_range=6.0), occlusion=width)
+    # The second landmark's bearing is gap / 2 rad off the first's (gap metres at 2 m).
+    L = np.array([[2.0, 0.0], [4.0 * math.cos(gap / 2.0), 4.0 * math.sin(gap / 2.0)]])
+    mu = np.array([[0.0, 0.0, 0.0]])
+    if update:
+        P = np.diag([1e-6, 1e-6, 1e-8])[None]
+        return float(frame_update(mu, P, np.zeros(0), L, model)[2][0])
+    return float(log_ratios(mu, np.zeros(0), L, model)[0])
+
+
+@pytest.mark.parametrize("update", [True, False])
+def test_a_landmark_behind_a_nearer_one_is_not_expected_to_be_seen(update: bool) -> None:
+    # Right behind: the farther landmark's miss costs nothing; far beside it: its full
+    # ln(1 - p); in between: the notch 1 - exp(-l^2 / (2 w^2)) on its detection probability.
+    p, w = 0.6, 0.04
+    assert _occluded_cost(0.0, w, update) == pytest.approx(math.log(1 - p), rel=1e-6)
+    assert _occluded_cost(1.0, w, update) == pytest.approx(2 * math.log(1 - p), rel=1e-6)
+    f = 1.0 - math.exp(-0.5 * (0.05 / w) ** 2)
+    want = math.log(1 - p) + math.log(1 - p * f)
+    assert _occluded_cost(0.05, w, update) == pytest.approx(want, rel=1e-5)
+    # Without occlusion the two misses cost in full wherever the second stands.
+    assert _occluded_cost(0.0, 0.0, update) == pytest.approx(2 * math.log(1 - p), rel=1e-6)
+
+
+def test_an_occluded_landmark_explains_its_bearing_less() -> None:
+    # A bearing at a landmark hidden right behind a nearer one, far from that nearer one's
+    # own bearing, is more likely clutter with occlusion than without.
+    L = np.array([[2.0, 0.0], [4.0, 0.0], [3.0, 2.0]])
+    mu = np.array([[0.0, 0.0, 0.0]])
+    P = np.diag([1e-4, 1e-4, 1e-6])[None]
+    plain = _model(fov=np.deg2rad(120.0), max_range=6.0)
+    hidden = dataclasses.replace(plain, occlusion=0.04)
+    z = np.array([_bearing(mu[0], L[2])])
+    a = frame_update_clutter(mu, P, z, L, plain, None)
+    b = frame_update_clutter(mu, P, z, L, hidden, None)
+    # The third landmark stands clear: its reading is the same; the frame costs one miss
+    # fewer (the hidden landmark's).
+    assert b[2][0] - a[2][0] == pytest.approx(-math.log(1 - 0.6), rel=1e-6)
+    np.testing.assert_allclose(b[4], a[4], rtol=1e-9)
+
+
+def test_occlusion_width_reaches_the_frame_model_and_is_checked() -> None:
+    from omniloc import LandmarkMap
+    from omniloc.errors import InputError
+    from omniloc.track import TrackerConfig
+    from omniloc.track.motion import MotionModel
+    from omniloc.track.tracker import Tracker
+
+    lm = LandmarkMap(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
+    sensor = SensorModel(sigma=SIGMA)
+    tr = Tracker(lm, sensor, MotionModel(), TrackerConfig(occlusion_width=0.04))
+    assert tr._model.occlusion == 0.04
+    assert Tracker(lm, sensor, MotionModel(), TrackerConfig())._model.occlusion == 0.0
+    for bad in (-0.1, float("nan"), float("inf")):
+        with pytest.raises(InputError, match="occlusion_width"):
+            TrackerConfig(occlusion_width=bad)

@@ -16,6 +16,10 @@ from numpy.typing import NDArray
 
 from .geometry import det3, form3, inv3, wrap_float
 
+#: A nearer landmark whose line of sight passes more than this many occlusion widths beside
+#: a farther one's is taken not to hide it (its factor would exceed 1 - 2e-8).
+OCCLUSION_REACH = 6.0
+
 __all__ = [
     "covered_kernel",
     "frame_update_kernel",
@@ -554,6 +558,56 @@ def _view_d(p_detect: float, half_fov: float, h: float, var: float) -> float:
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _occlude(
+    mu: FloatArray,
+    L: FloatArray,
+    h: FloatArray,
+    d: FloatArray,
+    half_fov: float,
+    width: float,
+    occ: FloatArray,
+    wi: NDArray[np.int64],
+    wq: FloatArray,
+) -> None:
+    """Landmarks hidden behind nearer ones: each landmark ``n`` with ``d[n]`` != 0 (in range;
+    -1, its view not yet computed, included) has its detection probability multiplied by
+    ``occ[n] = prod_m (1 - exp(-l_m^2 / (2 width^2)))`` over the nearer landmarks ``m`` in
+    range whose predicted bearing lies in the field of view (``half_fov`` < 0: every one),
+    where ``l_m`` is how far the line of sight to ``n`` passes beside ``m`` (metres at
+    ``m``'s distance: the bearings' separation times that distance). A factor for ``l_m``
+    beyond ``OCCLUSION_REACH`` widths (above 1 - 2e-8) is taken as 1. ``d[n]`` -1 stays -1
+    (the caller multiplies its view by ``occ[n]`` when it computes it). ``wi`` and ``wq``
+    (N,) are scratch space. The occluders are those in view at the pose's mean, whatever
+    its uncertainty, so that every path of :func:`_predict_one` (exact or not, its view
+    lazy or not) gives the same factors; a landmark just outside the view hides nothing."""
+    # (The landmarks in range, and their squared distances, gathered first: a pose sees a
+    # few of a map's landmarks, and only pairs of those are compared.)
+    k = 0
+    for n in range(L.shape[0]):
+        occ[n] = 1.0
+        if d[n] != 0.0:
+            wi[k] = n
+            wq[k] = (L[n, 0] - mu[0]) ** 2 + (L[n, 1] - mu[1]) ** 2
+            k += 1
+    reach2 = (OCCLUSION_REACH * width) ** 2
+    inv = 0.5 / (width * width)
+    for a in range(k):
+        n = wi[a]
+        f = 1.0
+        for b in range(k):
+            m = wi[b]
+            if b == a or not wq[b] < wq[a] or (half_fov >= 0.0 and not abs(h[m]) <= half_fov):
+                continue
+            e = wrap_float(h[m] - h[n])
+            l2 = e * e * wq[b]
+            if l2 < reach2:
+                f *= -math.expm1(-l2 * inv)
+        occ[n] = f
+        if d[n] > 0.0:
+            d[n] *= f
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _odds(d: float, miss_weight: float) -> float:
     """A reading's detection odds: it takes its landmark's miss term back, and with the
     misses weighed by ``miss_weight`` what it takes back is the weighed term."""
@@ -675,6 +729,7 @@ def frame_update_kernel(
     nonempty: bool,
     miss_weight: float,
     exclusive: bool,
+    occlusion: float,
     obj_b: FloatArray,
     obj_w: FloatArray,
     obj_var: float,
@@ -724,7 +779,13 @@ def frame_update_kernel(
     before it moved); the frame's ratio is then the sum over the assignments in which no
     landmark takes two bearings instead of the product of the bearings' sums
     (:func:`_exclusive_correction`). The updates, the clutter posteriors and the counts of
-    bearings explained are as without it."""
+    bearings explained are as without it.
+
+    ``occlusion`` > 0: landmarks stand in each other's way. A landmark's detection
+    probability is multiplied, for each nearer landmark, by ``1 - exp(-l^2 / (2
+    occlusion^2))``, ``l`` being how far (m) the line of sight to it passes beside the
+    nearer one (:func:`_occlude`): a tube right behind another is not expected to be seen.
+    0: no landmark hides another."""
     # (Exactly known poses: neither mu nor P is changed, and P may be a single zero
     # covariance shared by every pose.)
     mu = mu.copy() if update else mu
@@ -750,6 +811,11 @@ def frame_update_kernel(
     J = np.empty((N, 3))
     var = np.empty(N)
     d = np.empty(N)
+    # (Landmarks hidden behind nearer ones: each one's factor, and scratch space.)
+    n_occ = N if occlusion > 0.0 else 0
+    occ = np.ones(n_occ)
+    occ_i = np.empty(n_occ, dtype=np.int64)
+    occ_q = np.empty(n_occ)
     a = np.empty(N)
     ac = np.zeros(N)
     nu = np.empty(N)
@@ -814,6 +880,8 @@ def frame_update_kernel(
             tan_out,
             not update,
         )
+        if occlusion > 0.0:
+            _occlude(m, L, h, d, half_fov, occlusion, occ, occ_i, occ_q)
         s = 0.0
         for n in range(N):
             if d[n] > 0.0:
@@ -866,6 +934,8 @@ def frame_update_kernel(
                     False,
                     True,
                 )
+                if occlusion > 0.0:
+                    _occlude(m, L, h, d, half_fov, occlusion, occ, occ_i, occ_q)
                 moved = False
             base = fresh
             for o in range(K):
@@ -913,6 +983,8 @@ def frame_update_kernel(
                     # moved the hypothesis: see _predict_one's lazy_view. Out of view, d 0
                     # gives readings of 0, as the test of d above would.)
                     d[n] = _view_d(p_detect, half_fov, h[n], var[n])
+                    if occlusion > 0.0:
+                        d[n] *= occ[n]
                 rho = _odds(d[n], miss_weight)
                 if core_share > 0.0:
                     a[n] = _reading(wide, rho, nu[n], S, norm)

@@ -137,6 +137,11 @@ class FrameModel:
         readings as the chain rule above computes them (the updates are unchanged). False:
         each bearing is weighed on its own, as the product above has it
         (:attr:`~omniloc.track.TrackerConfig.exclusive_landmarks`).
+    occlusion : float
+        Landmarks hide the ones behind them: a landmark's detection probability is
+        multiplied, for each nearer landmark, by ``1 - exp(-l^2 / (2 occlusion^2))``, where
+        ``l`` (m) is how far the line of sight to it passes beside the nearer one (0: no
+        landmark hides another; :attr:`~omniloc.track.TrackerConfig.occlusion_width`).
     """
 
     sigma2: float
@@ -154,6 +159,7 @@ class FrameModel:
     nonempty: bool = False
     miss_weight: float = 1.0
     exclusive: bool = False
+    occlusion: float = 0.0
 
     @classmethod
     def of(cls, sensor: SensorModel, *, p_detect: float = 0.5, clutter: float = 0.5) -> FrameModel:
@@ -304,6 +310,7 @@ def _kernel(
         model.nonempty,
         model.miss_weight,
         model.exclusive,
+        model.occlusion,
         ob,
     )
     var = model.object_var if ob.size else 1.0

@@ -276,6 +276,8 @@ class Tracker:
             self._model = replace(self._model, miss_weight=c.miss_weight)
         if c.exclusive_landmarks:
             self._model = replace(self._model, exclusive=True)
+        if c.occlusion_width > 0:
+            self._model = replace(self._model, occlusion=c.occlusion_width)
         if c.clutter_persistence > 0:
             self._model = replace(
                 self._model,
