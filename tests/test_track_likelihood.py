@@ -758,6 +758,9 @@ def test_a_landmark_behind_a_nearer_one_is_not_expected_to_be_seen(update: bool)
     assert _occluded_cost(0.05, w, update) == pytest.approx(want, rel=1e-5)
     # Without occlusion the two misses cost in full wherever the second stands.
     assert _occluded_cost(0.0, 0.0, update) == pytest.approx(2 * math.log(1 - p), rel=1e-6)
+    # A width whose square underflows still hides a landmark right behind, and only it.
+    assert _occluded_cost(0.0, 1e-200, update) == pytest.approx(math.log(1 - p), rel=1e-6)
+    assert _occluded_cost(1e-3, 1e-200, update) == pytest.approx(2 * math.log(1 - p), rel=1e-6)
 
 
 def test_an_occluded_landmark_explains_its_bearing_less() -> None:

@@ -600,7 +600,11 @@ def _occlude(
                 continue
             e = wrap_float(h[m] - h[n])
             l2 = e * e * wq[b]
-            if l2 < reach2:
+            if l2 == 0.0:
+                # Right behind: hidden, whatever the width (one so small that its square
+                # underflows would make 0 * inf below).
+                f = 0.0
+            elif l2 < reach2:
                 f *= -math.expm1(-l2 * inv)
         occ[n] = f
         if d[n] > 0.0:
