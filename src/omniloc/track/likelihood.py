@@ -9,11 +9,13 @@ The model (multiple-hypothesis tracking, summed over the assignments)
 ---------------------------------------------------------------------
 A landmark ``j`` is detected with probability ``d_j = p_detect * v_j``, where ``v_j`` is the
 probability that it lies in the field of view given the pose's uncertainty (``Phi`` of how far
-inside the edge its predicted bearing lies, in standard deviations) and 0 out of range;
-spurious bearings are a Poisson clutter of density ``kappa = clutter / fov`` per radian. Summed
-over the ways of assigning bearings to landmarks (each bearing to at most one landmark, the
-landmarks of a map being rarely contested by two bearings of one frame; ``exclusive`` weighs
-the sum in which no landmark takes two bearings where they are), the ratio is
+inside the edge its predicted bearing lies, in standard deviations) and 0 out of range (with
+``occlusion``, times a factor for each nearer landmark whose line of sight it nearly
+shares: one right behind another is not seen); spurious bearings are a Poisson clutter of
+density ``kappa = clutter / fov`` per radian. Summed over the ways of assigning bearings to
+landmarks (each bearing to at most one landmark, the landmarks of a map being rarely
+contested by two bearings of one frame; ``exclusive`` weighs the sum in which no landmark
+takes two bearings where they are), the ratio is
 
     prod_j (1 - d_j)  *  prod_i (1 + sum_j rho_j g_ij / kappa),    rho_j = d_j / (1 - d_j),
 
