@@ -1826,3 +1826,19 @@ def test_a_tracker_saved_mid_run_goes_on_exactly_as_the_original(how: str) -> No
     original, copied = go(tr, rest, k_half), go(saved, rest, k_half)
     assert original == copied
     assert {s for s, _ in original} >= {"localized"}  # the second half does something
+
+
+def test_a_simulated_landmark_right_behind_another_is_never_reported() -> None:
+    # Landmark 1 stands right behind landmark 0 as seen from where the robot stands still;
+    # landmark 2 is clear of both. With occlusion the simulator never reports landmark 1;
+    # without it, every frame does (the simulator's p_detect 1 when the sensor states none).
+    lm = LandmarkMap(np.array([[2.0, 0.0], [4.0, 0.0], [3.0, 2.0]]))
+    sensor = SensorModel(sigma=math.radians(0.2))
+    kw = dict(duration_s=3.0, speed=0.0, turn_rate=0.0, rng=1)
+    hidden = simulate_run(lm, sensor, Pose(0.0, 0.0, 0.0), occlusion_width=0.05, **kw)
+    plain = simulate_run(lm, sensor, Pose(0.0, 0.0, 0.0), **kw)
+    assert len(hidden.frames) == len(plain.frames) >= 10
+    assert all(set(f.truth or ()) == {0, 2} for f in hidden.frames)
+    assert all(set(f.truth or ()) == {0, 1, 2} for f in plain.frames)
+    with pytest.raises(InputError, match="occlusion_width"):
+        simulate_run(lm, sensor, Pose(0.0, 0.0, 0.0), occlusion_width=-1.0, **kw)

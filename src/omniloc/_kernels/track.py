@@ -27,6 +27,7 @@ __all__ = [
     "merge_kernel",
     "move_kernel",
     "near_pairs",
+    "occlusion_factors",
     "particles_move_kernel",
     "place_kernel",
     "refine_frames_kernel",
@@ -609,6 +610,17 @@ def _occlude(
         occ[n] = f
         if d[n] > 0.0:
             d[n] *= f
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def occlusion_factors(rel: FloatArray, h: FloatArray, width: float) -> FloatArray:
+    """The factors :func:`_occlude` puts on the detection probabilities of landmarks at
+    ``rel`` (N, 2; metres from the sensor) seen at bearings ``h`` (N,), each one in view:
+    what a simulator draws its reports with, by the tracker's own model."""
+    n = rel.shape[0]
+    occ = np.ones(n)
+    _occlude(np.zeros(3), rel, h, np.ones(n), -1.0, width, occ, np.empty(n, np.int64), np.empty(n))
+    return occ
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

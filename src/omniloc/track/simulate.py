@@ -21,6 +21,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numpy.typing import NDArray
 
+from .._kernels.track import occlusion_factors
 from ..angles import wrap
 from ..errors import InputError
 from ..maps import LandmarkMap, as_landmark_map
@@ -72,6 +73,7 @@ def simulate_run(
     v_noise: float = 0.02,
     w_noise: float = 0.02,
     kidnap: tuple[float, Pose] | None = None,
+    occlusion_width: float = 0.0,
     rng: RngLike = None,
 ) -> SimulatedRun:
     """Simulate a robot's run.
@@ -100,6 +102,12 @@ def simulate_run(
         (rad/s, per row) errors.
     kidnap : (float, Pose), optional
         At this time the robot is carried to this pose (the odometry does not see it).
+    occlusion_width : float
+        Metres: a landmark in view is reported with probability ``p_detect`` times ``1 -
+        exp(-l^2 / (2 w^2))`` for each nearer landmark in view, ``l`` being how far its
+        line of sight passes beside that one -- the tracker's model of landmarks that hide
+        each other (:attr:`~omniloc.track.TrackerConfig.occlusion_width`). 0 (default):
+        none hides another (and the same draws, bit for bit, as without it).
     rng : Generator, int or None
 
     Returns
@@ -116,7 +124,12 @@ def simulate_run(
     ):
         if not (math.isfinite(val) and val > 0):
             raise InputError(f"{name} must be a positive number, got {val!r}")
-    for name, val in (("speed", speed), ("v_noise", v_noise), ("w_noise", w_noise)):
+    for name, val in (
+        ("speed", speed),
+        ("v_noise", v_noise),
+        ("w_noise", w_noise),
+        ("occlusion_width", occlusion_width),
+    ):
         if not (math.isfinite(val) and val >= 0):
             raise InputError(f"{name} must be finite and >= 0, got {val!r}")
     dt = 1.0 / odometry_hz
@@ -167,9 +180,13 @@ def simulate_run(
         # (The bearings are the sensor's: from where it sits on the robot, ``sensor.mount``.)
         pose = Pose.from_array(sensor.sensor_poses(truth.pose_at(float(tf))))
         vis = np.flatnonzero(sensor.visible(lm.xy, pose))
-        vis = vis[gen.random(vis.size) < p_det]
         d = lm.xy[vis] - pose.xy
-        b = np.arctan2(d[:, 1], d[:, 0]) - pose.theta + sensor.noise * gen.standard_normal(vis.size)
+        b = np.arctan2(d[:, 1], d[:, 0]) - pose.theta
+        if occlusion_width > 0:
+            keep = gen.random(vis.size) < p_det * occlusion_factors(d, b, occlusion_width)
+        else:
+            keep = gen.random(vis.size) < p_det
+        vis, d, b = vis[keep], d[keep], b[keep] + sensor.noise * gen.standard_normal(keep.sum())
         spur = gen.uniform(-half, half, size=gen.poisson(clutter))
         bearings = np.concatenate([b, spur])
         who: list[int | None] = [int(i) for i in vis] + [None] * spur.size
