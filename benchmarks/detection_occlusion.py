@@ -26,6 +26,7 @@ import argparse
 import itertools
 import math
 import sys
+from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -39,7 +40,8 @@ sys.path.insert(0, str(HERE.parent / "src"))
 from _results import run_meta, write_results  # noqa: E402
 from detection_dispersion import EDGE, frames_with_truth, reported  # noqa: E402  (the same view)
 from omniloc.angles import wrap  # noqa: E402
-from omniloc.evaluate.tracking import mrclam_streams  # noqa: E402
+from omniloc.evaluate.tracking import Stream, mrclam_streams  # noqa: E402
+from omniloc.sensor import SensorModel  # noqa: E402
 from omniloc.track import preset  # noqa: E402
 
 DATA = HERE.parent.parent / "shared" / "data" / "mrclam-ds6"
@@ -51,14 +53,16 @@ WIDTHS_M = (0.0, 0.02, 0.025, 0.03, 0.035, 0.04, 0.045, 0.05, 0.06)
 REACH = 6.0
 
 
-def sightings(data: str) -> tuple[list[NDArray[np.float64]], NDArray[np.bool_]]:
-    """For every landmark in view of a frame's true pose: the offsets (m) of the nearer
-    landmarks in the full view from its line of sight, and whether it was reported."""
-    sensor = preset("mrclam")[0]
+def sightings(
+    streams: Sequence[Stream], sensor: SensorModel
+) -> tuple[list[NDArray[np.float64]], NDArray[np.bool_]]:
+    """For every landmark in view of a frame's true pose (``sensor``'s view, ``EDGE``
+    inside its edges): the offsets (m) of the nearer landmarks in the full view from its
+    line of sight, and whether it was reported."""
     inner = replace(sensor, fov=sensor.fov - 2.0 * EDGE) if sensor.fov is not None else sensor
     offsets: list[NDArray[np.float64]] = []
     seen: list[bool] = []
-    for st in mrclam_streams(data):
+    for st in streams:
         L = st.landmarks.xy
         for f, x in frames_with_truth(st):
             count = inner.visible(L, x)
@@ -94,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--data", default=str(DATA), help="the MRCLAM set 6 folder")
     ap.add_argument("--out", default=str(HERE / "results_detection_occlusion.json"))
     args = ap.parse_args(argv)
-    offsets, seen = sightings(args.data)
+    offsets, seen = sightings(mrclam_streams(args.data), preset("mrclam")[0])
     nearest = np.array([o.min() if o.size else math.inf for o in offsets])
     clear = nearest >= OFFSET_BINS_M[-1]
     base = float(seen[clear].mean())
