@@ -763,9 +763,10 @@ def test_a_landmark_behind_a_nearer_one_is_not_expected_to_be_seen(update: bool)
     assert _occluded_cost(1e-3, 1e-200, update) == pytest.approx(2 * math.log(1 - p), rel=1e-6)
 
 
-def test_an_occluded_landmark_explains_its_bearing_less() -> None:
-    # A bearing at a landmark hidden right behind a nearer one, far from that nearer one's
-    # own bearing, is more likely clutter with occlusion than without.
+def test_a_hidden_landmark_costs_no_miss_and_leaves_a_clear_ones_reading() -> None:
+    # Landmark 1 right behind landmark 0; a bearing at landmark 2, which stands clear: its
+    # reading and clutter posterior are the same with occlusion, and the frame costs one
+    # miss fewer (the hidden landmark's).
     L = np.array([[2.0, 0.0], [4.0, 0.0], [3.0, 2.0]])
     mu = np.array([[0.0, 0.0, 0.0]])
     P = np.diag([1e-4, 1e-4, 1e-6])[None]
@@ -774,10 +775,31 @@ def test_an_occluded_landmark_explains_its_bearing_less() -> None:
     z = np.array([_bearing(mu[0], L[2])])
     a = frame_update_clutter(mu, P, z, L, plain, None)
     b = frame_update_clutter(mu, P, z, L, hidden, None)
-    # The third landmark stands clear: its reading is the same; the frame costs one miss
-    # fewer (the hidden landmark's).
     assert b[2][0] - a[2][0] == pytest.approx(-math.log(1 - 0.6), rel=1e-6)
     np.testing.assert_allclose(b[4], a[4], rtol=1e-9)
+
+
+def test_a_bearing_at_a_nearly_hidden_landmark_is_more_likely_clutter() -> None:
+    # Landmark 1 passes 2 cm beside landmark 0 (at landmark 0's 2 m; its bearing 0.57 deg
+    # off, 11 sigmas of a 0.05-deg sensor): a bearing at it is read as landmark 1 with
+    # the detection probability the occlusion leaves it, 1 - exp(-(0.02 / 0.04)^2 / 2) of
+    # the plain one, so clutter takes a larger share of it.
+    L = np.array([[2.0, 0.0], [4.0, 0.04]])
+    mu = np.array([[0.0, 0.0, 0.0]])
+    P = np.diag([1e-10, 1e-10, 1e-12])[None]
+    plain = dataclasses.replace(
+        _model(fov=np.deg2rad(120.0), max_range=6.0), sigma2=np.deg2rad(0.05) ** 2
+    )
+    hidden = dataclasses.replace(plain, occlusion=0.04)
+    z = np.array([_bearing(mu[0], L[1])])
+    a = frame_update_clutter(mu, P, z, L, plain, None)
+    b = frame_update_clutter(mu, P, z, L, hidden, None)
+    assert b[4][0, 0] > 2.0 * a[4][0, 0]
+    # The reading's odds by hand: d / (1 - d), d = p times the notch.
+    f = 1.0 - math.exp(-0.5 * (2.0 * math.atan2(0.04, 4.0) / 0.04) ** 2)
+    odds = lambda d: d / (1.0 - d)  # noqa: E731
+    ratio = (1.0 / a[4][0, 0] - 1.0) / (1.0 / b[4][0, 0] - 1.0)
+    assert ratio == pytest.approx(odds(0.6) / odds(0.6 * f), rel=1e-3)
 
 
 def test_occlusion_width_reaches_the_frame_model_and_is_checked() -> None:
