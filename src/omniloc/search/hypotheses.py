@@ -476,7 +476,7 @@ def _run_chunks(
         cap = caps_now()
         return [] if cap is None else [call(*chunks[0], cap)]
     workers = max(1, min(THREADS, _pools.CORES))
-    # The process's pool: starting two threads for each search cost a tracker's window
+    # The calling thread's pool: starting two threads for each search cost a tracker's window
     # searches on MRCLAM 1 ms of their 18.
     pool = _pools.pool("omniloc-search", workers)
     pending: list[Future[KernelResult]] = []
