@@ -1,0 +1,200 @@
+"""What the data allow when the bearing errors repeat on each landmark
+(omniloc.evaluate.bounds.RepeatingErrors): the information filter carries each landmark's
+drifting bias beside the pose."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from omniloc import LandmarkMap, Pose, predict_bearings
+from omniloc.errors import InputError
+from omniloc.evaluate.bounds import (
+    MRCLAM_REPEATING,
+    BoundSteps,
+    RepeatingErrors,
+    _Repeating,
+    bound_steps,
+    confident_frames,
+    stream_bound,
+    times_to_localize,
+)
+from omniloc.evaluate.tracking import Stream, whole_run
+from omniloc.pose import bearing_jacobian
+from omniloc.track import Frame, MotionModel, Odometry
+from omniloc.track.data import GroundTruth
+
+LANDMARKS = np.array([[3.0, 0.5], [2.5, -1.5], [4.0, 2.0], [-2.0, 3.0]])
+INFO = 1 / math.radians(0.5) ** 2
+
+
+def _steps(frames: list[list[int]], dt: float = 0.25, noise: bool = True) -> BoundSteps:
+    """Standing at the origin facing +x, frames of the given landmark rows (with each
+    bearing's row and gradient), the heading noise growing with time (no motion noise at
+    all without ``noise``)."""
+    k = len(frames)
+    F = np.tile(np.eye(3), (k, 1, 1))
+    N = np.zeros((k, 3, 3))
+    if noise:
+        N[1:] = np.diag([1e-6, 1e-6, 1e-4 * dt])
+    HtH = np.zeros((k, 3, 3))
+    grads = []
+    for i, rows in enumerate(frames):
+        if rows:
+            _, G = bearing_jacobian(LANDMARKS[rows], np.zeros(3))
+            HtH[i] = G.T @ G
+            grads.append(G)
+    rows_all = np.array([r for f in frames for r in f], dtype=np.int64)
+    G_all = np.concatenate(grads) if grads else np.zeros((0, 3))
+    return BoundSteps(
+        np.arange(k) * dt, F, N, HtH, np.array([len(r) for r in frames]), rows_all, G_all
+    )
+
+
+def _run(steps: BoundSteps, repeat: RepeatingErrors) -> tuple[np.ndarray, list[list[int]]]:
+    """The pose's information at each frame, the filter started at the first, and the
+    landmarks whose biases its state holds there."""
+    rf = _Repeating(steps, INFO, repeat, 1)
+    on = np.ones(1, dtype=bool)
+    out, lms = [], []
+    for i in range(steps.t.size):
+        rf.advance(i, on)
+        rf.update(i, on)
+        out.append(rf.pose(on)[0])
+        lms.append(list(rf.lms))
+        assert rf.Y.shape[1:] == (3 + len(rf.lms),) * 2
+    return np.array(out), lms
+
+
+def _pose_information(steps: BoundSteps, repeat: RepeatingErrors) -> np.ndarray:
+    return _run(steps, repeat)[0]
+
+
+def test_a_landmark_seen_again_at_once_adds_only_its_independent_part() -> None:
+    # Standing still, no motion noise, a bias that never drifts: after n frames of the same
+    # three landmarks, each landmark's n bearings are worth one of variance
+    # share / info + (1 - share) / (n info) -- the bias is not averaged away.
+    repeat = RepeatingErrors(share=0.8, tau_s=1e7)
+    n = 12
+    st_ = _steps([[0, 1, 2]] * n, noise=False)
+    got = _pose_information(st_, repeat)
+    _, G = bearing_jacobian(LANDMARKS[[0, 1, 2]], np.zeros(3))
+    for k in (1, 4, n):
+        var = repeat.share / INFO + (1 - repeat.share) / (k * INFO)
+        np.testing.assert_allclose(got[k - 1], G.T @ G / var, rtol=1e-6)
+    # Independent errors would have grown it n-fold; here it is less than 1.25-fold.
+    indep = n * INFO * G.T @ G
+    assert np.linalg.eigvalsh(got[-1] - indep).max() < 0
+    assert np.trace(got[-1]) < 1.25 * np.trace(INFO * G.T @ G)
+
+
+def test_a_bias_half_forgotten_between_two_sightings_counts_by_its_correlation() -> None:
+    # Two frames of the same three landmarks, the bias's correlation between them 0.5:
+    # each landmark's two errors have variance v = vb + vw and covariance 0.5 vb, so the
+    # pair is worth 1' C^-1 1 = 2 / (v + 0.5 vb) times its gradient's outer product.
+    dt = 0.25
+    repeat = RepeatingErrors(share=0.6, tau_s=dt / math.log(2.0))
+    got = _pose_information(_steps([[0, 1, 2]] * 2, dt=dt, noise=False), repeat)
+    vb, vw = repeat.share / INFO, (1 - repeat.share) / INFO
+    _, G = bearing_jacobian(LANDMARKS[[0, 1, 2]], np.zeros(3))
+    np.testing.assert_allclose(got[1], G.T @ G * 2 / (vb + vw + 0.5 * vb), rtol=1e-9)
+
+
+def test_errors_forgotten_between_frames_are_independent_ones() -> None:
+    # A time constant far below the frame period: every frame's biases are new, and each
+    # bearing is worth info, as without repeat.
+    frames = [[0], [1], [2], [0], [0, 1], [3], [3], [2], [0, 1, 2], [1]]
+    st_ = _steps(frames)
+    fast = RepeatingErrors(share=0.8, tau_s=1e-3)
+    indep = confident_frames(st_, INFO, 0.99)
+    assert indep.any() and not indep.all()
+    assert confident_frames(st_, INFO, 0.99, repeat=fast).tolist() == indep.tolist()
+    starts = list(range(len(frames)))
+    np.testing.assert_allclose(
+        times_to_localize(st_, starts, INFO, 0.99, repeat=fast),
+        times_to_localize(st_, starts, INFO, 0.99),
+    )
+    # A share of 0 is the independent bound itself.
+    none = RepeatingErrors(share=0.0, tau_s=5.0)
+    assert confident_frames(st_, INFO, 0.99, repeat=none).tolist() == indep.tolist()
+
+
+def test_a_landmark_not_seen_for_five_time_constants_leaves_the_state() -> None:
+    repeat = RepeatingErrors(share=0.5, tau_s=0.2)
+    st_ = _steps([[0], [1], [1], [1], [1], [2]])  # 0.25 s apart: landmark 0 leaves at 1.25 s
+    _, seen = _run(st_, repeat)
+    assert seen == [[0], [0, 1], [0, 1], [0, 1], [0, 1], [1, 2]]
+
+
+def test_repeating_errors_slow_the_bound_where_a_robot_sees_landmarks_in_turn() -> None:
+    lm = LandmarkMap(np.array([[8.0, 0.0], [9.0, 3.0], [10.0, -2.0], [7.0, 4.0]]))
+    n, dt = 160, 0.25
+    t = np.arange(n) * dt
+    gt_t = np.arange(-1.0, n * dt + 1.0, 0.1)
+    truth = GroundTruth(t=gt_t, x=0.2 * gt_t, y=np.zeros(gt_t.size), theta=np.zeros(gt_t.size))
+    frames = [
+        Frame(float(tk), predict_bearings(lm.xy[[k % 3]], Pose(0.2 * tk, 0.0, 0.0)), (k % 3,))
+        for k, tk in enumerate(t)
+    ]
+    s: Stream = whole_run("a", lm, Odometry(t=t, v=np.full(n, 0.2), w=np.zeros(n)), frames, truth)
+    motion = MotionModel(delay_s=0.0)
+    plain = stream_bound(s, motion, INFO, 0.99)
+    rep = stream_bound(s, motion, INFO, 0.99, repeat=MRCLAM_REPEATING)
+    assert 0.0 < plain.time_to_localize_s < rep.time_to_localize_s < 40.0
+    assert rep.correct_after_rate <= plain.correct_after_rate
+
+
+@pytest.mark.parametrize("mount", [None, (0.3, 0.1, 0.5)])
+def test_the_steps_carry_each_bearing_s_landmark_and_gradient(mount: object) -> None:
+    lm = LandmarkMap(np.array([[8.0, 0.0], [9.0, 3.0], [10.0, -2.0]]))
+    t = np.arange(6) * 0.25
+    gt_t = np.arange(-1.0, 3.0, 0.1)
+    truth = GroundTruth(t=gt_t, x=0.2 * gt_t, y=np.zeros(gt_t.size), theta=np.zeros(gt_t.size))
+    rows = [(0, 1), (), (2,), (1, 0, 2), (None, 1), (0,)]
+    frames = [Frame(float(tk), np.zeros(len(r)), r or None) for tk, r in zip(t, rows, strict=True)]
+    s = whole_run("a", lm, Odometry(t=t, v=np.full(6, 0.2), w=np.zeros(6)), frames, truth)
+    st_ = bound_steps(s, MotionModel(delay_s=0.0), mount)  # type: ignore[arg-type]
+    assert st_.rows is not None and st_.G is not None
+    assert st_.rows.tolist() == [0, 1, 2, 1, 0, 2, 1, 0]  # the clutter (None) dropped
+    off = np.concatenate([[0], np.cumsum(st_.bearings)])
+    for i in range(t.size):
+        g = st_.G[off[i] : off[i + 1]]
+        np.testing.assert_allclose(g.T @ g, st_.HtH[i], rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize(
+    "share, tau",
+    [
+        (1.0, 5.0),
+        (-0.1, 5.0),
+        (math.nan, 5.0),
+        ("a", 5.0),
+        (0.5, 0.0),
+        (0.5, -1.0),
+        (0.5, math.inf),
+        (0.5, math.nan),
+        (0.5, 1e8),
+    ],
+)
+def test_repeating_errors_that_are_not_a_model_are_refused(share: object, tau: object) -> None:
+    with pytest.raises(InputError, match="RepeatingErrors"):
+        RepeatingErrors(share=share, tau_s=tau)  # type: ignore[arg-type]
+
+
+def test_a_repeat_that_is_not_one_or_steps_without_their_bearings_are_refused() -> None:
+    st_ = _steps([[0, 1, 2]])
+    with pytest.raises(InputError, match="repeat must be a RepeatingErrors"):
+        confident_frames(st_, INFO, 0.99, repeat=0.5)  # type: ignore[arg-type]
+    bare = BoundSteps(st_.t, st_.F, st_.N, st_.HtH, st_.bearings)
+    with pytest.raises(InputError, match=r"BoundSteps\.rows"):
+        times_to_localize(bare, [0], INFO, 0.99, repeat=MRCLAM_REPEATING)
+    # Without repeat the bare steps are enough, as before.
+    assert confident_frames(bare, INFO, 0.99).tolist() == [True]
+
+
+def test_mrclam_s_repeating_errors_are_the_measured_fit() -> None:
+    # benchmarks/bearing_correlation.py: a bias of sd 0.71 deg over 13.9 s, white 0.37 deg.
+    assert MRCLAM_REPEATING.share == pytest.approx(0.783, abs=0.001)
+    assert MRCLAM_REPEATING.tau_s == 13.9
