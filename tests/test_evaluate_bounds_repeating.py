@@ -12,16 +12,18 @@ import pytest
 from omniloc import LandmarkMap, Pose, predict_bearings
 from omniloc.errors import InputError
 from omniloc.evaluate.bounds import (
+    MRCLAM_BEARING_ERRORS,
     MRCLAM_REPEATING,
     BoundSteps,
     RepeatingErrors,
     _Repeating,
+    bearing_information,
     bound_steps,
     confident_frames,
     stream_bound,
     times_to_localize,
 )
-from omniloc.evaluate.tracking import Stream, whole_run
+from omniloc.evaluate.tracking import Stream, mrclam_bound, whole_run
 from omniloc.pose import bearing_jacobian
 from omniloc.track import Frame, MotionModel, Odometry
 from omniloc.track.data import GroundTruth
@@ -128,9 +130,9 @@ def test_a_landmark_not_seen_for_five_time_constants_leaves_the_state() -> None:
     assert seen == [[0], [0, 1], [0, 1], [0, 1], [0, 1], [1, 2]]
 
 
-def test_repeating_errors_slow_the_bound_where_a_robot_sees_landmarks_in_turn() -> None:
+def _line(n: int = 160, dt: float = 0.25) -> Stream:
+    """Driving along x at 0.2 m/s, seeing three landmarks ahead one at a time, in turn."""
     lm = LandmarkMap(np.array([[8.0, 0.0], [9.0, 3.0], [10.0, -2.0], [7.0, 4.0]]))
-    n, dt = 160, 0.25
     t = np.arange(n) * dt
     gt_t = np.arange(-1.0, n * dt + 1.0, 0.1)
     truth = GroundTruth(t=gt_t, x=0.2 * gt_t, y=np.zeros(gt_t.size), theta=np.zeros(gt_t.size))
@@ -138,12 +140,25 @@ def test_repeating_errors_slow_the_bound_where_a_robot_sees_landmarks_in_turn() 
         Frame(float(tk), predict_bearings(lm.xy[[k % 3]], Pose(0.2 * tk, 0.0, 0.0)), (k % 3,))
         for k, tk in enumerate(t)
     ]
-    s: Stream = whole_run("a", lm, Odometry(t=t, v=np.full(n, 0.2), w=np.zeros(n)), frames, truth)
+    return whole_run("a", lm, Odometry(t=t, v=np.full(n, 0.2), w=np.zeros(n)), frames, truth)
+
+
+def test_repeating_errors_slow_the_bound_where_a_robot_sees_landmarks_in_turn() -> None:
+    s = _line()
     motion = MotionModel(delay_s=0.0)
     plain = stream_bound(s, motion, INFO, 0.99)
     rep = stream_bound(s, motion, INFO, 0.99, repeat=MRCLAM_REPEATING)
     assert 0.0 < plain.time_to_localize_s < rep.time_to_localize_s < 40.0
     assert rep.correct_after_rate <= plain.correct_after_rate
+
+
+def test_the_mrclam_evaluation_s_bound_takes_the_tubes_repeating_errors() -> None:
+    s = _line()
+    motion = MotionModel.mrclam()
+    info = bearing_information(*MRCLAM_BEARING_ERRORS)
+    assert mrclam_bound()(s) == stream_bound(s, motion, info, 0.99, repeat=MRCLAM_REPEATING)
+    assert mrclam_bound(0.9, repeat=None)(s) == stream_bound(s, motion, info, 0.9)
+    assert mrclam_bound()(s) != mrclam_bound(repeat=None)(s)
 
 
 @pytest.mark.parametrize("mount", [None, (0.3, 0.1, 0.5)])

@@ -71,7 +71,14 @@ from ..sensor import chi2_quantile
 from ..track.data import Frame, GroundTruth, Odometry
 from ..track.offline import rows_before
 from ..track.records import TrackEstimate, TrackState
-from .bounds import MRCLAM_BEARING_ERRORS, StreamBound, bearing_information, stream_bound
+from .bounds import (
+    MRCLAM_BEARING_ERRORS,
+    MRCLAM_REPEATING,
+    RepeatingErrors,
+    StreamBound,
+    bearing_information,
+    stream_bound,
+)
 from .common import (
     NAN,
     calibration_of_bins,
@@ -1089,13 +1096,15 @@ def mrclam_bound(
     *,
     pos_tol_m: float = 0.3,
     heading_tol_deg: float = 5.0,
+    repeat: RepeatingErrors | None = MRCLAM_REPEATING,
 ) -> Callable[[Stream], StreamBound]:
     """``bound`` for :func:`evaluate_tracking` on MRCLAM streams: what a localizer told the
     correspondences could do (:func:`omniloc.evaluate.bounds.stream_bound`), with the
     recordings' odometry noise (:meth:`~omniloc.track.MotionModel.mrclam`), their measured
-    bearing errors (:data:`~omniloc.evaluate.bounds.MRCLAM_BEARING_ERRORS`) and a
-    localizer that says ``localized`` when it is within tolerance with probability
-    ``p_min``."""
+    bearing errors (:data:`~omniloc.evaluate.bounds.MRCLAM_BEARING_ERRORS`), repeating on
+    each tube as measured (``repeat``, :data:`~omniloc.evaluate.bounds.MRCLAM_REPEATING`;
+    None: independent from frame to frame, an optimistic bound) and a localizer that says
+    ``localized`` when it is within tolerance with probability ``p_min``."""
     from ..track.motion import MotionModel
 
     motion = MotionModel.mrclam()
@@ -1103,7 +1112,9 @@ def mrclam_bound(
     tol_h = math.radians(heading_tol_deg)
 
     def bound(stream: Stream) -> StreamBound:
-        return stream_bound(stream, motion, info, p_min, tol_m=pos_tol_m, tol_heading=tol_h)
+        return stream_bound(
+            stream, motion, info, p_min, tol_m=pos_tol_m, tol_heading=tol_h, repeat=repeat
+        )
 
     return bound
 
