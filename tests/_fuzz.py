@@ -2150,6 +2150,24 @@ def _bound_steps() -> Any:
         N,
         np.einsum("kij,kil->kjl", G, G),
         np.ones(9, dtype=np.int64),
+        np.arange(9, dtype=np.int64) % 3,
+        G.reshape(9, 3),
+    )
+
+
+def _repeats() -> Pool:
+    """Values for a bound's ``repeat``: models from none to all but independent, and
+    what is not one."""
+    from omniloc.evaluate.bounds import MAX_SHARE, RepeatingErrors
+
+    return (
+        ("None", None),
+        ("MRCLAM's", RepeatingErrors(0.783, 13.9)),
+        ("nearly all, slow", RepeatingErrors(MAX_SHARE, 3.2e7)),
+        ("tiny share", RepeatingErrors(1e-300, 1.0)),
+        ("forgotten at once", RepeatingErrors(0.9, 1e-300)),
+        ("a number", 0.5),
+        ("a string", "mrclam"),
     )
 
 
@@ -2165,6 +2183,7 @@ def _bounds_targets() -> list[Target]:
         "p_min": Arg(("p_min",), PROBABILITIES),
         "tol_m": Arg(("tol_m",), NUMBERS),
         "tol_heading": Arg(("tol_heading",), ANGLES),
+        "repeat": Arg(("repeat",), _repeats()),
     }
     base = lambda: {  # noqa: E731
         "steps": Lazy(_bound_steps),
@@ -2172,6 +2191,7 @@ def _bounds_targets() -> list[Target]:
         "p_min": 0.99,
         "tol_m": 0.3,
         "tol_heading": math.radians(5.0),
+        "repeat": None,
     }
     return [
         Target(
@@ -2193,6 +2213,13 @@ def _bounds_targets() -> list[Target]:
                 "tol_heading": Arg(("tol_heading",), ANGLES),
             },
             check=prob_check,
+        ),
+        Target(
+            "RepeatingErrors",
+            lambda kw: B.RepeatingErrors(**kw),
+            lambda: {"share": 0.78, "tau_s": 13.9},
+            {"share": Arg(("share",), NUMBERS), "tau_s": Arg(("tau_s",), NUMBERS)},
+            check=lambda kw, v: None,
         ),
         Target(
             "predict_information",

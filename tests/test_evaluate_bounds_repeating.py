@@ -109,7 +109,7 @@ def test_errors_forgotten_between_frames_are_independent_ones() -> None:
     # bearing is worth info, as without repeat.
     frames = [[0], [1], [2], [0], [0, 1], [3], [3], [2], [0, 1, 2], [1]]
     st_ = _steps(frames)
-    fast = RepeatingErrors(share=0.8, tau_s=1e-3)
+    fast = RepeatingErrors(share=0.8, tau_s=1e-6)  # (exp(-dt / tau) underflows to 0)
     indep = confident_frames(st_, INFO, 0.99)
     assert indep.any() and not indep.all()
     assert confident_frames(st_, INFO, 0.99, repeat=fast).tolist() == indep.tolist()
@@ -118,9 +118,10 @@ def test_errors_forgotten_between_frames_are_independent_ones() -> None:
         times_to_localize(st_, starts, INFO, 0.99, repeat=fast),
         times_to_localize(st_, starts, INFO, 0.99),
     )
-    # A share of 0 is the independent bound itself.
-    none = RepeatingErrors(share=0.0, tau_s=5.0)
-    assert confident_frames(st_, INFO, 0.99, repeat=none).tolist() == indep.tolist()
+    # A share of 0 (or below MIN_SHARE) is the independent bound itself.
+    for share in (0.0, 1e-300, 1e-12):
+        none = RepeatingErrors(share=share, tau_s=5.0)
+        assert confident_frames(st_, INFO, 0.99, repeat=none).tolist() == indep.tolist()
 
 
 def test_a_landmark_not_seen_for_five_time_constants_leaves_the_state() -> None:
@@ -183,6 +184,7 @@ def test_the_steps_carry_each_bearing_s_landmark_and_gradient(mount: object) -> 
     "share, tau",
     [
         (1.0, 5.0),
+        (0.9999999, 5.0),
         (-0.1, 5.0),
         (math.nan, 5.0),
         ("a", 5.0),

@@ -99,6 +99,11 @@ MRCLAM_BEARING_ERRORS: tuple[tuple[float, ...], tuple[float, ...]] = (
 
 #: The longest time constant of repeating errors (seconds: a year).
 MAX_TAU_S = 3.2e7
+#: The largest share of a bearing's error variance that may repeat (the rest, independent,
+#: is what a landmark seen again adds), and the share below which errors count as
+#: independent (the difference below any bound's precision).
+MAX_SHARE = 0.999999
+MIN_SHARE = 1e-9
 #: A landmark not seen for this many time constants leaves the filter's state (its bias
 #: then as good as independent of the one it will have when seen again: exp(-5) = 0.007).
 FORGET_TAUS = 5.0
@@ -119,15 +124,16 @@ class RepeatingErrors:
     Attributes
     ----------
     share : float
-        The share of a bearing's error variance that repeats, in [0, 1) (0: independent
-        errors, the bound without ``repeat``).
+        The share of a bearing's error variance that repeats, in [0, MAX_SHARE] (0, or below
+        MIN_SHARE: independent errors, the bound without ``repeat``).
     tau_s : float
         The time constant over which a landmark's bias is forgotten, seconds (> 0).
 
     Raises
     ------
     InputError
-        A share outside [0, 1) or a time constant that is not a positive finite number.
+        A share outside [0, MAX_SHARE] or a time constant that is not a number of seconds
+        in (0, MAX_TAU_S].
     """
 
     share: float
@@ -136,8 +142,11 @@ class RepeatingErrors:
     def __post_init__(self) -> None:
         share = finite_number(self.share, "RepeatingErrors.share")
         tau = finite_number(self.tau_s, "RepeatingErrors.tau_s")
-        if not 0.0 <= share < 1.0:
-            raise InputError(f"RepeatingErrors.share must lie in [0, 1), got {self.share!r}")
+        if not 0.0 <= share <= MAX_SHARE:
+            raise InputError(
+                f"RepeatingErrors.share must lie in [0, {MAX_SHARE}] (some of each error "
+                f"independent), got {self.share!r}"
+            )
         if not 0.0 < tau <= MAX_TAU_S:
             raise InputError(
                 f"RepeatingErrors.tau_s must be a number of seconds in (0, {MAX_TAU_S:g}], "
@@ -307,15 +316,16 @@ class _Repeating:
             self.seen = [v for k, v in enumerate(self.seen) if k not in old]
         n = self.Y.shape[1]
         if i > 0 and which.any():
-            # Every bias left was seen within FORGET_TAUS time constants: a >= exp(-5).
-            a = math.exp(-(t - float(st.t[i - 1])) / self.tau)
             Finv = np.zeros((n, n))
             Finv[:3, :3] = np.linalg.inv(st.F[i])
             Nt = np.zeros((n, n))
             Nt[:3, :3] = st.N[i]
-            b = np.arange(3, n)
-            Finv[b, b] = 1.0 / a
-            Nt[b, b] = self.var_b * (1.0 - a * a)
+            if n > 3:
+                # Every bias left was seen within FORGET_TAUS time constants: a >= exp(-5).
+                a = math.exp(-(t - float(st.t[i - 1])) / self.tau)
+                b = np.arange(3, n)
+                Finv[b, b] = 1.0 / a
+                Nt[b, b] = self.var_b * (1.0 - a * a)
             self.Y[which] = _predict_inv(self.Y[which], Finv, Nt)
         assert st.rows is not None  # (checked in __init__)
         new = [
@@ -610,7 +620,7 @@ def _repeat(repeat: object) -> RepeatingErrors | None:
         return None
     if not isinstance(repeat, RepeatingErrors):
         raise InputError(f"repeat must be a RepeatingErrors or None, got {_describe(repeat)}")
-    return repeat if repeat.share > 0 else None
+    return repeat if repeat.share >= MIN_SHARE else None
 
 
 def _check(info: float, p_min: float, tol_m: float, tol_heading: float) -> None:
