@@ -14,7 +14,7 @@ The method is :mod:`omniloc.evaluate.bounds` (its documentation says what the bo
 and leaves out): the recursion of the posterior Cramer-Rao bound along the true path, from
 no information, with the odometry's noise of ``MotionModel.mrclam()``; a frame could be
 localized when the pose there is within 0.3 m and 5 deg with probability >= ``p`` (0.99,
-the tracker's ``localized_probability``; also 0.9). Two bearing error models: one Gaussian
+the tracker's ``localized_probability``; also 0.9). Three bearing error models: one Gaussian
 of 1 deg (the preset's sigma), and the mixture measured on the recordings (57 % at 0.33
 deg, 43 % at 1.03 deg, worth a Gaussian of 0.52 deg), that mixture with its errors
 independent from frame to frame and repeating on each tube as the recordings' do (78 % of
@@ -23,8 +23,9 @@ a bearing's error variance a tube's own bias, forgotten over 13.9 s:
 Everything the bound leaves out makes it optimistic -- the correspondences known, the
 odometry without biases, and in the first two models the bearing errors independent from
 frame to frame -- so its times are lower bounds and its shares upper bounds.
-``omniloc evaluate --dataset mrclam-track`` reports the same bound (the measured mixture,
-the tracker's ``localized_probability``) beside the tracker on every stream.
+``omniloc evaluate --dataset mrclam-track`` reports the same bound (the measured mixture
+repeating on each tube, the tracker's ``localized_probability``) beside the tracker on
+every stream.
 
 Three figures per setting:
 
