@@ -23,9 +23,15 @@ from omniloc.evaluate.bounds import (
     stream_bound,
     times_to_localize,
 )
-from omniloc.evaluate.tracking import Stream, mrclam_bound, whole_run
+from omniloc.evaluate.tracking import (
+    Stream,
+    evaluate_tracking,
+    mrclam_bound,
+    tracking_summary,
+    whole_run,
+)
 from omniloc.pose import bearing_jacobian
-from omniloc.track import Frame, MotionModel, Odometry
+from omniloc.track import Frame, MotionModel, Odometry, TrackEstimate, TrackState
 from omniloc.track.data import GroundTruth
 
 LANDMARKS = np.array([[3.0, 0.5], [2.5, -1.5], [4.0, 2.0], [-2.0, 3.0]])
@@ -160,6 +166,29 @@ def test_the_mrclam_evaluation_s_bound_takes_the_tubes_repeating_errors() -> Non
     assert mrclam_bound()(s) == stream_bound(s, motion, info, 0.99, repeat=MRCLAM_REPEATING)
     assert mrclam_bound(0.9, repeat=None)(s) == stream_bound(s, motion, info, 0.9)
     assert mrclam_bound()(s) != mrclam_bound(repeat=None)(s)
+
+
+def test_the_evaluation_says_what_its_bound_assumed() -> None:
+    class Lost:
+        def odometry(self, t: object, v: object, w: object) -> None:
+            pass
+
+        def frame(self, t: float, bearings: np.ndarray) -> TrackEstimate:
+            return TrackEstimate(t, TrackState.LOST)
+
+    for bound, said in (
+        (mrclam_bound(), "78 % of their variance each tube's own, forgotten over 13.9 s"),
+        (mrclam_bound(repeat=None), "independent from frame to frame"),
+    ):
+        res, _ = evaluate_tracking([_line(40)], lambda lm, p: Lost(), progress=False, bound=bound)
+        assert said in res.bound_model and res.as_dict()["bound_model"] == res.bound_model
+        line = next(x for x in tracking_summary(res).splitlines() if "what the data allow" in x)
+        assert said in line
+    # A bound that says nothing of itself is scored all the same, its model unsaid.
+    bare, _ = evaluate_tracking(
+        [_line(40)], lambda lm, p: Lost(), progress=False, bound=lambda st: mrclam_bound()(st)
+    )
+    assert bare.bound_model == "" and "what the data allow (a localizer" in tracking_summary(bare)
 
 
 @pytest.mark.parametrize("mount", [None, (0.3, 0.1, 0.5)])

@@ -814,6 +814,9 @@ class TrackingResult:
     runs: list[RunScore] = field(repr=False)
     pos_tol_m: float = 0.3
     heading_tol_deg: float = 5.0
+    #: What the bound beside the localizer assumed of the bearing errors, in words (the
+    #: ``model`` of :func:`evaluate_tracking`'s ``bound``; empty: no bound, or not said).
+    bound_model: str = ""
 
     def _sel(self, kidnapped: bool | None) -> list[RunScore]:
         if kidnapped is None:
@@ -918,6 +921,7 @@ class TrackingResult:
             "name": self.name,
             "pos_tol_m": self.pos_tol_m,
             "heading_tol_deg": self.heading_tol_deg,
+            "bound_model": self.bound_model,
             "totals": {k: jsonable(v) for k, v in self.totals().items()},
             "totals_without_jump": {k: jsonable(v) for k, v in self.totals(False).items()},
             "totals_kidnapped": {k: jsonable(v) for k, v in self.totals(True).items()},
@@ -943,7 +947,8 @@ def evaluate_tracking(
     the true pose at the stream's start only when ``oracle_start`` is True (for a baseline
     started at the truth), else None. ``bound(stream)``, when given, says what the data
     allow on each stream (:func:`mrclam_bound`), scored beside the localizer
-    (:attr:`RunScore.bound_time_to_localize_s` and the rest). ``offline(stream,
+    (:attr:`RunScore.bound_time_to_localize_s` and the rest; its ``model`` attribute, if
+    any, says in words what it assumed: :attr:`TrackingResult.bound_model`). ``offline(stream,
     estimates)``, when given, turns the localizer's estimates into those scored, with the
     whole stream known (:func:`backward_offline`); its processor time is counted. Returns
     the scores and every estimate.
@@ -978,7 +983,8 @@ def evaluate_tracking(
             bar.update(1)
     finally:
         bar.close()
-    return TrackingResult(name, runs, pos_tol_m, heading_tol_deg), all_est
+    model = "" if bound is None else str(getattr(bound, "model", ""))
+    return TrackingResult(name, runs, pos_tol_m, heading_tol_deg, model), all_est
 
 
 def mrclam_streams(path: str | Path, robots: Sequence[int] = (1, 2, 3, 4, 5)) -> list[Stream]:
@@ -1107,16 +1113,47 @@ def mrclam_bound(
     ``localized`` when it is within tolerance with probability ``p_min``."""
     from ..track.motion import MotionModel
 
-    motion = MotionModel.mrclam()
-    info = bearing_information(*MRCLAM_BEARING_ERRORS)
-    tol_h = math.radians(heading_tol_deg)
+    return _MrclamBound(
+        MotionModel.mrclam(),
+        bearing_information(*MRCLAM_BEARING_ERRORS),
+        p_min,
+        pos_tol_m,
+        math.radians(heading_tol_deg),
+        repeat,
+    )
 
-    def bound(stream: Stream) -> StreamBound:
-        return stream_bound(
-            stream, motion, info, p_min, tol_m=pos_tol_m, tol_heading=tol_h, repeat=repeat
+
+@dataclass(frozen=True)
+class _MrclamBound:
+    """:func:`mrclam_bound`'s bound: called on a stream, with ``model`` saying in words what
+    it assumed of the bearing errors."""
+
+    motion: MotionModel
+    info: float
+    p_min: float
+    tol_m: float
+    tol_heading: float
+    repeat: RepeatingErrors | None
+
+    @property
+    def model(self) -> str:
+        if self.repeat is None:
+            return "the measured bearing errors, independent from frame to frame"
+        return (
+            f"the measured bearing errors, {100 * self.repeat.share:.0f} % of their variance "
+            f"each tube's own, forgotten over {self.repeat.tau_s:g} s"
         )
 
-    return bound
+    def __call__(self, stream: Stream) -> StreamBound:
+        return stream_bound(
+            stream,
+            self.motion,
+            self.info,
+            self.p_min,
+            tol_m=self.tol_m,
+            tol_heading=self.tol_heading,
+            repeat=self.repeat,
+        )
 
 
 @dataclass(frozen=True)
@@ -1250,7 +1287,8 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
     if not math.isnan(tot["bound_time_to_localize_max_s"]):
         lines.append(
             "what the data allow (a localizer told the correspondences, as sure as localized "
-            f"asks): first possible after a median of "
+            f"asks{'; ' + w.bound_model if w.bound_model else ''}): first possible after a "
+            "median of "
             f"{_seconds(tot['bound_time_to_localize_median_s'])} (max "
             f"{_seconds(tot['bound_time_to_localize_max_s'])}), then in "
             f"{_fmt(100 * tot['bound_correct_after_rate'], '.1f')} % of the frames"
