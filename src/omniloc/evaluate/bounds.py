@@ -134,6 +134,14 @@ class RepeatingErrors:
     InputError
         A share outside [0, MAX_SHARE] or a time constant that is not a number of seconds
         in (0, MAX_TAU_S].
+
+    Notes
+    -----
+    The filter's state holds one bias per landmark seen within the last ``FORGET_TAUS *
+    tau_s`` seconds, and each frame costs the cube of its size (and, in
+    :func:`times_to_localize`, that times the starts still running): on MRCLAM, up to 15
+    tubes, the bound takes about 40 % longer than with independent errors; a recording
+    that sees hundreds of landmarks within that time would take far longer.
     """
 
     share: float
