@@ -4,7 +4,9 @@ drifting bias beside the pose."""
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -240,7 +242,11 @@ def test_a_repeat_that_is_not_one_or_steps_without_their_bearings_are_refused() 
     assert confident_frames(bare, INFO, 0.99).tolist() == [True]
 
 
-def test_mrclam_s_repeating_errors_are_the_measured_fit() -> None:
-    # benchmarks/bearing_correlation.py: a bias of sd 0.71 deg over 13.9 s, white 0.37 deg.
-    assert MRCLAM_REPEATING.share == pytest.approx(0.783, abs=0.001)
-    assert MRCLAM_REPEATING.tau_s == 13.9
+def test_mrclam_s_repeating_errors_are_the_benchmark_s_fit() -> None:
+    # The constant is benchmarks/bearing_correlation.py's drifting bias, as its results file
+    # has it: run again with other figures, this says the constant is stale.
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "results_bearing_correlation.json"
+    fit = json.loads(path.read_text())["drifting_bias"]
+    b2, w2 = fit["bias_sd"] ** 2, fit["white_sd"] ** 2
+    assert MRCLAM_REPEATING.share == pytest.approx(b2 / (b2 + w2), abs=5e-4)
+    assert MRCLAM_REPEATING.tau_s == pytest.approx(fit["tau_s"], abs=0.05)

@@ -56,7 +56,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -265,17 +265,28 @@ def predict_information(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArr
 
 def _predict(Y: FloatArray, F: FloatArray, N: FloatArray) -> FloatArray:
     """:func:`predict_information` without its checks, for the filter's own steps."""
-    Finv = np.linalg.inv(F)
-    Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
-    Yn = np.linalg.solve(np.eye(3) + Yt @ N, Yt)
-    return np.asarray(0.5 * (Yn + np.swapaxes(Yn, -1, -2)), dtype=np.float64)
+    return _predict_inv(Y, np.asarray(np.linalg.inv(F), dtype=np.float64), N)
 
 
 def _predict_inv(Y: FloatArray, Finv: FloatArray, N: FloatArray) -> FloatArray:
     """:func:`_predict` of any size, given ``F``'s inverse."""
     Yt = np.swapaxes(Finv, -1, -2) @ Y @ Finv
     Yn = np.linalg.solve(np.eye(Y.shape[-1]) + Yt @ N, Yt)
-    return np.asarray(0.5 * (Yn + np.swapaxes(Yn, -1, -2)), dtype=np.float64)
+    return _symmetric(Yn)
+
+
+def _symmetric(Y: NDArray[np.floating[Any]]) -> FloatArray:
+    return np.asarray(0.5 * (Y + np.swapaxes(Y, -1, -2)), dtype=np.float64)
+
+
+def _marginal(Y: FloatArray, keep: NDArray[np.int64], drop: NDArray[np.int64]) -> FloatArray:
+    """The information of the entries ``keep`` of stacked information matrices ``Y`` with
+    those of ``drop`` marginalised out (the Schur complement; ``drop``'s block invertible)."""
+    Ykd = Y[:, keep][:, :, drop]
+    Yk = Y[:, keep][:, :, keep] - Ykd @ np.linalg.solve(
+        Y[:, drop][:, :, drop], np.swapaxes(Ykd, 1, 2)
+    )
+    return _symmetric(Yk)
 
 
 class _Repeating:
@@ -315,11 +326,7 @@ class _Repeating:
         old = {k for k, ts in enumerate(self.seen) if t - ts > FORGET_TAUS * self.tau}
         if old:
             keep = np.array([0, 1, 2] + [3 + k for k in range(len(self.lms)) if k not in old])
-            drop = np.array([3 + k for k in sorted(old)])
-            Ykd = self.Y[:, keep][:, :, drop]
-            Ydd = self.Y[:, drop][:, :, drop]
-            Yk = self.Y[:, keep][:, :, keep] - Ykd @ np.linalg.solve(Ydd, np.swapaxes(Ykd, 1, 2))
-            self.Y = np.asarray(0.5 * (Yk + np.swapaxes(Yk, 1, 2)), dtype=np.float64)
+            self.Y = _marginal(self.Y, keep, np.array([3 + k for k in sorted(old)]))
             self.lms = [r for k, r in enumerate(self.lms) if k not in old]
             self.seen = [v for k, v in enumerate(self.seen) if k not in old]
         n = self.Y.shape[1]
@@ -378,9 +385,7 @@ class _Repeating:
         Y = self.Y[which]
         if Y.shape[1] == 3:
             return Y
-        Ypb = Y[:, :3, 3:]
-        Yp = Y[:, :3, :3] - Ypb @ np.linalg.solve(Y[:, 3:, 3:], np.swapaxes(Ypb, 1, 2))
-        return np.asarray(0.5 * (Yp + np.swapaxes(Yp, 1, 2)), dtype=np.float64)
+        return _marginal(Y, np.arange(3), np.arange(3, Y.shape[1]))
 
 
 def _describe(a: object) -> str:
