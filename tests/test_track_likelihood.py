@@ -579,7 +579,16 @@ def test_a_miss_weight_scales_the_cost_of_the_landmarks_not_reported(w: float) -
     assert b[2][0] - a[2][0] == pytest.approx((w - 1) * math.log(1 - 0.6), rel=0.02, abs=1e-9)
 
 
-def test_miss_weight_reaches_the_frame_model_and_is_checked() -> None:
+@pytest.mark.parametrize(
+    "setting, attr, value, default, bad",
+    [
+        ("miss_weight", "miss_weight", 0.5, 1.0, (-0.1, 1.5, float("nan"))),
+        ("occlusion_width", "occlusion", 0.04, 0.0, (-0.1, float("nan"), float("inf"))),
+    ],
+)
+def test_a_frame_model_setting_reaches_the_frame_model_and_is_checked(
+    setting: str, attr: str, value: float, default: float, bad: tuple[float, ...]
+) -> None:
     from omniloc import LandmarkMap
     from omniloc.errors import InputError
     from omniloc.track import TrackerConfig
@@ -588,12 +597,12 @@ def test_miss_weight_reaches_the_frame_model_and_is_checked() -> None:
 
     lm = LandmarkMap(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
     sensor = SensorModel(sigma=SIGMA)
-    tr = Tracker(lm, sensor, MotionModel(), TrackerConfig(miss_weight=0.5))
-    assert tr._model.miss_weight == 0.5
-    assert Tracker(lm, sensor, MotionModel(), TrackerConfig())._model.miss_weight == 1.0
-    for bad in (-0.1, 1.5, float("nan")):
-        with pytest.raises(InputError, match="miss_weight"):
-            TrackerConfig(miss_weight=bad)
+    tr = Tracker(lm, sensor, MotionModel(), TrackerConfig(**{setting: value}))
+    assert getattr(tr._model, attr) == value
+    assert getattr(Tracker(lm, sensor, MotionModel(), TrackerConfig())._model, attr) == default
+    for v in bad:
+        with pytest.raises(InputError, match=setting):
+            TrackerConfig(**{setting: v})
 
 
 def _assignment_sum(R: np.ndarray) -> float:
@@ -800,20 +809,3 @@ def test_a_bearing_at_a_nearly_hidden_landmark_is_more_likely_clutter() -> None:
     odds = lambda d: d / (1.0 - d)  # noqa: E731
     ratio = (1.0 / a[4][0, 0] - 1.0) / (1.0 / b[4][0, 0] - 1.0)
     assert ratio == pytest.approx(odds(0.6) / odds(0.6 * f), rel=1e-3)
-
-
-def test_occlusion_width_reaches_the_frame_model_and_is_checked() -> None:
-    from omniloc import LandmarkMap
-    from omniloc.errors import InputError
-    from omniloc.track import TrackerConfig
-    from omniloc.track.motion import MotionModel
-    from omniloc.track.tracker import Tracker
-
-    lm = LandmarkMap(np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]))
-    sensor = SensorModel(sigma=SIGMA)
-    tr = Tracker(lm, sensor, MotionModel(), TrackerConfig(occlusion_width=0.04))
-    assert tr._model.occlusion == 0.04
-    assert Tracker(lm, sensor, MotionModel(), TrackerConfig())._model.occlusion == 0.0
-    for bad in (-0.1, float("nan"), float("inf")):
-        with pytest.raises(InputError, match="occlusion_width"):
-            TrackerConfig(occlusion_width=bad)
