@@ -2166,6 +2166,11 @@ def _repeats() -> Pool:
         ("nearly all, slow", RepeatingErrors(MAX_SHARE, 3.2e7)),
         ("tiny share", RepeatingErrors(1e-300, 1.0)),
         ("forgotten at once", RepeatingErrors(0.9, 1e-300)),
+        ("MRCLAM's shared", RepeatingErrors(0.13, 18.1, 0.68, 13.8, 0.16)),
+        ("nearly all common, slow", RepeatingErrors(0.0, 1.0, MAX_SHARE, 3.2e7)),
+        ("nearly all the frame's", RepeatingErrors(0.0, 1.0, frame_share=MAX_SHARE)),
+        ("common forgotten at once", RepeatingErrors(0.3, 5.0, 0.6, 1e-300, 0.09)),
+        ("tiny shared shares", RepeatingErrors(0.0, 1.0, 1e-300, 1.0, 1e-300)),
         ("a number", 0.5),
         ("a string", "mrclam"),
     )

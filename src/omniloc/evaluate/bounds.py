@@ -25,17 +25,21 @@ its estimate with probability ``p_min`` under that covariance (:func:`tolerance_
 the earliest an honest localizer -- one that says ``localized`` only when it is that sure --
 could say it and be right by design.
 
-With ``repeat`` (:class:`RepeatingErrors`) the bearing errors are not independent: a share
-of each one's variance is its landmark's own bias, which drifts and is forgotten over a
-time constant, as MRCLAM's tubes' errors are (:data:`MRCLAM_REPEATING`). The filter then
-also carries the bias of each landmark seen lately (the state augmented, each bias an
-Ornstein-Uhlenbeck process; a landmark not seen for five time constants is marginalised
-out), so a landmark seen again soon after adds less than a new one.
+With ``repeat`` (:class:`RepeatingErrors`) the bearing errors are not independent: shares
+of each one's variance are a bias common to every landmark, an offset common to the
+frame's bearings and its landmark's own bias, the biases drifting and forgotten over their
+time constants, as MRCLAM's errors are (:data:`MRCLAM_REPEATING`). The filter then also
+carries the common bias and the bias of each landmark seen lately (the state augmented,
+each bias an Ornstein-Uhlenbeck process; one not seen for five time constants is
+marginalised out) and weighs a frame's bearings with their shared offset: a landmark seen
+again soon after adds less than a new one, and a second landmark in the same frame adds
+what their difference says.
 
 What the bound leaves out makes it optimistic, so its times are lower bounds and its shares
 upper bounds: the correspondences are known (ruling out the wrong places that fit is a real
-localizer's hard part), the bearing errors are taken as independent from frame to frame
-unless ``repeat`` says otherwise, the odometry's errors as the model's, without biases.
+localizer's hard part), the bearing errors as their model has them (independent from frame
+to frame unless ``repeat`` says otherwise: a bound is only as good as the errors' fit), the
+odometry's errors as the model's, without biases.
 Left out, and so possibly in a real localizer's favour: the landmarks in view that were not
 reported (weak evidence where few are: on MRCLAM a third of the tubes in view are reported
 per frame) and the extent of the map (metres wide, against the 0.3 m asked).
@@ -111,34 +115,54 @@ FORGET_TAUS = 5.0
 
 @dataclass(frozen=True)
 class RepeatingErrors:
-    """Bearing errors that repeat on each landmark from one sighting to the next.
+    """Bearing errors that repeat: on each landmark from one sighting to the next, and on
+    every landmark at once.
 
-    A share of each bearing's error variance is its landmark's own bias, which drifts (an
-    Ornstein-Uhlenbeck process: stationary, its correlation ``exp(-lag / tau_s)``); the rest
-    is independent from bearing to bearing. One bearing keeps the information ``info`` the
-    bound is given: its variance ``1 / info`` splits into ``share / info`` of bias and
-    ``(1 - share) / info`` of independent noise. So a landmark seen once is worth what it is
-    worth under independent errors, and seen again soon after, less: with ``share`` 0.8,
-    ten sightings within a second are worth about 1.2 where independent ones are worth 10.
+    A bearing's error variance ``1 / info`` (one bearing keeps the information the bound is
+    given) splits into up to four parts:
+
+    * ``share``: its landmark's own bias, which drifts (an Ornstein-Uhlenbeck process:
+      stationary, its correlation ``exp(-lag / tau_s)``);
+    * ``common_share``: a bias shared by every bearing, which drifts over ``common_tau_s``
+      (what a camera's heading, its clock against the odometry's, or the robot's wobble
+      add to all it sees);
+    * ``frame_share``: an offset shared by the bearings of one frame and drawn afresh at
+      the next;
+    * the rest, independent from bearing to bearing.
+
+    So a landmark seen once is worth what it is worth under independent errors, and seen
+    again soon after, less: with ``share`` 0.8, ten sightings within a second are worth
+    about 1.2 where independent ones are worth 10. A shared part moves every bearing as a
+    turn of the robot would: it spares the differences between bearings, which place the
+    robot, and the heading cannot be known better than it.
 
     Attributes
     ----------
     share : float
-        The share of a bearing's error variance that repeats, in [0, MAX_SHARE] (0, or below
-        MIN_SHARE: independent errors, the bound without ``repeat``).
+        The share of a bearing's error variance that is its landmark's own drifting bias
+        (0, or below MIN_SHARE: none).
     tau_s : float
         The time constant over which a landmark's bias is forgotten, seconds (> 0).
+    common_share : float, optional
+        The share that is a drifting bias common to every bearing (0: none).
+    common_tau_s : float, optional
+        Its time constant, seconds (None: ``tau_s``).
+    frame_share : float, optional
+        The share common to the bearings of one frame, independent between frames (0: none).
+
+    The shares are each in [0, MAX_SHARE] and so is their sum (some of each error
+    independent); all below MIN_SHARE: independent errors, the bound without ``repeat``.
 
     Raises
     ------
     InputError
-        A share outside [0, MAX_SHARE] or a time constant that is not a number of seconds
-        in (0, MAX_TAU_S].
+        A share outside [0, MAX_SHARE], shares summing beyond it, or a time constant that is
+        not a number of seconds in (0, MAX_TAU_S].
 
     Notes
     -----
-    The filter's state holds one bias per landmark seen within the last ``FORGET_TAUS *
-    tau_s`` seconds, and each frame costs the cube of its size (and, in
+    The filter's state holds the common bias and one bias per landmark seen within the last
+    ``FORGET_TAUS * tau_s`` seconds, and each frame costs the cube of its size (and, in
     :func:`times_to_localize`, that times the starts still running): on MRCLAM, up to 15
     tubes, the bound takes about 40 % longer than with independent errors; a recording
     that sees hundreds of landmarks within that time would take far longer.
@@ -146,32 +170,96 @@ class RepeatingErrors:
 
     share: float
     tau_s: float
+    common_share: float = 0.0
+    common_tau_s: float | None = None
+    frame_share: float = 0.0
 
     def __post_init__(self) -> None:
-        share = finite_number(self.share, "RepeatingErrors.share")
         tau = finite_number(self.tau_s, "RepeatingErrors.tau_s")
-        if not 0.0 <= share <= MAX_SHARE:
+        common_tau = (
+            tau
+            if self.common_tau_s is None
+            else finite_number(self.common_tau_s, "RepeatingErrors.common_tau_s")
+        )
+        shares = {}
+        for name in ("share", "common_share", "frame_share"):
+            v = finite_number(getattr(self, name), f"RepeatingErrors.{name}")
+            if not 0.0 <= v <= MAX_SHARE:
+                raise InputError(
+                    f"RepeatingErrors.{name} must lie in [0, {MAX_SHARE}] (some of each error "
+                    f"independent), got {getattr(self, name)!r}"
+                )
+            shares[name] = v
+        if sum(shares.values()) > MAX_SHARE:
             raise InputError(
-                f"RepeatingErrors.share must lie in [0, {MAX_SHARE}] (some of each error "
-                f"independent), got {self.share!r}"
+                f"RepeatingErrors' shares must sum to at most {MAX_SHARE} (some of each error "
+                f"independent), got {sum(shares.values())!r}"
             )
-        if not 0.0 < tau <= MAX_TAU_S:
-            raise InputError(
-                f"RepeatingErrors.tau_s must be a number of seconds in (0, {MAX_TAU_S:g}], "
-                f"got {self.tau_s!r}"
-            )
-        object.__setattr__(self, "share", share)
+        for name, v, given in (
+            ("tau_s", tau, self.tau_s),
+            ("common_tau_s", common_tau, self.common_tau_s),
+        ):
+            if not 0.0 < v <= MAX_TAU_S:
+                raise InputError(
+                    f"RepeatingErrors.{name} must be a number of seconds in (0, "
+                    f"{MAX_TAU_S:g}], got {given!r}"
+                )
+        for name, v in shares.items():
+            object.__setattr__(self, name, v)
         object.__setattr__(self, "tau_s", tau)
+        object.__setattr__(self, "common_tau_s", common_tau)
+
+    @property
+    def repeats(self) -> bool:
+        """Whether any share is at least MIN_SHARE (else: independent errors)."""
+        return max(self.share, self.common_share, self.frame_share) >= MIN_SHARE
+
+    def describe(self) -> str:
+        """The model in words, its parts as shares of the variance.
+
+        Examples
+        --------
+        >>> for part in RepeatingErrors(0.13, 18.1, 0.68, 13.8).describe().split("; "):
+        ...     print(part)
+        68 % of their variance common to every landmark, forgotten over 13.8 s
+        13 % each landmark's own, forgotten over 18.1 s
+        >>> RepeatingErrors(0.0, 1.0).describe()
+        'independent from frame to frame'
+        """
+        parts = [
+            (share, what)
+            for share, what in (
+                (
+                    self.common_share,
+                    f"common to every landmark, forgotten over {self.common_tau_s:g} s",
+                ),
+                (self.frame_share, "common to one frame's bearings"),
+                (self.share, f"each landmark's own, forgotten over {self.tau_s:g} s"),
+            )
+            if share >= MIN_SHARE
+        ]
+        if not parts:
+            return "independent from frame to frame"
+        return "; ".join(
+            f"{100 * share:.0f} %{' of their variance' if k == 0 else ''} {what}"
+            for k, (share, what) in enumerate(parts)
+        )
 
 
-#: MRCLAM set 6's tubes' repeating bearing errors: ``benchmarks/bearing_correlation.py``
-#: fits each tube's sequence of errors at the true poses (maximum likelihood, the five
-#: runs) with a drifting bias of sd 0.71 deg, forgotten over 13.9 s, plus independent noise
-#: of sd 0.37 deg: 78 % of the variance repeats. (The raw correlation of two sightings of a
-#: tube is 0.66 within 0.3 s and 0.48 at 2.5-5 s.)
+#: MRCLAM set 6's repeating bearing errors: ``benchmarks/bearing_correlation.py`` fits the
+#: errors at the true poses (maximum likelihood over each run's frames, the five runs) as a
+#: bias common to every tube of sd 0.74 deg forgotten over 13.8 s (68 % of the variance),
+#: an offset common to one frame's bearings of 0.35 deg (16 %), each tube's own bias of
+#: 0.32 deg forgotten over 18.1 s (13 %) and independent noise of 0.17 deg (4 %). (Two
+#: tubes' errors in one frame are correlated 0.54; one tube's two sightings 0.66 within
+#: 0.3 s and 0.48 at 2.5-5 s. The fit with each tube's own bias alone, 78 % over 13.9 s,
+#: was 0.24 nats a sighting less likely.)
 MRCLAM_REPEATING = RepeatingErrors(
-    share=0.012365**2 / (0.012365**2 + 0.006508**2),
-    tau_s=13.9,
+    share=0.005573**2 / (0.012877**2 + 0.005573**2 + 0.006184**2 + 0.003006**2),
+    tau_s=18.1,
+    common_share=0.012877**2 / (0.012877**2 + 0.005573**2 + 0.006184**2 + 0.003006**2),
+    common_tau_s=13.8,
+    frame_share=0.006184**2 / (0.012877**2 + 0.005573**2 + 0.006184**2 + 0.003006**2),
 )
 
 #: The narrowest bearing error sd :func:`bearing_information` takes (radians).
@@ -290,11 +378,12 @@ def _marginal(Y: FloatArray, keep: NDArray[np.int64], drop: NDArray[np.int64]) -
 
 
 class _Repeating:
-    """Information filters over the pose and the biases of the landmarks seen lately, one per
-    start (``S`` of them, over the frames of ``steps``): the bound with repeating errors
-    (:class:`RepeatingErrors`). The state is the pose, then one bias per landmark of
-    ``lms``; every start carries the same landmarks (a start not begun or done is carried
-    but neither predicted nor updated). At each frame: :meth:`advance`, then
+    """Information filters over the pose, the common bias and the biases of the landmarks
+    seen lately, one per start (``S`` of them, over the frames of ``steps``): the bound
+    with repeating errors (:class:`RepeatingErrors`). The state is the pose, then the
+    common bias (if ``common_share``), then one bias per landmark of ``lms`` (if
+    ``share``); every start carries the same landmarks (a start not begun or done is
+    carried but neither predicted nor updated). At each frame: :meth:`advance`, then
     :meth:`reset` for the starts that begin there, then :meth:`update`."""
 
     def __init__(self, steps: BoundSteps, info: float, repeat: RepeatingErrors, S: int) -> None:
@@ -310,38 +399,75 @@ class _Repeating:
                 "(BoundSteps.rows and BoundSteps.G, as bound_steps fills them)"
             )
         self.steps = steps
+        self.per_landmark = repeat.share >= MIN_SHARE
         self.var_b = repeat.share / info
-        self.info_w = info / (1.0 - repeat.share)
         self.tau = repeat.tau_s
+        #: Where the landmarks' biases begin in the state (after the common bias, if any).
+        self.first = 4 if repeat.common_share >= MIN_SHARE else 3
+        self.var_c = repeat.common_share / info
+        assert repeat.common_tau_s is not None  # (RepeatingErrors fills it)
+        self.tau_c = repeat.common_tau_s
+        self.var_f = repeat.frame_share / info if repeat.frame_share >= MIN_SHARE else 0.0
+        self.var_w = (1.0 - repeat.share - repeat.common_share - repeat.frame_share) / info
         self.off = np.concatenate([[0], np.cumsum(steps.bearings)])
         self.lms: list[int] = []
         self.seen: list[float] = []
-        self.Y = np.zeros((S, 3, 3))
+        self.Y = np.tile(self._prior(self.first), (S, 1, 1))
+
+    def _prior(self, n: int) -> FloatArray:
+        """The information (state of size ``n``) of a start that knows nothing of the pose:
+        each bias its prior."""
+        Y0 = np.zeros((n, n))
+        if self.first == 4:
+            Y0[3, 3] = 1.0 / self.var_c
+        d = np.arange(self.first, n)
+        Y0[d, d] = 1.0 / self.var_b if self.per_landmark else 0.0
+        return Y0
 
     def advance(self, i: int, which: NDArray[np.bool_]) -> None:
         """To frame ``i``: the landmarks not seen for ``FORGET_TAUS`` time constants
         marginalised out, the starts ``which`` predicted (from frame ``i - 1``), and a bias
         (at its prior) for each landmark the frame sees first."""
         st, t = self.steps, float(self.steps.t[i])
+        f0 = self.first
         old = {k for k, ts in enumerate(self.seen) if t - ts > FORGET_TAUS * self.tau}
         if old:
-            keep = np.array([0, 1, 2] + [3 + k for k in range(len(self.lms)) if k not in old])
-            self.Y = _marginal(self.Y, keep, np.array([3 + k for k in sorted(old)]))
+            keep = np.array(
+                list(range(f0)) + [f0 + k for k in range(len(self.lms)) if k not in old]
+            )
+            self.Y = _marginal(self.Y, keep, np.array([f0 + k for k in sorted(old)]))
             self.lms = [r for k, r in enumerate(self.lms) if k not in old]
             self.seen = [v for k, v in enumerate(self.seen) if k not in old]
         n = self.Y.shape[1]
+        dt = t - float(st.t[i - 1]) if i > 0 else 0.0
+        fresh = f0 == 4 and dt > FORGET_TAUS * self.tau_c
+        if fresh:
+            # The common bias forgotten (as a landmark's is): marginalised out, and drawn
+            # afresh from its prior.
+            rest = np.array([k for k in range(n) if k != 3])
+            Y = np.zeros_like(self.Y)
+            Y[:, rest[:, None], rest] = _marginal(self.Y, rest, np.array([3]))
+            Y[:, 3, 3] = 1.0 / self.var_c
+            self.Y = Y
         if i > 0 and which.any():
             Finv = np.zeros((n, n))
             Finv[:3, :3] = np.linalg.inv(st.F[i])
             Nt = np.zeros((n, n))
             Nt[:3, :3] = st.N[i]
-            if n > 3:
+            if f0 == 4:
+                # (Kept: seen within FORGET_TAUS time constants, a >= exp(-5).)
+                a = 1.0 if fresh else math.exp(-dt / self.tau_c)
+                Finv[3, 3] = 1.0 / a
+                Nt[3, 3] = self.var_c * (1.0 - a * a)
+            if n > f0:
                 # Every bias left was seen within FORGET_TAUS time constants: a >= exp(-5).
-                a = math.exp(-(t - float(st.t[i - 1])) / self.tau)
-                b = np.arange(3, n)
+                a = math.exp(-dt / self.tau)
+                b = np.arange(f0, n)
                 Finv[b, b] = 1.0 / a
                 Nt[b, b] = self.var_b * (1.0 - a * a)
             self.Y[which] = _predict_inv(self.Y[which], Finv, Nt)
+        if not self.per_landmark:
+            return
         assert st.rows is not None  # (checked in __init__)
         new = [
             r
@@ -360,25 +486,30 @@ class _Repeating:
 
     def reset(self, which: NDArray[np.bool_]) -> None:
         """The starts ``which`` begin afresh: nothing known of the pose, each bias its prior."""
-        n = self.Y.shape[1]
-        Y0 = np.zeros((n, n))
-        Y0[3:, 3:] = np.eye(n - 3) / self.var_b
-        self.Y[which] = Y0
+        self.Y[which] = self._prior(self.Y.shape[1])
 
     def update(self, i: int, which: NDArray[np.bool_]) -> None:
-        """Frame ``i``'s bearings into the starts ``which``."""
+        """Frame ``i``'s bearings into the starts ``which``: their errors' covariance is the
+        independent part plus the frame's common offset, ``var_w I + var_f 1 1^T``."""
         st, lo, hi = self.steps, int(self.off[i]), int(self.off[i + 1])
         if hi == lo:
             return
         assert st.rows is not None and st.G is not None  # (checked in __init__)
-        col = {r: 3 + k for k, r in enumerate(self.lms)}
-        H = np.zeros((hi - lo, self.Y.shape[1]))
+        k = hi - lo
+        H = np.zeros((k, self.Y.shape[1]))
         H[:, :3] = st.G[lo:hi]
-        H[np.arange(hi - lo), [col[r] for r in st.rows[lo:hi].tolist()]] = 1.0
-        self.Y[which] += self.info_w * (H.T @ H)
-        t = float(st.t[i])
-        for r in st.rows[lo:hi].tolist():
-            self.seen[col[r] - 3] = t
+        if self.first == 4:
+            H[:, 3] = 1.0
+        if self.per_landmark:
+            col = {r: self.first + j for j, r in enumerate(self.lms)}
+            H[np.arange(k), [col[r] for r in st.rows[lo:hi].tolist()]] = 1.0
+        # (var_w I + var_f 1 1^T)^-1 = (I - var_f / (var_w + k var_f) 1 1^T) / var_w
+        Rinv = (np.eye(k) - self.var_f / (self.var_w + k * self.var_f)) / self.var_w
+        self.Y[which] += _symmetric(H.T @ Rinv @ H)
+        if self.per_landmark:
+            t = float(st.t[i])
+            for r in st.rows[lo:hi].tolist():
+                self.seen[col[r] - self.first] = t
 
     def pose(self, which: NDArray[np.bool_]) -> FloatArray:
         """The pose's information (the biases marginalised out) of the starts ``which``."""
@@ -633,7 +764,7 @@ def _repeat(repeat: object) -> RepeatingErrors | None:
         return None
     if not isinstance(repeat, RepeatingErrors):
         raise InputError(f"repeat must be a RepeatingErrors or None, got {_describe(repeat)}")
-    return repeat if repeat.share >= MIN_SHARE else None
+    return repeat if repeat.repeats else None
 
 
 def _check(info: float, p_min: float, tol_m: float, tol_heading: float) -> None:
@@ -658,7 +789,7 @@ def confident_frames(
     """For each frame, whether the filter started at the first frame with no information
     (and again at each frame index of ``restarts``: a kidnapping) could call the pose
     localized there with probability ``p_min``; with ``repeat``, bearing errors that repeat
-    on each landmark (:class:`RepeatingErrors`).
+    (:class:`RepeatingErrors`).
 
     Examples
     --------
@@ -713,7 +844,7 @@ def times_to_localize(
     """For each start frame index, the time from it to the first frame (itself included) at
     which a filter started there with no information could call the pose localized with
     probability ``p_min``; inf when no frame of the stream does. With ``repeat``, bearing
-    errors that repeat on each landmark (:class:`RepeatingErrors`).
+    errors that repeat (:class:`RepeatingErrors`).
 
     All starts run at once: each frame predicts and updates the information of every start
     begun and not yet localized.
@@ -794,7 +925,7 @@ def stream_bound(
     mount : sequence of 3 floats, optional
         Where the sensor sits on the robot (:func:`bound_steps`).
     repeat : RepeatingErrors, optional
-        Bearing errors that repeat on each landmark (None: independent ones).
+        Bearing errors that repeat (None: independent ones).
     """
     _check(info, p_min, tol_m, tol_heading)
     steps = bound_steps(stream, motion, mount)

@@ -1107,9 +1107,10 @@ def mrclam_bound(
     """``bound`` for :func:`evaluate_tracking` on MRCLAM streams: what a localizer told the
     correspondences could do (:func:`omniloc.evaluate.bounds.stream_bound`), with the
     recordings' odometry noise (:meth:`~omniloc.track.MotionModel.mrclam`), their measured
-    bearing errors (:data:`~omniloc.evaluate.bounds.MRCLAM_BEARING_ERRORS`), repeating on
-    each tube as measured (``repeat``, :data:`~omniloc.evaluate.bounds.MRCLAM_REPEATING`;
-    None: independent from frame to frame, an optimistic bound) and a localizer that says
+    bearing errors (:data:`~omniloc.evaluate.bounds.MRCLAM_BEARING_ERRORS`), repeating as
+    measured -- most of each error shared by the tubes a frame sees (``repeat``,
+    :data:`~omniloc.evaluate.bounds.MRCLAM_REPEATING`; None: independent from frame to
+    frame) -- and a localizer that says
     ``localized`` when it is within tolerance with probability ``p_min``."""
     from ..track.motion import MotionModel
 
@@ -1137,12 +1138,9 @@ class _MrclamBound:
 
     @property
     def model(self) -> str:
-        if self.repeat is None:
+        if self.repeat is None or not self.repeat.repeats:
             return "the measured bearing errors, independent from frame to frame"
-        return (
-            f"the measured bearing errors, {100 * self.repeat.share:.0f} % of their variance "
-            f"each tube's own, forgotten over {self.repeat.tau_s:g} s"
-        )
+        return f"the measured bearing errors, {self.repeat.describe()}"
 
     def __call__(self, stream: Stream) -> StreamBound:
         return stream_bound(
