@@ -89,6 +89,7 @@ from baselines_track.tuning import (  # noqa: E402
     tune_pf_tracking,
     tune_recovery,
 )
+from omniloc.evaluate.bounds import MRCLAM_REPEATING  # noqa: E402
 from omniloc.evaluate.tracking import (  # noqa: E402
     LocalizerOverTime,
     Stream,
@@ -510,8 +511,8 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
             "",
             f"*{BOUND_LABEL}*: `omniloc.evaluate.bounds.stream_bound` on each stream -- the "
             "Cramer-Rao recursion of the bearings (told which tube each is; the measured "
-            "errors, 57 % at 0.33 deg and 43 % at 1.03 deg, 78 % of their variance a tube's "
-            "own bias forgotten over 13.9 s: `MRCLAM_REPEATING`) and the odometry "
+            "errors, 57 % at 0.33 deg and 43 % at 1.03 deg, "
+            f"{MRCLAM_REPEATING.describe()}: `MRCLAM_REPEATING`) and the odometry "
             "(`MotionModel.mrclam()`) along the true path from no information, afresh at a "
             f"kidnapping; a frame counts once the pose is within tolerance with probability "
             f"{BOUND_P}. Optimistic (the correspondences known, the odometry without biases), "
