@@ -28,7 +28,8 @@ Much of what repeats is not the tube's own: two different tubes' errors in one f
 correlated too (``same_frame``). So the errors are also fitted, by maximum likelihood over
 each run's frames (a Kalman filter over a bias common to every tube and each tube's own),
 as a common bias that drifts, each tube's own bias that drifts, an offset common to one
-frame's bearings, and white noise (``shared_bias``; the bound on what the data allow,
+frame's bearings, and white noise (``shared_bias``, with
+``omniloc.evaluate.bearing_errors.fit_shared_biases``; the bound on what the data allow,
 ``omniloc.evaluate.bounds.MRCLAM_REPEATING``, takes its shares). A part every bearing shares
 moves them all as a turn of the robot would: it costs the heading, not the position.
 """
@@ -48,39 +49,32 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 from _results import run_meta, write_results  # noqa: E402
-from omniloc import predict_bearings  # noqa: E402
 from omniloc.angles import wrap  # noqa: E402
-from omniloc.evaluate.tracking import MAX_GAP_S, Stream, mrclam_streams  # noqa: E402
+from omniloc.evaluate.bearing_errors import (  # noqa: E402
+    MAX_ERROR,
+    fit_shared_biases,
+    same_frame_correlation,
+)
+from omniloc.evaluate.bearing_errors import sightings as error_sightings  # noqa: E402
+from omniloc.evaluate.tracking import Stream, mrclam_streams  # noqa: E402
 from omniloc.track.calibrate import turn_noise_fit  # noqa: E402
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 DATA = HERE.parent.parent / "shared" / "data" / "mrclam-ds6"
-#: Bearing errors beyond this (radians) are left out: the heavy tail the gate handles.
-MAX_ERROR = math.radians(5.0)
 #: The lags (s) whose correlation is reported: each bin is (previous, this].
 LAGS = (0.3, 0.6, 1.2, 2.5, 5.0)
 
 
 def sightings(streams: Sequence[Stream]) -> list[tuple[int, int, float, float]]:
     """Every bearing of a known tube as ``(run, tube, t, error)`` (error in radians, frames
-    without ground truth skipped)."""
-    out: list[tuple[int, int, float, float]] = []
-    for k, st in enumerate(streams):
-        ts = np.array([f.t for f in st.frames])
-        truth, gaps = st.truth_at(ts)
-        L = st.landmarks.xy
-        for f, x, gap in zip(st.frames, truth, gaps, strict=True):
-            if not (gap <= MAX_GAP_S and np.isfinite(x).all()) or f.truth is None:
-                continue
-            for b, tube in zip(f.bearings, f.truth, strict=True):
-                if tube is None:
-                    continue
-                err = float(wrap(b - predict_bearings(L[tube][None], x)[0]))
-                if abs(err) <= MAX_ERROR:
-                    out.append((k, int(tube), float(f.t), err))
-    return out
+    without ground truth skipped; :func:`omniloc.evaluate.bearing_errors.sightings`)."""
+    s = error_sightings(streams, MAX_ERROR)
+    return [
+        (int(r), int(n), float(t), float(e))
+        for r, n, t, e in zip(s.run, s.landmark, s.t, s.error, strict=True)
+    ]
 
 
 def geometry(
@@ -229,148 +223,6 @@ def drifting_bias_fit(rows: Sequence[tuple[int, int, float, float]]) -> dict[str
     }
 
 
-#: The shared-bias model's parameters, in the order :func:`shared_bias_nll` takes them.
-SHARED_PARAMETERS = ("common_sd", "common_tau_s", "tube_sd", "tube_tau_s", "frame_sd", "white_sd")
-
-
-def _frames_by_run(
-    rows: Sequence[tuple[int, int, float, float]],
-) -> list[tuple[int, list[tuple[float, IntArray, FloatArray]]]]:
-    """Each run's frames in time order, as (state size, [(t, state column of each bearing's
-    tube, errors)]): column 0 is the common bias, 1.. the run's tubes."""
-    runs: dict[int, dict[float, list[tuple[int, float]]]] = {}
-    for run, tube, t, e in rows:
-        runs.setdefault(run, {}).setdefault(t, []).append((tube, e))
-    out = []
-    for frames in runs.values():
-        ts = sorted(frames)
-        tubes = sorted({n for t in ts for n, _ in frames[t]})
-        col = {n: i + 1 for i, n in enumerate(tubes)}
-        out.append(
-            (
-                len(tubes) + 1,
-                [
-                    (
-                        t,
-                        np.array([col[n] for n, _ in frames[t]], dtype=np.int64),
-                        np.array([e for _, e in frames[t]]),
-                    )
-                    for t in ts
-                ],
-            )
-        )
-    return out
-
-
-def shared_bias_nll(
-    params: Sequence[float], runs: list[tuple[int, list[tuple[float, IntArray, FloatArray]]]]
-) -> float:
-    """Minus the log-likelihood of the errors (:func:`_frames_by_run`) under the shared-bias
-    model (``params`` in the order of :data:`SHARED_PARAMETERS`, radians and seconds): each
-    error is a bias common to every tube of the run (Ornstein-Uhlenbeck: stationary sd,
-    correlation time), plus the tube's own (the same), plus an offset common to the frame's
-    bearings and drawn afresh each frame, plus white noise. A Kalman filter per run over the
-    common bias and the tubes' biases."""
-    sc, tc, sb, tb, sf, sw = (float(v) for v in params)
-    total = 0.0
-    for n, frames in runs:
-        q = np.r_[sc * sc, np.full(n - 1, sb * sb)]
-        taus = np.r_[tc, np.full(n - 1, tb)]
-        m = np.zeros(n)
-        P = np.diag(q)
-        prev = frames[0][0]
-        for t, cols, e in frames:
-            a = np.exp(-(t - prev) / taus)
-            prev = t
-            m = a * m
-            P = P * np.outer(a, a) + np.diag(q * (1.0 - a * a))
-            k = e.size
-            H = np.zeros((k, n))
-            H[:, 0] = 1.0
-            H[np.arange(k), cols] = 1.0
-            PHt = P @ H.T
-            S = H @ PHt + sw * sw * np.eye(k) + sf * sf
-            r = e - H @ m
-            L = np.linalg.cholesky(S)
-            z = np.linalg.solve(L, r)
-            total += (
-                0.5 * float(z @ z)
-                + float(np.log(np.diag(L)).sum())
-                + 0.5 * k * math.log(2.0 * math.pi)
-            )
-            K = np.linalg.solve(S, PHt.T).T
-            m = m + K @ r
-            P = P - K @ PHt.T
-            P = 0.5 * (P + P.T)
-    return total
-
-
-def shared_bias_fit(
-    rows: Sequence[tuple[int, int, float, float]], max_evaluations: int = 2000
-) -> dict[str, float]:
-    """Maximum-likelihood fit of the shared-bias model (:func:`shared_bias_nll`): the error a
-    bias common to every tube that drifts, each tube's own bias that drifts, an offset
-    common to one frame's bearings, and white noise. Returns the parameters
-    (:data:`SHARED_PARAMETERS`, radians and seconds), each part's share of the variance (the
-    stationary variances' sum), and the gain in log-likelihood per sighting over
-    independent Gaussian errors."""
-    from scipy.optimize import minimize
-
-    runs = _frames_by_run(rows)
-    err = np.array([r[3] for r in rows])
-    sd = float(err.std())
-    p0 = np.log([sd * 0.6, 10.0, sd * 0.3, 10.0, sd * 0.3, sd * 0.3])
-    res = minimize(
-        lambda p: shared_bias_nll(np.exp(p), runs),
-        p0,
-        method="Nelder-Mead",
-        options={"xatol": 2e-3, "fatol": 0.5, "maxfev": max_evaluations},
-    )
-    fit = dict(zip(SHARED_PARAMETERS, (float(v) for v in np.exp(res.x)), strict=True))
-    var = {k: fit[k] ** 2 for k in ("common_sd", "tube_sd", "frame_sd", "white_sd")}
-    total = sum(var.values())
-    independent = 0.5 * err.size * (1.0 + math.log(2.0 * math.pi * sd * sd))
-    return {
-        **fit,
-        "common_share": var["common_sd"] / total,
-        "tube_share": var["tube_sd"] / total,
-        "frame_share": var["frame_sd"] / total,
-        "white_share": var["white_sd"] / total,
-        "gain_per_sighting": (independent - float(res.fun)) / err.size,
-        "evaluations": int(res.nfev),
-    }
-
-
-def same_frame_correlation(rows: Sequence[tuple[int, int, float, float]]) -> dict[str, float]:
-    """The correlation of two different tubes' errors in one frame (over every such pair,
-    about the errors' overall mean and variance), with the sd of the errors' differences
-    over the square root of 2 (what each error would have were the pair's independent).
-
-    Examples
-    --------
-    >>> rows = [(0, 1, 0.0, 0.01), (0, 2, 0.0, 0.01), (0, 1, 1.0, -0.01), (0, 2, 1.0, -0.01)]
-    >>> out = same_frame_correlation(rows)
-    >>> round(out["correlation"], 2), out["pairs"], out["difference_sd"]
-    (1.0, 2, 0.0)
-    """
-    err = np.array([r[3] for r in rows])
-    mean, var = float(err.mean()), float(err.var())
-    frames: dict[tuple[int, float], list[float]] = {}
-    for run, _, t, e in rows:
-        frames.setdefault((run, t), []).append(e)
-    prod, diff = [], []
-    for es in frames.values():
-        for i in range(len(es)):
-            for j in range(i + 1, len(es)):
-                prod.append((es[i] - mean) * (es[j] - mean))
-                diff.append(es[i] - es[j])
-    return {
-        "pairs": len(prod),
-        "correlation": float(np.mean(prod) / var) if prod and var > 0 else math.nan,
-        "difference_sd": float(np.std(diff) / math.sqrt(2.0)) if diff else math.nan,
-    }
-
-
 def lag_correlations(
     rows: Sequence[tuple[int, int, float, float]], lags: Sequence[float] = LAGS
 ) -> list[dict[str, float]]:
@@ -457,12 +309,33 @@ def main(argv: list[str] | None = None) -> int:
         f"{ou['tau_s']:.1f} s, white noise {math.degrees(ou['white_sd']):.2f} deg; "
         f"{ou['gain_per_sighting']:.2f} nats a sighting better than independent errors"
     )
-    same = same_frame_correlation(rows)
+    S = error_sightings(streams, MAX_ERROR)
+    frame = same_frame_correlation(S)
+    same = {
+        "pairs": frame.pairs,
+        "correlation": frame.correlation,
+        "difference_sd": frame.difference_sd,
+    }
     print(
         f"two tubes in one frame ({same['pairs']} pairs): correlation {same['correlation']:.2f}; "
         f"their difference {math.degrees(same['difference_sd']):.2f} deg per tube"
     )
-    shared = shared_bias_fit(rows)
+    sfit = fit_shared_biases(S)
+    common, frame_share, own, white = sfit.shares()
+    shared = {
+        "common_sd": sfit.common_sd,
+        "common_tau_s": sfit.common_tau_s,
+        "tube_sd": sfit.landmark_sd,
+        "tube_tau_s": sfit.landmark_tau_s,
+        "frame_sd": sfit.frame_sd,
+        "white_sd": sfit.white_sd,
+        "common_share": common,
+        "tube_share": own,
+        "frame_share": frame_share,
+        "white_share": white,
+        "gain_per_sighting": sfit.gain_per_sighting,
+        "evaluations": sfit.evaluations,
+    }
     print(
         f"shared biases: common to every tube sd {math.degrees(shared['common_sd']):.2f} deg "
         f"over {shared['common_tau_s']:.1f} s, each tube's own "

@@ -2249,6 +2249,66 @@ def _bounds_targets() -> list[Target]:
     ]
 
 
+def _bearing_errors_targets() -> list[Target]:
+    """How a recording's bearing errors repeat: sightings, the shared-bias fit and its
+    likelihood."""
+    from omniloc.evaluate import bearing_errors as E
+
+    def sightings() -> Any:
+        rng = np.random.default_rng(0)
+        t = np.repeat(np.arange(12) * 0.25, 2)
+        return E.Sightings(np.zeros(24, int), np.tile([0, 1], 12), t, rng.normal(0, 0.01, 24))
+
+    def fit_check(kw: dict[str, Any], v: Any) -> None:
+        _finite(
+            [
+                v.common_sd,
+                v.common_tau_s,
+                v.landmark_sd,
+                v.landmark_tau_s,
+                v.frame_sd,
+                v.white_sd,
+                v.gain_per_sighting,
+            ],
+            "shared-bias fit",
+        )
+        v.repeating()
+
+    def nll_check(kw: dict[str, Any], v: Any) -> None:
+        if not (isinstance(v, float) and not math.isnan(v)):
+            raise Insane(f"likelihood {v!r}")
+
+    arrays = merged(ARRAYS_OF_NUMBERS, NUMBERS)
+    return [
+        Target(
+            "Sightings",
+            lambda kw: E.Sightings(**kw),
+            lambda: {
+                "run": [0, 0, 1],
+                "landmark": [0, 1, 0],
+                "t": [0.0, 0.0, 1.0],
+                "error": [0.01, -0.01, 0.0],
+            },
+            {k: Arg(("Sightings", k), arrays) for k in ("run", "landmark", "t", "error")},
+            check=lambda kw, v: None,
+        ),
+        Target(
+            "fit_shared_biases",
+            lambda kw: E.fit_shared_biases(**kw),
+            lambda: {"s": sightings(), "max_evaluations": 50},
+            {"max_evaluations": Arg(("max_evaluations",), COUNTS)},
+            check=fit_check,
+        ),
+        Target(
+            "shared_bias_likelihood",
+            lambda kw: E.shared_bias_likelihood(**kw),
+            lambda: {"s": sightings(), "fit": (0.01, 5.0, 0.005, 5.0, 0.004, 0.002)},
+            {"fit": Arg(("six positive numbers", "fit"), arrays)},
+            check=nll_check,
+        ),
+    ]
+
+
 def _confidence_targets() -> list[Target]:
     """The tracker's confidence tables: fitted on frames, held out by run, applied."""
     from omniloc.track import confidence as C
@@ -2369,6 +2429,7 @@ def all_targets() -> dict[str, Target]:
         + _plot_targets()
         + _scenario_targets()
         + _bounds_targets()
+        + _bearing_errors_targets()
         + _confidence_targets()
     ):
         out[t.name] = t

@@ -12,14 +12,9 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 from bearing_correlation import (
-    SHARED_PARAMETERS,
-    _frames_by_run,
     drifting_bias_fit,
     geometry,
     lag_correlations,
-    same_frame_correlation,
-    shared_bias_fit,
-    shared_bias_nll,
     sightings,
     systematic,
 )
@@ -123,79 +118,6 @@ def test_a_drifting_bias_is_fitted_and_independent_errors_gain_nothing() -> None
     assert fit["gain_per_sighting"] > 0.3
     flat = [(0, 0, 0.25 * i, float(sw * rng.normal())) for i in range(3000)]
     assert drifting_bias_fit(flat)["gain_per_sighting"] < 0.01
-
-
-def _shared_rows(
-    rng: np.random.Generator, params: dict[str, float], frames: int, tubes: int = 3
-) -> list[tuple[int, int, float, float]]:
-    """Errors drawn from the shared-bias model: one run, frames every 0.25 s, each seeing a
-    random one or more of ``tubes`` tubes."""
-    sc, tc, sb, tb, sf, sw = (params[k] for k in SHARED_PARAMETERS)
-    ac, ab = math.exp(-0.25 / tc), math.exp(-0.25 / tb)
-    c, b = sc * rng.normal(), sb * rng.normal(size=tubes)
-    rows = []
-    for i in range(frames):
-        c = ac * c + math.sqrt(1 - ac * ac) * sc * rng.normal()
-        b = ab * b + np.sqrt(1 - ab * ab) * sb * rng.normal(size=tubes)
-        f = sf * rng.normal()
-        seen = rng.permutation(tubes)[: rng.integers(1, tubes + 1)]
-        for n in seen:
-            rows.append((0, int(n), 0.25 * i, float(c + b[n] + f + sw * rng.normal())))
-    return rows
-
-
-def test_the_shared_bias_likelihood_is_the_errors_gaussian_written_out() -> None:
-    # Three frames, two tubes: minus the log-density of the errors under their covariance
-    # written out pair by pair (common bias, each tube's own, the frame's offset, white).
-    rows = [
-        (0, 7, 0.0, 0.01),
-        (0, 9, 0.0, -0.004),
-        (0, 9, 0.3, 0.002),
-        (0, 7, 1.0, 0.006),
-        (0, 9, 1.0, 0.0),
-    ]
-    params = (0.012, 4.0, 0.006, 9.0, 0.005, 0.003)
-    sc, tc, sb, tb, sf, sw = params
-    t = np.array([r[2] for r in rows])
-    tube = np.array([r[1] for r in rows])
-    e = np.array([r[3] for r in rows])
-    lag = np.abs(t[:, None] - t[None, :])
-    C = (
-        sc**2 * np.exp(-lag / tc)
-        + sb**2 * np.exp(-lag / tb) * np.equal.outer(tube, tube)
-        + sf**2 * np.equal.outer(t, t)
-        + sw**2 * np.eye(t.size)
-    )
-    want = 0.5 * (e @ np.linalg.solve(C, e) + np.linalg.slogdet(2 * math.pi * C)[1])
-    assert shared_bias_nll(params, _frames_by_run(rows)) == pytest.approx(want, rel=1e-10)
-
-
-def test_errors_shared_by_a_frame_s_tubes_are_found_and_measured() -> None:
-    # Most of each error shared (a drifting common bias and a frame offset), a little each
-    # tube's own: the likelihood is higher at the truth than with any part's sd moved by
-    # half either way (the time constants are known less sharply from 6 minutes); the fit
-    # gains over independent errors and finds most of the error shared; the correlation of
-    # two tubes in one frame is the shared share.
-    rng = np.random.default_rng(3)
-    values = (math.radians(0.6), 8.0, math.radians(0.2), 8.0, math.radians(0.3), math.radians(0.15))
-    truth = dict(zip(SHARED_PARAMETERS, values, strict=True))
-    rows = _shared_rows(rng, truth, 1500)
-    runs = _frames_by_run(rows)
-    best = shared_bias_nll(values, runs)
-    for i in (0, 2, 4, 5):
-        for f in (1.5, 1 / 1.5):
-            moved = list(values)
-            moved[i] *= f
-            assert shared_bias_nll(moved, runs) > best + 1.0
-    fit = shared_bias_fit(rows[:800], max_evaluations=100)
-    assert fit["evaluations"] <= 101
-    assert fit["gain_per_sighting"] > 0.3 and fit["common_share"] + fit["frame_share"] > 0.6
-    same = same_frame_correlation(rows)
-    shared = (truth["common_sd"] ** 2 + truth["frame_sd"] ** 2) / sum(
-        truth[k] ** 2 for k in ("common_sd", "tube_sd", "frame_sd", "white_sd")
-    )
-    assert same["correlation"] == pytest.approx(shared, abs=0.15)
-    assert same["difference_sd"] < 0.5 * float(np.std([r[3] for r in rows]))
 
 
 def test_the_noise_that_grows_with_the_turn_rate_is_fitted() -> None:

@@ -7,7 +7,8 @@ computes and in which order.
 * :mod:`.tree` -- the paper's interpretation tree with a fixed threshold;
 * :mod:`.hypotheses` -- hypothesise and verify (wildcards, chi-square gates, range limits,
   negative evidence, budgets);
-* :mod:`.merge` -- merging equal poses.
+* :mod:`.merge` -- merging equal poses;
+* :mod:`.errors` -- the likelihood of bearing errors whose biases are shared.
 
 Kernels take their arguments in named groups (``NamedTuple``: noise and gate, visibility,
 budget, ...) and return named counters. They are compiled on first use and cached on disk.
