@@ -133,6 +133,10 @@ def test_sightings_are_the_known_landmarks_errors_against_the_truth() -> None:
     assert s.size == 1 and (s.run[0], s.landmark[0], s.t[0]) == (0, 0, 0.5)
     assert s.error[0] == pytest.approx(math.radians(1.0))
     assert same_frame_correlation(s).pairs == 0
+    assert sightings([stream], max_error=math.radians(10.0)).size == 2  # (the 8-deg one too)
+    for bad in (0.0, -1.0, 4.0, math.nan, "wide"):
+        with pytest.raises(InputError, match="max_error"):
+            sightings([stream], max_error=bad)  # type: ignore[arg-type]
 
 
 def test_sightings_are_kept_in_time_order_within_each_run() -> None:
@@ -168,6 +172,13 @@ def test_what_cannot_be_fitted_is_refused() -> None:
     for bad in (0, -3, 2.5, True, "many", 10**7, 10**400):
         with pytest.raises(InputError, match="max_evaluations"):
             fit_shared_biases(s, max_evaluations=bad)  # type: ignore[arg-type]
+    for call in (
+        fit_shared_biases,
+        same_frame_correlation,
+        lambda x: shared_bias_likelihood(x, TRUTH),
+    ):
+        with pytest.raises(InputError, match="takes Sightings"):
+            call([0.1, 0.2])  # type: ignore[operator, arg-type]
     for model in ((1.0, 2.0), (0.01, 1.0, 0.01, 1.0, 0.01, 0.0), (0.01, 1.0, 0.01, math.nan, 1, 1)):
         with pytest.raises(InputError, match="six positive numbers"):
             shared_bias_likelihood(s, model)

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from .._kernels.errors import shared_bias_nll
 from ..angles import wrap
 from ..errors import InputError
-from ..io import real_array, shorten
+from ..io import finite_number, real_array, shorten
 from ..pose import predict_bearings
 from .bounds import MAX_SHARE, RepeatingErrors
 
@@ -107,6 +107,7 @@ class Sightings:
 
     @property
     def size(self) -> int:
+        """How many sightings."""
         return int(self.error.size)
 
 
@@ -114,9 +115,18 @@ def sightings(streams: Sequence[Stream], max_error: float = MAX_ERROR) -> Sighti
     """Every bearing of a known landmark (:attr:`~omniloc.track.Frame.truth`) in frames with
     a true pose (within :data:`~omniloc.evaluate.tracking.MAX_GAP_S` of a ground-truth
     sample), with its error against that pose; errors beyond ``max_error`` (radians) left
-    out."""
+    out.
+
+    Raises
+    ------
+    InputError
+        ``max_error`` not a number of radians in (0, pi].
+    """
     from .tracking import MAX_GAP_S
 
+    limit = finite_number(max_error, "sightings' max_error")
+    if not 0.0 < limit <= math.pi:
+        raise InputError(f"sightings' max_error must lie in (0, pi] radians, got {max_error!r}")
     run: list[int] = []
     lm: list[int] = []
     ts: list[float] = []
@@ -134,7 +144,7 @@ def sightings(streams: Sequence[Stream], max_error: float = MAX_ERROR) -> Sighti
                 if row is None:
                     continue
                 e = float(wrap(b - predict_bearings(L[row][None], x)[0]))
-                if abs(e) <= max_error:
+                if abs(e) <= limit:
                     run.append(k)
                     lm.append(int(row))
                     ts.append(float(f.t))
@@ -170,7 +180,7 @@ def same_frame_correlation(s: Sightings) -> FrameCorrelation:
     >>> out.pairs, round(out.correlation, 2), out.difference_sd
     (2, 1.0, 0.0)
     """
-    e = s.error
+    e = _sightings(s, "same_frame_correlation").error
     if e.size == 0:
         return FrameCorrelation(0, math.nan, math.nan)
     mean, var = float(e.mean()), float(e.var())
@@ -189,6 +199,13 @@ def same_frame_correlation(s: Sightings) -> FrameCorrelation:
         float(np.mean(prod) / var) if var > 0 else math.nan,
         float(np.std(diff) / math.sqrt(2.0)),
     )
+
+
+def _sightings(s: object, where: str) -> Sightings:
+    """``s`` if it is a :class:`Sightings`, else an :class:`InputError` naming ``where``."""
+    if not isinstance(s, Sightings):
+        raise InputError(f"{where} takes Sightings (see sightings()), got {shorten(s)}")
+    return s
 
 
 def _frame_bounds(s: Sightings) -> list[tuple[int, int]]:
@@ -305,6 +322,7 @@ def fit_shared_biases(s: Sightings, max_evaluations: int = 2000) -> SharedBiasFi
     """
     from scipy.optimize import minimize
 
+    s = _sightings(s, "fit_shared_biases")
     if isinstance(max_evaluations, bool) or not isinstance(max_evaluations, (int, np.integer)):
         raise InputError(f"max_evaluations must be a whole number, got {shorten(max_evaluations)}")
     if not 1 <= max_evaluations <= MAX_EVALUATIONS:
@@ -353,6 +371,7 @@ def shared_bias_likelihood(s: Sightings, fit: SharedBiasFit | Sequence[float]) -
     """Minus the log-likelihood of the sightings' errors under a shared-bias model (a fit,
     or its six numbers in :class:`SharedBiasFit`'s order: common sd and time constant,
     landmark sd and time constant, frame sd, white sd); inf where it is not defined."""
+    s = _sightings(s, "shared_bias_likelihood")
     if isinstance(fit, SharedBiasFit):
         p: object = [
             fit.common_sd,
