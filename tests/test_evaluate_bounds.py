@@ -403,6 +403,29 @@ def test_the_guides_example_prints_what_it_says(
     assert capsys.readouterr().out.strip() == said[0]
 
 
+@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
+def test_the_guides_fit_of_repeating_errors_prints_what_it_says(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # The guide's second block runs on the first one's run: the errors' shares fitted on
+    # robot 4, and the bound under them.
+    text = DOCS.read_text()
+    start = text.index("How soon could any localizer know where the robot is")
+    first = text.index("```python\n", start)
+    end = text.index("```\n", first + 10)
+    second = text.index("```python\n", end)
+    blocks = [text[i + 10 : text.index("```\n", i + 10)] for i in (first, second)]
+    assert "fit_shared_biases" in blocks[1]
+    said = [ln[2:] for ln in blocks[1].splitlines() if ln.startswith("# ")]
+    assert len(said) == 2
+    monkeypatch.chdir(MRCLAM)
+    env: dict[str, object] = {}
+    exec(compile(blocks[0], str(DOCS), "exec"), env)
+    capsys.readouterr()
+    exec(compile(blocks[1], str(DOCS), "exec"), env)
+    assert capsys.readouterr().out.strip().splitlines() == said
+
+
 def test_draws_of_another_shape_are_refused_and_given_ones_are_used() -> None:
     cov = np.array([[0.02, 0.012, 0.0], [0.012, 0.015, 0.0], [0.0, 0.0, 0.002]])
     for bad in (np.zeros((10, 2)), np.zeros((0, 3)), np.zeros((2, 5, 3)), [[np.nan] * 3]):
