@@ -335,6 +335,7 @@ def main(argv: list[str] | None = None) -> int:
         "white_share": white,
         "gain_per_sighting": sfit.gain_per_sighting,
         "evaluations": sfit.evaluations,
+        "converged": sfit.converged,
     }
     print(
         f"shared biases: common to every tube sd {math.degrees(shared['common_sd']):.2f} deg "

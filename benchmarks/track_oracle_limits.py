@@ -49,6 +49,7 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -163,15 +164,7 @@ def main(argv: list[str] | None = None) -> int:
             first = np.array(list(runs.values()))
             results[key] = {
                 "bearing_sd_equivalent_deg": math.degrees(1.0 / math.sqrt(info)),
-                "repeating": None
-                if repeat is None
-                else {
-                    "share": repeat.share,
-                    "tau_s": repeat.tau_s,
-                    "common_share": repeat.common_share,
-                    "common_tau_s": repeat.common_tau_s,
-                    "frame_share": repeat.frame_share,
-                },
+                "repeating": None if repeat is None else asdict(repeat),
                 "p_min": p_min,
                 "first_from_first_frame_s": runs,
                 "first_median_s": float(np.median(first)),

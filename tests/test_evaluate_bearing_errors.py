@@ -83,6 +83,7 @@ def test_shared_errors_are_found_measured_and_handed_to_the_bound() -> None:
             moved[i] *= f
             assert shared_bias_likelihood(s, moved) > best + 1.0
     fit = fit_shared_biases(s)
+    assert fit.converged and not fit_shared_biases(s, max_evaluations=5).converged
     common, frame, own, _ = fit.shares()
     assert sum(fit.shares()) == pytest.approx(1.0)
     assert common + frame > 0.6 and fit.gain_per_sighting > 0.3

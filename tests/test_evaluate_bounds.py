@@ -390,40 +390,25 @@ DOCS = Path(__file__).resolve().parents[1] / "docs" / "tracking.md"
 
 
 @pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
-def test_the_guides_example_prints_what_it_says(
+def test_the_guides_examples_print_what_they_say(
     monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    text = DOCS.read_text()
-    start = text.index("How soon could any localizer know where the robot is")
-    block = text[text.index("```python\n", start) + 10 : text.index("```\n", start + 10)]
-    said = [ln[2:] for ln in block.splitlines() if ln.startswith("# first possible after")]
-    assert len(said) == 1
-    monkeypatch.chdir(MRCLAM)
-    exec(compile(block, str(DOCS), "exec"), {})
-    assert capsys.readouterr().out.strip() == said[0]
-
-
-@pytest.mark.skipif(not MRCLAM.is_dir(), reason="the MRCLAM recordings are not here")
-def test_the_guides_fit_of_repeating_errors_prints_what_it_says(
-    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
-) -> None:
-    # The guide's second block runs on the first one's run: the errors' shares fitted on
-    # robot 4, and the bound under them.
+    # The guide's two blocks, run one after the other as a reader would: robot 4's bound
+    # with independent errors, then its errors' shares fitted and the bound under them;
+    # each prints the lines its comments say.
     text = DOCS.read_text()
     start = text.index("How soon could any localizer know where the robot is")
     first = text.index("```python\n", start)
-    end = text.index("```\n", first + 10)
-    second = text.index("```python\n", end)
+    second = text.index("```python\n", text.index("```\n", first + 10))
     blocks = [text[i + 10 : text.index("```\n", i + 10)] for i in (first, second)]
     assert "fit_shared_biases" in blocks[1]
-    said = [ln[2:] for ln in blocks[1].splitlines() if ln.startswith("# ")]
-    assert len(said) == 2
     monkeypatch.chdir(MRCLAM)
     env: dict[str, object] = {}
-    exec(compile(blocks[0], str(DOCS), "exec"), env)
-    capsys.readouterr()
-    exec(compile(blocks[1], str(DOCS), "exec"), env)
-    assert capsys.readouterr().out.strip().splitlines() == said
+    for block, lines in zip(blocks, (1, 2), strict=True):
+        said = [ln[2:] for ln in block.splitlines() if ln.startswith("# ")]
+        assert len(said) == lines
+        exec(compile(block, str(DOCS), "exec"), env)
+        assert capsys.readouterr().out.strip().splitlines() == said
 
 
 def test_draws_of_another_shape_are_refused_and_given_ones_are_used() -> None:

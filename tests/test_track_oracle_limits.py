@@ -14,7 +14,7 @@ BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
 sys.path.insert(0, str(BENCH))
 
 import track_oracle_limits as tol  # noqa: E402
-from omniloc.evaluate.bounds import MRCLAM_REPEATING  # noqa: E402
+from omniloc.evaluate.bounds import MRCLAM_REPEATING, RepeatingErrors  # noqa: E402
 
 MRCLAM = Path(__file__).resolve().parents[2] / "shared" / "data" / "mrclam-ds6"
 
@@ -38,13 +38,7 @@ def test_the_script_bounds_the_recordings(tmp_path: Path) -> None:
     g, m, r = (data["bounds"][f"{k}, p >= 0.99"] for k in tol.ERROR_MODELS)
     assert m["first_median_s"] <= g["first_median_s"]
     assert m["repeating"] is None
-    assert r["repeating"] == {
-        "share": MRCLAM_REPEATING.share,
-        "tau_s": MRCLAM_REPEATING.tau_s,
-        "common_share": MRCLAM_REPEATING.common_share,
-        "common_tau_s": MRCLAM_REPEATING.common_tau_s,
-        "frame_share": MRCLAM_REPEATING.frame_share,
-    }
+    assert RepeatingErrors(**r["repeating"]) == MRCLAM_REPEATING
     loose = data["bounds"][f"{next(iter(tol.ERROR_MODELS))}, p >= 0.9"]
     assert loose["first_median_s"] <= g["first_median_s"]
 

@@ -238,6 +238,9 @@ class SharedBiasFit:
         own sd (nats).
     sightings, evaluations : int
         Errors fitted, and likelihood evaluations the fit took.
+    converged : bool
+        Whether the search met its tolerances within ``max_evaluations`` (False: the
+        numbers are where it stopped, not a maximum).
     """
 
     common_sd: float
@@ -249,6 +252,7 @@ class SharedBiasFit:
     gain_per_sighting: float
     sightings: int
     evaluations: int
+    converged: bool = True
 
     def shares(self) -> tuple[float, float, float, float]:
         """Each part's share of the variance (the stationary variances' sum): common,
@@ -364,6 +368,7 @@ def fit_shared_biases(s: Sightings, max_evaluations: int = 2000) -> SharedBiasFi
         gain_per_sighting=(independent - float(res.fun)) / s.size,
         sightings=s.size,
         evaluations=int(res.nfev),
+        converged=bool(res.success),
     )
 
 
