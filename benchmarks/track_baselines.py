@@ -452,6 +452,40 @@ def tables(results: dict[str, dict[str, Any]]) -> str:
             )
     lines.append("")
 
+    # Where the localized frames' errors lie, and which part of the pose the covariance is
+    # too sure of (rows measured before the scoring had them are left out).
+    split = [k for k in keys if all("along_mean_m" in r for r in results[k]["runs"])]
+    if split:
+        lines += [
+            "**Where the error lies, per robot** (over the localized frames: the position "
+            "error along the robot's true heading, + ahead, and across it, + to its left, "
+            "mean / RMSE; the truth inside the 99 % region of the reported covariance's "
+            "position block, and of its heading variance)",
+            "",
+            "| localizer | robot | localized frames | along mean / RMSE m | "
+            "across mean / RMSE m | position in its 99 % region | heading in its 99 % "
+            "interval |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for k in split:
+            for r in results[k]["runs"]:
+                if not r["name"].startswith("robot"):
+                    continue
+                cov = max(r["cov_frames"], 1)
+                lines.append(
+                    f"| {_label(k)} | {r['name']} | {r['n_localized']} | "
+                    f"{_f(r['along_mean_m'], '{:+.3f}')} / {_f(r['along_rmse_m'], '{:.3f}')} | "
+                    f"{_f(r['across_mean_m'], '{:+.3f}')} / "
+                    f"{_f(r['across_rmse_m'], '{:.3f}')} | "
+                    + (
+                        f"{_pct(r['cov_position_inside_99'] / cov)} | "
+                        f"{_pct(r['cov_heading_inside_99'] / cov)} |"
+                        if r["cov_frames"]
+                        else "- | - |"
+                    )
+                )
+        lines.append("")
+
     # Totals per stream set.
     lines += [
         "**Totals per set of streams** (whole runs: the five robots; kidnapped: the streams "

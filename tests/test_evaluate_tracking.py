@@ -126,6 +126,79 @@ def test_the_reported_covariance_is_scored_against_the_truth() -> None:
     assert "99 % region in 75.0 %" in text
 
 
+def _at(t: float, ahead: float, left: float, P: np.ndarray, dtheta: float = 0.0) -> TrackEstimate:
+    """Localized ``ahead`` m along the true heading and ``left`` m to its left."""
+    c, s = math.cos(TRUE.theta), math.sin(TRUE.theta)
+    pose = Pose(TRUE.x + ahead * c - left * s, TRUE.y + ahead * s + left * c, TRUE.theta + dtheta)
+    return TrackEstimate(t, TrackState.LOCALIZED, pose=pose, covariance=P)
+
+
+def test_the_position_error_is_split_along_and_across_the_heading() -> None:
+    from omniloc.evaluate.tracking import tracking_summary
+
+    stream = _stream(5)
+    P = np.eye(3) * 1.0
+    est = [
+        _at(0.0, -0.10, 0.02, P),
+        _at(1.0, -0.20, 0.02, P),
+        _at(2.0, -0.30, -0.01, P),
+        _ambiguous(3.0, Pose(TRUE.x + 5.0, TRUE.y, TRUE.theta), 0.5),  # not localized
+        TrackEstimate(4.0, TrackState.LOST),
+    ]
+    r = score_run(stream, est)
+    assert r.along_mean_m == pytest.approx(-0.2)
+    assert r.along_rmse_m == pytest.approx(math.sqrt((0.01 + 0.04 + 0.09) / 3))
+    assert r.across_mean_m == pytest.approx(0.01)
+    assert r.across_rmse_m == pytest.approx(math.sqrt((0.0004 + 0.0004 + 0.0001) / 3))
+    # Pooled over runs by their localized frames: a run of one frame ahead by 0.4 m.
+    one = score_run(_stream(1), [_at(0.0, 0.4, 0.0, P)])
+    tot = TrackingResult("x", [r, one]).totals()
+    assert tot["along_mean_m"] == pytest.approx((-0.6 + 0.4) / 4)
+    assert tot["along_rmse_m"] == pytest.approx(math.sqrt((0.14 + 0.16) / 4))
+    assert tot["across_mean_m"] == pytest.approx(0.03 / 4)
+    text = tracking_summary(TrackingResult("x", [r]))
+    assert "along the robot's heading: mean -0.200 m (ahead +)" in text
+    assert "across it: mean +0.010 m (left +)" in text
+    # Nothing localized: no mean, no line.
+    none = score_run(_stream(2), [TrackEstimate(float(k), TrackState.LOST) for k in range(2)])
+    assert math.isnan(none.along_mean_m) and math.isnan(none.across_rmse_m)
+    assert "along the robot's heading" not in tracking_summary(TrackingResult("x", [none]))
+
+
+def test_the_covariance_is_scored_by_its_position_block_and_its_heading_apart() -> None:
+    from omniloc.evaluate.tracking import CHI2_1DOF_99, CHI2_2DOF_99, tracking_summary
+
+    assert CHI2_2DOF_99 == pytest.approx(9.21034, abs=1e-5)
+    assert CHI2_1DOF_99 == pytest.approx(6.63490, abs=1e-5)
+    stream = _stream(4)
+    small = np.eye(3) * 0.01**2
+    # Correlated x and y: the position's NEES is that of the 2 x 2 block, e' P_xy^-1 e.
+    corr = np.array([[4.0, 3.0, 0.0], [3.0, 4.0, 0.0], [0.0, 0.0, 1.0]]) * 0.01**2
+    est = [
+        _at(0.0, 0.04, 0.0, small),  # position 16 sd^2 off: outside; heading exact
+        _at(1.0, 0.0, 0.0, small, dtheta=0.04),  # heading 16: outside; position exact
+        _at(2.0, 0.02, 0.0, small, dtheta=0.02),  # both 4: inside both, and the whole
+        TrackEstimate(
+            3.0,
+            TrackState.LOCALIZED,
+            pose=Pose(TRUE.x + 0.05, TRUE.y + 0.05, TRUE.theta),
+            covariance=corr,
+        ),
+    ]
+    r = score_run(stream, est)
+    # The last: e = (0.05, 0.05) along the correlation's long axis, variance 7e-4 there:
+    # NEES 2 * 0.05^2 / 7e-4 = 7.14, inside; against the diagonal alone it would be 12.5.
+    assert r.cov_frames == 4
+    assert (r.cov_position_inside_99, r.cov_heading_inside_99) == (3, 3)
+    assert r.cov_inside_99 == 2  # the whole pose: 16, 16 (> 11.34), 8 and 7.14
+    tot = TrackingResult("x", [r]).totals()
+    assert tot["cov_position_inside_99_rate"] == pytest.approx(0.75)
+    assert tot["cov_heading_inside_99_rate"] == pytest.approx(0.75)
+    text = tracking_summary(TrackingResult("x", [r]))
+    assert "the position alone inside the 99 % region of its block in 75.0 %" in text
+    assert "the heading alone in 75.0 %" in text
+
+
 def test_without_localized_frames_the_covariance_is_not_scored() -> None:
     from omniloc.evaluate.tracking import tracking_summary
 

@@ -135,6 +135,9 @@ WEIGHT_BINS = 10
 #: covariance is below them in 50 % and 99 % of the frames.
 CHI2_3DOF_50 = chi2_quantile(0.5, 3)
 CHI2_3DOF_99 = chi2_quantile(0.99, 3)
+#: The same for the position alone (x, y: 2 degrees of freedom) and the heading alone (1).
+CHI2_2DOF_99 = chi2_quantile(0.99, 2)
+CHI2_1DOF_99 = chi2_quantile(0.99, 1)
 
 
 class LocalizerOverTime(Protocol):
@@ -422,6 +425,19 @@ class RunScore:
     #: Of the false alarms, those that left a place that was right: all but those whose last
     #: localized frame before the flag was scored and wrong (those left a wrong place).
     false_alarms_left_right: int = 0
+    #: Over the localized frames, the position error split along the robot's true heading
+    #: (positive: the estimate ahead of the robot) and across it (positive: to its left):
+    #: the means (a bias, such as odometry whose scale is off) and the RMSEs, metres.
+    along_mean_m: float = NAN
+    along_rmse_m: float = NAN
+    across_mean_m: float = NAN
+    across_rmse_m: float = NAN
+    #: Of the ``cov_frames``, those whose true position lies inside the 99 % region of the
+    #: covariance's position block, and those whose true heading lies inside the 99 %
+    #: interval of its heading variance: which part of the pose the covariance is too sure
+    #: of.
+    cov_position_inside_99: int = 0
+    cov_heading_inside_99: int = 0
 
     @property
     def realtime_factor(self) -> float:
@@ -511,7 +527,8 @@ def score_run(
         for name in ("probability", "confidence")
     }
     own.update(_hypothesis_bins(estimates, truth, scored, pos_tol_m, heading_tol_deg))
-    nees = _nees(estimates, est, truth, sel)
+    nees, nees_pos, nees_hdg = _nees(estimates, est, truth, sel)
+    along, across = _along_across(est[sel], truth[sel])
     ends = [float(stream.odometry.t[-1])] + ([t[-1]] if t.size else [])
     return RunScore(
         name=stream.name,
@@ -538,6 +555,12 @@ def score_run(
         cov_frames=int(nees.size),
         cov_inside_50=int((nees <= CHI2_3DOF_50).sum()),
         cov_inside_99=int((nees <= CHI2_3DOF_99).sum()),
+        cov_position_inside_99=int((nees_pos <= CHI2_2DOF_99).sum()),
+        cov_heading_inside_99=int((nees_hdg <= CHI2_1DOF_99).sum()),
+        along_mean_m=float(along.mean()) if along.size else NAN,
+        along_rmse_m=float(np.sqrt(np.mean(along**2))) if along.size else NAN,
+        across_mean_m=float(across.mean()) if across.size else NAN,
+        across_rmse_m=float(np.sqrt(np.mean(across**2))) if across.size else NAN,
         flag_delay_s=flag_delay,
         n_after=int(after.sum()),
         n_correct_after=int(correct[after].sum()),
@@ -679,10 +702,12 @@ def _nees(
     est: FloatArray,
     truth: FloatArray,
     sel: NDArray[np.bool_],
-) -> FloatArray:
+) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The normalised estimation error squared of each selected frame's pose under its
-    covariance (frames without a finite, positive-definite covariance left out)."""
-    out: list[float] = []
+    covariance (frames without a finite, positive-definite covariance left out), and over
+    the same frames that of the position alone under the covariance's position block and
+    that of the heading alone under its heading variance."""
+    out: list[tuple[float, float, float]] = []
     for k in np.flatnonzero(sel).tolist():
         P = estimates[k].covariance
         if P is None:
@@ -697,8 +722,20 @@ def _nees(
         except np.linalg.LinAlgError:
             continue
         z = np.linalg.solve(L, e)
-        out.append(float(z @ z))
-    return np.asarray(out, dtype=np.float64)
+        # (The position block's Cholesky factor is L's upper left block; the heading's
+        # variance is positive with P.)
+        zp = np.linalg.solve(L[:2, :2], e[:2])
+        out.append((float(z @ z), float(zp @ zp), float(e[2] ** 2 / P[2, 2])))
+    a = np.asarray(out, dtype=np.float64).reshape(-1, 3)
+    return a[:, 0], a[:, 1], a[:, 2]
+
+
+def _along_across(est: FloatArray, truth: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The position errors ``est - truth`` (rows ``x, y, theta``) along the true heading
+    and across it (to the robot's left)."""
+    d = est[:, :2] - truth[:, :2]
+    c, s = np.cos(truth[:, 2]), np.sin(truth[:, 2])
+    return d[:, 0] * c + d[:, 1] * s, -d[:, 0] * s + d[:, 1] * c
 
 
 def _weight_bins(
@@ -843,6 +880,10 @@ class TrackingResult:
             num = sum(getattr(r, attr) ** 2 * r.n_localized for r in rs if r.n_localized)
             return math.sqrt(num / loc) if loc else NAN
 
+        def mean_over_localized(attr: str) -> float:
+            num = sum(getattr(r, attr) * r.n_localized for r in rs if r.n_localized)
+            return num / loc if loc else NAN
+
         after = [r.correct_after_rate for r in rs if math.isfinite(r.correct_after_rate)]
         jumps = [r for r in rs if math.isfinite(r.jump_t)]
         plain = [r for r in rs if not math.isfinite(r.jump_t)]
@@ -908,6 +949,16 @@ class TrackingResult:
             "cov_frames": float(cov),
             "cov_inside_50_rate": sum(r.cov_inside_50 for r in rs) / cov if cov else NAN,
             "cov_inside_99_rate": sum(r.cov_inside_99 for r in rs) / cov if cov else NAN,
+            "cov_position_inside_99_rate": (
+                sum(r.cov_position_inside_99 for r in rs) / cov if cov else NAN
+            ),
+            "cov_heading_inside_99_rate": (
+                sum(r.cov_heading_inside_99 for r in rs) / cov if cov else NAN
+            ),
+            "along_mean_m": mean_over_localized("along_mean_m"),
+            "along_rmse_m": pooled("along_rmse_m"),
+            "across_mean_m": mean_over_localized("across_mean_m"),
+            "across_rmse_m": pooled("across_rmse_m"),
             **_bound_totals(rs, jumps),
         }
 
@@ -1323,7 +1374,17 @@ def tracking_summary(report: TrackingReport | TrackingResult) -> str:
             f"reported covariance over {int(tot['cov_frames'])} localized frames: the truth "
             f"inside its 50 % region in {_fmt(100 * tot['cov_inside_50_rate'], '.1f')} %, its "
             f"99 % region in {_fmt(100 * tot['cov_inside_99_rate'], '.1f')} % (consistent: 50 %"
-            ", 99 %)"
+            ", 99 %); the position alone inside the 99 % region of its block in "
+            f"{_fmt(100 * tot['cov_position_inside_99_rate'], '.1f')} %, the heading alone in "
+            f"{_fmt(100 * tot['cov_heading_inside_99_rate'], '.1f')} %"
+        )
+    if tot["localized_frames"]:
+        lines.append(
+            f"position error over the localized frames along the robot's heading: mean "
+            f"{_fmt(tot['along_mean_m'], '+.3f')} m (ahead +), RMSE "
+            f"{_fmt(tot['along_rmse_m'], '.3f')} m; across it: mean "
+            f"{_fmt(tot['across_mean_m'], '+.3f')} m (left +), RMSE "
+            f"{_fmt(tot['across_rmse_m'], '.3f')} m"
         )
     if report.kidnap is not None:
         k = report.kidnap
