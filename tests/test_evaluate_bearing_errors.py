@@ -183,3 +183,15 @@ def test_what_cannot_be_fitted_is_refused() -> None:
     for model in ((1.0, 2.0), (0.01, 1.0, 0.01, 1.0, 0.01, 0.0), (0.01, 1.0, 0.01, math.nan, 1, 1)):
         with pytest.raises(InputError, match="six positive numbers"):
             shared_bias_likelihood(s, model)
+
+
+@pytest.mark.parametrize(
+    "sds", [(0.0, 0.0, 0.0, 0.0), (0.01, math.nan, 0.01, 0.01), (0.01, 0.01, -0.01, 0.01)]
+)
+def test_a_fit_without_a_spread_has_no_shares(sds: tuple[float, float, float, float]) -> None:
+    common, frame, own, white = sds
+    fit = SharedBiasFit(common, 10.0, own, 10.0, frame, white, 0.0, 100, 10)
+    with pytest.raises(InputError, match="SharedBiasFit's sds"):
+        fit.shares()
+    with pytest.raises(InputError, match="SharedBiasFit's sds"):
+        fit.repeating()

@@ -170,7 +170,7 @@ def test_the_covariance_is_scored_by_its_position_block_and_its_heading_apart() 
 
     assert CHI2_2DOF_99 == pytest.approx(9.21034, abs=1e-5)
     assert CHI2_1DOF_99 == pytest.approx(6.63490, abs=1e-5)
-    stream = _stream(4)
+    stream = _stream(6)
     small = np.eye(3) * 0.01**2
     # Correlated x and y: the position's NEES is that of the 2 x 2 block, e' P_xy^-1 e.
     corr = np.array([[4.0, 3.0, 0.0], [3.0, 4.0, 0.0], [0.0, 0.0, 1.0]]) * 0.01**2
@@ -184,19 +184,23 @@ def test_the_covariance_is_scored_by_its_position_block_and_its_heading_apart() 
             pose=Pose(TRUE.x + 0.05, TRUE.y + 0.05, TRUE.theta),
             covariance=corr,
         ),
+        # Between the quantiles: the position 10 sd^2 off (outside 9.21 with 2 degrees of
+        # freedom, inside 11.34 with 3), the heading 8 (outside 6.63 with 1, inside 9.21).
+        _at(4.0, 0.01 * math.sqrt(10.0), 0.0, small),
+        _at(5.0, 0.0, 0.0, small, dtheta=0.01 * math.sqrt(8.0)),
     ]
     r = score_run(stream, est)
     # The last: e = (0.05, 0.05) along the correlation's long axis, variance 7e-4 there:
     # NEES 2 * 0.05^2 / 7e-4 = 7.14, inside; against the diagonal alone it would be 12.5.
-    assert r.cov_frames == 4
-    assert (r.cov_position_inside_99, r.cov_heading_inside_99) == (3, 3)
-    assert r.cov_inside_99 == 2  # the whole pose: 16, 16 (> 11.34), 8 and 7.14
+    assert r.cov_frames == 6
+    assert (r.cov_position_inside_99, r.cov_heading_inside_99) == (4, 4)
+    assert r.cov_inside_99 == 4  # the whole pose: 16, 16 (> 11.34), 8, 7.14, 10 and 8
     tot = TrackingResult("x", [r]).totals()
-    assert tot["cov_position_inside_99_rate"] == pytest.approx(0.75)
-    assert tot["cov_heading_inside_99_rate"] == pytest.approx(0.75)
+    assert tot["cov_position_inside_99_rate"] == pytest.approx(4 / 6)
+    assert tot["cov_heading_inside_99_rate"] == pytest.approx(4 / 6)
     text = tracking_summary(TrackingResult("x", [r]))
-    assert "the position alone inside the 99 % region of its block in 75.0 %" in text
-    assert "the heading alone in 75.0 %" in text
+    assert "the position alone inside the 99 % region of its block in 66.7 %" in text
+    assert "the heading alone in 66.7 %" in text
 
 
 def test_without_localized_frames_the_covariance_is_not_scored() -> None:

@@ -257,9 +257,14 @@ class SharedBiasFit:
     def shares(self) -> tuple[float, float, float, float]:
         """Each part's share of the variance (the stationary variances' sum): common,
         frame, landmark, white."""
-        v = np.array([self.common_sd, self.frame_sd, self.landmark_sd, self.white_sd]) ** 2
-        total = float(v.sum())
-        return tuple(float(x) for x in v / total)  # type: ignore[return-value]
+        sds = np.array([self.common_sd, self.frame_sd, self.landmark_sd, self.white_sd])
+        if not (np.isfinite(sds).all() and (sds >= 0).all() and (sds > 0).any()):
+            raise InputError(
+                "SharedBiasFit's sds (common, frame, landmark, white) must be finite, >= 0 "
+                f"and not all 0, got {shorten(sds.tolist())}"
+            )
+        v = sds**2
+        return tuple(float(x) for x in v / float(v.sum()))  # type: ignore[return-value]
 
     def repeating(self) -> RepeatingErrors:
         """The fit as the bound takes it (:class:`~omniloc.evaluate.bounds.RepeatingErrors`):
