@@ -143,6 +143,56 @@ def test_propagated_covariance_matches_monte_carlo(rng: np.random.Generator) -> 
     assert abs(emp[0, 2] - Q[0, 2]) < 0.15 * np.sqrt(Q[0, 0] * Q[2, 2])
 
 
+def test_delay_var_adds_heading_noise_at_each_change_of_the_turn_rate() -> None:
+    base = MotionModel(turn_per_rad=0.01, turn_per_m=0.0, turn_per_s=1e-4)
+    lag = MotionModel(turn_per_rad=0.01, turn_per_m=0.0, turn_per_s=1e-4, delay_var=0.004)
+    dt = np.full(6, 0.1)
+    v = np.full(6, 0.2)
+    # a turn rate that flips its sign row by row: five changes of 0.8 rad/s
+    w = np.array([0.4, -0.4, 0.4, -0.4, 0.4, -0.4])
+    (d0, Q0), (d1, Q1) = integrate(dt, v, w, base), integrate(dt, v, w, lag)
+    assert d1 == pytest.approx(d0, abs=0.0)  # the mean motion is the odometry's
+    # heading variances add exactly: five changes of 0.8 rad/s at 0.004 s^2
+    assert Q1[2, 2] - Q0[2, 2] == pytest.approx(5 * 0.004 * 0.8**2, rel=1e-12)
+    # a steady twist, sampled as finely, gains nothing; a piece of zero duration between
+    # two equal twists is no change
+    steady = np.full(6, 0.4)
+    assert np.array_equal(integrate(dt, v, steady, lag)[1], integrate(dt, v, steady, base)[1])
+    dz = np.array([0.1, 0.0, 0.1])
+    _, Qz = integrate(dz, [0.2, 0.2, 0.2], [0.4, -3.0, 0.4], lag)
+    assert np.array_equal(Qz, integrate(dz, [0.2, 0.2, 0.2], [0.4, 9.0, 0.4], base)[1])
+
+
+def test_delay_var_matches_boundaries_moved_by_a_random_response_time(
+    rng: np.random.Generator,
+) -> None:
+    """The change's noise, cross terms and frame included, against moving each boundary
+    between two pieces by a response time drawn with variance ``delay_var``."""
+    var = 0.003
+    m = MotionModel(
+        along_per_m=0.0, across_per_m=0.0, turn_per_rad=0.0, turn_per_m=0.0, turn_per_s=0.0,
+        along_per_s=0.0, delay_var=var,
+    )  # fmt: skip
+    dt = np.array([0.6, 0.5, 0.7, 0.4])
+    vx = np.array([0.3, 0.1, 0.4, 0.2])
+    vy = np.array([0.0, 0.05, -0.05, 0.0])
+    w = np.array([0.5, -0.6, 0.2, 0.9])
+    d0, Q = integrate(dt, vx, w, m, vy=vy)
+    k = 4000
+    e = rng.normal(0.0, np.sqrt(var), size=(k, 3))
+    out = np.empty((k, 3))
+    for i in range(k):
+        shifted = dt.copy()
+        shifted[:-1] += e[i]  # each boundary moved by its own response time
+        shifted[1:] -= e[i]
+        out[i] = integrate(shifted, vx, w, MotionModel(), vy=vy)[0]
+    emp = np.cov(out.T)
+    assert np.allclose(out.mean(axis=0), d0, atol=0.005)
+    assert np.allclose(np.diag(emp), np.diag(Q), rtol=0.1)
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        assert abs(emp[a, b] - Q[a, b]) < 0.1 * np.sqrt(Q[a, a] * Q[b, b])
+
+
 def test_bad_input() -> None:
     with pytest.raises(InputError, match="turn_per_rad"):
         MotionModel(turn_per_rad=-1.0)
@@ -161,6 +211,8 @@ def test_bad_input() -> None:
         MotionModel(turn_slowdown=-0.5)
     with pytest.raises(InputError, match="turn_slowdown=1e\\+03 is implausibly large"):
         MotionModel(turn_slowdown=1e3)
+    with pytest.raises(InputError, match="delay_var must be finite and >= 0"):
+        MotionModel(delay_var=-1e-3)
 
 
 @pytest.mark.parametrize(

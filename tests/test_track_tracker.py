@@ -1842,3 +1842,35 @@ def test_a_simulated_landmark_right_behind_another_is_never_reported() -> None:
     assert all(set(f.truth or ()) == {0, 1, 2} for f in plain.frames)
     with pytest.raises(InputError, match="occlusion_width"):
         simulate_run(lm, sensor, Pose(0.0, 0.0, 0.0), occlusion_width=-1.0, **kw)
+
+
+# ---- delay_var: the odometry's response to a change, as the tracker integrates it ------------
+def test_each_change_of_the_turn_rate_adds_its_heading_noise_once_across_frames() -> None:
+    # Odometry rows every 0.1 s whose turn rate flips between +0.4 and -0.4 rad/s, frames
+    # between them: the rows of each frame's interval are integrated from the twist that
+    # held at the frame before, so each change between two frames is counted once, none at
+    # a frame. The heading variances differ by delay_var times the changes' squares.
+    lag = 0.004
+
+    def heading_variances(delay_var: float) -> list[float]:
+        # A camera that sees 1 m, 2 m from every landmark: the frames see nothing, as
+        # expected, and the told place keeps its mass; only the odometry moves it.
+        sensor = replace(SENSOR, max_range=1.0)
+        tracker = Tracker(GRID, sensor, replace(MOTION, delay_var=delay_var), CONFIG)
+        tracker.set_pose(Pose(6.0, 2.0, 0.3), np.diag([0.01**2, 0.01**2, 0.001**2]))
+        out = []
+        rows = np.round(np.arange(13) * 0.1, 10)  # 0.0 ... 1.2 s
+        w = np.where(np.arange(rows.size) % 2 == 0, 0.4, -0.4)
+        frames = [0.05, 0.35, 0.65, 1.25]
+        for t, wk in zip(rows, w, strict=True):
+            while frames and frames[0] < t:
+                out.append(float(np.asarray(tracker.frame(frames.pop(0), []).covariance)[2, 2]))
+            tracker.odometry(float(t), 0.2, float(wk))
+        out.append(float(np.asarray(tracker.frame(frames.pop(0), []).covariance)[2, 2]))
+        return out
+
+    plain, lagging = heading_variances(0.0), heading_variances(lag)
+    # Changes at 0.1 ... 1.2 s: (0.05, 0.35] holds 0.1-0.3 (3), (0.35, 0.65] 0.4-0.6 (3),
+    # (0.65, 1.25] 0.7-1.2 (6); each of 0.8 rad/s.
+    extra = np.cumsum([0.0, 3, 3, 6]) * lag * 0.8**2
+    assert np.array(lagging) - np.array(plain) == pytest.approx(extra, abs=1e-12)

@@ -61,7 +61,10 @@ def integrate_pieces(
     ``dt``: ``dtheta = w dt``, ``[dx, dy] = V(dtheta) [vx, vy] dt`` with
     ``V = [[sin/th, -(1-cos)/th], [(1-cos)/th, sin/th]]``), its noise in its start frame
     (diagonal: along x, across, heading; ``noise`` = along_per_m, across_per_m,
-    turn_per_rad, turn_per_m, turn_per_s, along_per_s), then the composition
+    turn_per_rad, turn_per_m, turn_per_s, along_per_s, delay_var), plus, where the twist
+    changes from the last piece that moved by ``c = (dvx, dvy, dw)``, ``delay_var J c c^T
+    J^T`` (a response time off by ``e`` s moves the piece's start by the twist ``-e c``,
+    which moves ``d`` by ``-e J c``), then the composition
     ``T <- T (+) d`` with ``Q <- Jp Q Jp^T + Jd N Jd^T``. The total heading is not wrapped.
     """
     tx = 0.0
@@ -71,6 +74,8 @@ def integrate_pieces(
     Jp = np.eye(3)
     Jd = np.eye(3)
     N = np.zeros((3, 3))
+    lag = noise[6]
+    last = -1
     for k in range(dt.size):
         h = dt[k]
         if h <= 0.0:
@@ -87,9 +92,24 @@ def integrate_pieces(
         dx = a * ux - b * uy
         dy = b * ux + a * uy
         dist = np.sqrt(ux * ux + uy * uy)
-        N[0, 0] = noise[0] * dist + noise[5] * h
-        N[1, 1] = noise[1] * dist
-        N[2, 2] = noise[2] * abs(phi) + noise[3] * dist + noise[4] * h
+        N[:, :] = 0.0
+        if lag > 0.0 and last >= 0:
+            # The change ``c`` moves the piece's start by the twist ``-e c``; as a change of
+            # the piece's ``d`` that is ``-e J c`` with ``J = [[1, 0, -dy], [0, 1, dx],
+            # [0, 0, 1]]`` (the rest of the piece turned by the heading's part).
+            ch2 = w[k] - w[last]
+            ch0 = vx[k] - vx[last] - ch2 * dy
+            ch1 = vy[k] - vy[last] + ch2 * dx
+            N[0, 0] = lag * ch0 * ch0
+            N[0, 1] = N[1, 0] = lag * ch0 * ch1
+            N[0, 2] = N[2, 0] = lag * ch0 * ch2
+            N[1, 1] = lag * ch1 * ch1
+            N[1, 2] = N[2, 1] = lag * ch1 * ch2
+            N[2, 2] = lag * ch2 * ch2
+        last = k
+        N[0, 0] += noise[0] * dist + noise[5] * h
+        N[1, 1] += noise[1] * dist
+        N[2, 2] += noise[2] * abs(phi) + noise[3] * dist + noise[4] * h
         c = np.cos(tt)
         s = np.sin(tt)
         _jacobians(c, s, dx, dy, Jp, Jd)

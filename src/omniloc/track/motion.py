@@ -18,7 +18,18 @@ Each piece adds independent noise in its own start frame (variances, per piece):
 
 where ``|d|`` is the distance travelled and ``|dtheta|`` the angle turned on the piece: a
 variance per unit of motion, so that noise grows with the motion and not with how finely it
-was sampled. ``Q`` is propagated through the composition to first order (the Jacobians of
+was sampled.
+
+Where the velocities change from one piece to the next by ``c = (dvx, dvy, dw)``, the
+next piece adds ``delay_var * J c c^T J^T``: the robot answers a change of its velocities
+after a time uncertain by ``sqrt(delay_var)`` seconds, and an error ``e`` of it moves the
+piece's start by the twist ``-e c`` (``J`` carries that to the piece's motion: the rest of
+the piece turned by its heading part). A turn rate that flips its sign leaves a heading
+error in proportion to the flip, however little the robot turns in all: on MRCLAM the
+heading's error over 1-5 s grows with the sum of the squared changes of the turn rate, at
+about 0.003-0.005 s^2 (docs/tracking.md).
+
+``Q`` is propagated through the composition to first order (the Jacobians of
 :func:`compose`). ``delay_s`` is the odometry's latency: a row stamped ``t`` describes the
 motion from ``t + delay_s`` (MRCLAM's recorded velocities lead the true motion by ~0.2 s).
 
@@ -76,6 +87,7 @@ MOTION_MAX = {
     "turn_per_m": 1e3,
     "turn_per_s": 1e3,
     "along_per_s": 1e3,
+    "delay_var": 1e3,
     "delay_s": 60.0,
     "v_scale": 100.0,
     "w_scale": 100.0,
@@ -106,6 +118,10 @@ class MotionModel:
     delay_s : float
         Latency of the odometry, seconds: a row stamped ``t`` moves the robot from
         ``t + delay_s``. May be negative (odometry stamped late).
+    delay_var : float
+        Variance of that latency from one change of the velocities to the next, s^2: each
+        change ``c = (dvx, dvy, dw)`` between two pieces moves the robot by ``-e c``, ``e``
+        of variance ``delay_var`` (0: none; the module's docstring says how and why).
     v_scale : float
         Factor on the odometry's velocities (its scale error: wheels worn, a radius off).
     w_scale : float
@@ -136,6 +152,7 @@ class MotionModel:
     v_scale: float = 1.0
     w_scale: float = 1.0
     turn_slowdown: float = 0.0
+    delay_var: float = 0.0
 
     def __post_init__(self) -> None:
         for f in fields(self):
@@ -181,7 +198,7 @@ class MotionModel:
 
     @property
     def noise(self) -> FloatArray:
-        """The six variances in the order the compiled integration takes them."""
+        """The seven variances in the order the compiled integration takes them."""
         return np.array(
             [
                 self.along_per_m,
@@ -190,6 +207,7 @@ class MotionModel:
                 self.turn_per_m,
                 self.turn_per_s,
                 self.along_per_s,
+                self.delay_var,
             ]
         )
 
