@@ -12,6 +12,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from _odometry import lagging_recording
 from omniloc.errors import InputError
 from omniloc.track import (
     Frame,
@@ -81,6 +82,21 @@ def test_a_simulated_run_gives_back_its_model() -> None:
     # Its turns are as the odometry says, and it goes as far in them: nothing found.
     assert fit.model.w_scale == pytest.approx(1.0, abs=0.01)
     assert fit.model.turn_slowdown == 0.0
+
+
+def test_a_robot_whose_response_to_a_change_varies_gives_back_that_variance() -> None:
+    # A response uncertain by 0.063 s at every change of velocities (delay_var 0.004 s^2, as
+    # on MRCLAM) where the heading drifts by 1e-5 rad^2/s. The fit reads about three
+    # quarters of it (0.0029): a change just outside a stretch whose response falls inside
+    # it is not among the stretch's changes, and part of it goes to turn_per_s.
+    fit = estimate_motion(*lagging_recording(0.004))
+    assert fit.model.delay_s == pytest.approx(0.2, abs=0.011)
+    assert fit.model.delay_var == pytest.approx(0.004, rel=0.35)
+    assert fit.model.turn_per_rad < 1e-3 and fit.model.turn_per_s < 1e-3
+    # The same robot answering every change on time: none found.
+    steady = estimate_motion(*lagging_recording(0.0))
+    assert steady.model.delay_var < 1e-4
+    assert steady.model.turn_per_s == pytest.approx(1e-5, rel=0.35)
 
 
 def test_a_jump_in_the_truth_is_left_out_of_the_latency_and_the_scales() -> None:

@@ -19,9 +19,9 @@ were fitted by hand before this existed; ``docs/tracking.md`` compares the two).
    turn rate clockwise positive, another run's truth) is refused. The delay is then found
    again at those scales.
 3. **Noise**: over non-overlapping stretches of each length in ``stretch_s``, the error of
-   the predicted relative motion against the truth's; the six noise values are the maximum
+   the predicted relative motion against the truth's; the seven noise values are the maximum
    of the Gaussian likelihood of those errors under the covariance the model propagates
-   (:func:`~omniloc.track.motion.integrate`: linear in the six values), a small floor
+   (:func:`~omniloc.track.motion.integrate`: linear in the seven values), a small floor
    standing for the truth's own noise. A second pass leaves out the stretches whose error is
    beyond the 99.9 % chi-square bound (the truth's glitches, a wheel that slipped once).
 
@@ -88,6 +88,7 @@ NOISE_FIELDS = (
     "turn_per_m",
     "turn_per_s",
     "along_per_s",
+    "delay_var",
 )
 #: Variance (m^2, m^2, rad^2) the ground truth's own error adds to a relative motion.
 TRUTH_FLOOR = (1e-6, 1e-6, 1e-6)
@@ -538,7 +539,7 @@ def estimate_motion(
             for j in range(len(NOISE_FIELDS)):
                 m = replace(model, **{f: float(i == j) for i, f in enumerate(NOISE_FIELDS)})
                 unit.append(np.stack([integrate(dt, v, w, m)[1] for dt, v, w in pieces]))
-            parts.append(np.stack(unit, axis=1))  # (n, 6, 3, 3)
+            parts.append(np.stack(unit, axis=1))  # (n, 7, 3, 3)
             count += int(ok.sum())
         by_run.append(count)
     if sum(by_run) < MIN_STRETCHES:
