@@ -163,6 +163,29 @@ def test_delay_var_adds_heading_noise_at_each_change_of_the_turn_rate() -> None:
     assert np.array_equal(Qz, integrate(dz, [0.2, 0.2, 0.2], [0.4, 9.0, 0.4], base)[1])
 
 
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.floats(0.0, 0.5), st.floats(-0.5, 0.5), st.floats(-2.0, 2.0)),
+        min_size=1,
+        max_size=12,
+    ),
+    st.floats(1e-4, 0.05),
+)
+def test_delay_var_heading_noise_is_the_changes_between_the_pieces_that_move(
+    pieces: list[tuple[float, float, float]], lag: float
+) -> None:
+    # Heading variances add along the pieces whatever they are: the difference is lag times
+    # the squared changes of the turn rate between consecutive pieces of positive duration.
+    dt, v, w = (np.array(c) for c in zip(*pieces, strict=True))
+    base = MotionModel(turn_per_rad=0.01, turn_per_s=1e-4)
+    _, Q0 = integrate(dt, v, w, base)
+    _, Q1 = integrate(dt, v, w, MotionModel(turn_per_rad=0.01, turn_per_s=1e-4, delay_var=lag))
+    moving = w[dt > 0]
+    assert Q1[2, 2] - Q0[2, 2] == pytest.approx(lag * np.sum(np.diff(moving) ** 2), abs=1e-12)
+    assert np.all(np.linalg.eigvalsh(Q1 - Q0) > -1e-12)  # it only adds noise
+
+
 def test_delay_var_matches_boundaries_moved_by_a_random_response_time(
     rng: np.random.Generator,
 ) -> None:
