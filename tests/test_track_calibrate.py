@@ -99,6 +99,23 @@ def test_a_robot_whose_response_to_a_change_varies_gives_back_that_variance() ->
     assert steady.model.turn_per_s == pytest.approx(1e-5, rel=0.35)
 
 
+def test_a_noise_value_nothing_exercises_is_fitted_as_none() -> None:
+    # Odometry whose velocities never change: no stretch's covariance moves with delay_var,
+    # whose likelihood is flat; it comes out 0 (the search once wandered to 5e116, which
+    # the model then refused as implausible, naming neither the data nor the fit).
+    rng = np.random.default_rng(2)
+    n, dt = 6000, 0.1
+    t = np.arange(n) * dt
+    poses = np.zeros((n + 1, 3))
+    step, _ = integrate([dt], [0.2], [0.1], MotionModel())
+    for k in range(n):
+        poses[k + 1] = compose(poses[k], step + rng.normal(0.0, [1e-3, 1e-4, 3e-3]))
+    truth = GroundTruth(np.arange(n + 1) * dt + 0.2, poses[:, 0], poses[:, 1], poses[:, 2])
+    fit = estimate_motion(Odometry(t, np.full(n, 0.2), np.full(n, 0.1)), truth)
+    assert fit.model.delay_var == 0.0
+    assert fit.model.turn_per_rad * 0.1 + fit.model.turn_per_s > 0.0  # the heading drifts
+
+
 def test_a_jump_in_the_truth_is_left_out_of_the_latency_and_the_scales() -> None:
     # The truth carried 3 m off at 300 s and 4 m at 600 s (a kidnapping in the recording, a
     # tracking system's swap): least squares over every stretch followed the jumps (turns x

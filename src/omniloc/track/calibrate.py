@@ -563,9 +563,22 @@ def estimate_motion(
         return float(0.5 * np.sum(q + logdet))
 
     def fit(use: NDArray[np.bool_], start: FloatArray) -> FloatArray:
-        res = minimize(nll, start, args=(use,), method="Nelder-Mead",
+        # A noise value that moves no stretch's covariance (delay_var where the velocities
+        # never change) is left out of the search, at zero: its likelihood is flat, and the
+        # search would wander off to any value.
+        active = np.any(Qp[use] != 0.0, axis=(0, 2, 3))
+        out = np.full(len(NOISE_FIELDS), -np.inf)
+        if not active.any():
+            return out
+
+        def cost(x: FloatArray) -> float:
+            out[active] = x
+            return nll(out, use)
+
+        res = minimize(cost, start[active], method="Nelder-Mead",
                        options={"maxiter": 4000, "xatol": 1e-3, "fatol": 1e-3})  # fmt: skip
-        return np.asarray(res.x)
+        out[active] = res.x
+        return out
 
     use = np.ones(r.shape[0], dtype=bool)
     logp = fit(use, np.log(np.full(len(NOISE_FIELDS), 1e-3)))
@@ -576,6 +589,14 @@ def estimate_motion(
     noise = {f: float(v) for f, v in zip(NOISE_FIELDS, np.exp(logp), strict=True)}
     # Values the likelihood cannot tell from zero come out as tiny ones: call them zero.
     noise = {f: (v if v > 1e-9 else 0.0) for f, v in noise.items()}
+    wild = {f: v for f, v in noise.items() if not v <= MOTION_MAX[f]}
+    if wild:
+        raise InputError(
+            "the odometry and the truth disagree far beyond any robot's noise: the noise fit "
+            + ", ".join(f"{f}={v:.3g}" for f, v in wild.items())
+            + f" (at most {MOTION_MAX[next(iter(wild))]:g}); are they of the same run, and "
+            "do their times overlap?"
+        )
     model = replace(model, **noise)
     return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()), tuple(by_run), jumps)
 
