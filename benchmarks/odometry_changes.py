@@ -19,8 +19,8 @@ the window). Then how often the heading error over 2-s stretches lies inside the
 (:func:`omniloc.track.motion.integrate`, with the stretch's own pieces), over all stretches
 and over the tenth whose turn rate changes most: the preset, the preset with part of its
 drift moved to ``delay_var``, the five runs' pooled ``estimate_motion`` fit of 2026-12-05
-(before ``delay_var``: docs/tracking.md) and today's (fitted here unless ``--no-fit``, which
-takes the values docs/tracking.md lists). Writes ``results_odometry_changes.json`` beside
+(before ``delay_var``) and today's (fitted here unless ``--no-fit``, which takes the values
+docs/tracking.md lists). Writes ``results_odometry_changes.json`` beside
 this file; docs/tracking-notebook.md ("The odometry's response to a change") says what
 became of it.
 """
@@ -61,8 +61,9 @@ WINDOWS = (1.0, 2.0, 5.0)
 BINS = (0.0, 1e-4, 0.01, 0.05, 0.2, 1.0, math.inf)
 #: Longest gap (s) of the Vicon track a window may hold.
 MAX_GAP_S = 0.5
-#: The five runs' pooled fit of 2026-12-05, before ``delay_var`` (docs/tracking.md,
-#: "Calibrating a robot of your own"), and of 2026-12-07 with it (what ``--no-fit`` takes).
+#: The five runs' pooled fit of 2026-12-05, before ``delay_var`` (as docs/tracking.md,
+#: "Calibrating a robot of your own", printed it until 2026-12-07), and of 2026-12-07 with
+#: it (what the docs print now, and what ``--no-fit`` takes).
 SCALES = {"delay_s": 0.23, "v_scale": 1.043, "turn_slowdown": 1.08, "w_scale": 0.942}
 BEFORE = MotionModel(
     along_per_m=0.0, across_per_m=7.6e-6, turn_per_rad=0.00953, turn_per_m=0.0,
