@@ -38,7 +38,7 @@ def test_changes_are_counted_between_the_pieces_that_move() -> None:
 def test_the_variance_per_change_is_the_robots_response_variance() -> None:
     # A robot whose response to each change varies by 0.063 s (delay_var 0.004): the squared
     # heading error grows by about that per (rad/s)^2 of change, over 1- and 2-s windows
-    # (read low, as the fit reads it: a change just outside a window whose response falls
+    # (a little low, as the fit reads it: a change just outside a window whose response falls
     # inside it is not among its changes); one that answers on time, by none.
     for length in (1.0, 2.0):
         row = by_changes(_runs(0.004), length, AT)
