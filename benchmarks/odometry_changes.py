@@ -42,7 +42,6 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parent / "src"))
 
 from _results import run_meta, write_results  # noqa: E402
-from omniloc.angles import wrap  # noqa: E402
 from omniloc.track import (  # noqa: E402
     GroundTruth,
     MotionModel,
@@ -50,6 +49,12 @@ from omniloc.track import (  # noqa: E402
     estimate_motion,
     load_groundtruth,
     load_odometry,
+)
+from omniloc.track.calibrate import (  # noqa: E402
+    _errors,
+    _predicted,
+    _stretches,
+    _true_motion,
 )
 from omniloc.track.motion import integrate  # noqa: E402
 
@@ -77,25 +82,18 @@ TODAY = MotionModel(
 
 def windows(
     odometry: Odometry, truth: GroundTruth, length: float, model: MotionModel
-) -> tuple[FloatArray, FloatArray, list[tuple[FloatArray, FloatArray, FloatArray, FloatArray]]]:
-    """Non-overlapping windows of ``length`` s the odometry and the truth both cover: the
-    heading error (truth's change minus the model's), and each window's pieces (durations,
-    v, w, vy) in the odometry's time, shifted by the model's latency."""
+) -> tuple[FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
+    """Non-overlapping windows of ``length`` s the odometry and the truth both cover, as
+    :func:`~omniloc.track.estimate_motion` cuts its stretches (its own helpers): the heading
+    error (the truth's change minus the model's), and each window's pieces (durations, v, w)
+    in the odometry's time, shifted by the model's latency."""
     lo = max(float(odometry.t[0]) + 1.0, float(truth.t[0])) + 1.0
     hi = min(float(odometry.t[-1]), float(truth.t[-1])) - 1.0
-    a = np.arange(lo, hi - length, length)
-    pa, ga = truth.at(a)
-    pb, gb = truth.at(a + length)
-    ok = np.isfinite(pa).all(axis=1) & np.isfinite(pb).all(axis=1)
-    if truth.gap is not None:
-        ok &= (ga <= MAX_GAP_S) & (gb <= MAX_GAP_S)
-    errors, pieces = [], []
-    for k in np.flatnonzero(ok):
-        p = odometry.pieces(a[k] - model.delay_s, a[k] + length - model.delay_s)
-        d, _ = integrate(p[0], p[1], p[2], model, vy=p[3])
-        errors.append(float(wrap(pb[k, 2] - pa[k, 2] - d[2])))
-        pieces.append(p)
-    return a[ok], np.array(errors), pieces
+    a = _stretches(lo, hi, length, length)
+    true = _true_motion(truth, a, a + length, MAX_GAP_S)
+    ok = np.isfinite(true).all(axis=1)
+    pred, pieces = _predicted(odometry, a[ok], a[ok] + length, model)
+    return _errors(true[ok], pred)[:, 2], pieces
 
 
 def changes(w: FloatArray, dt: FloatArray) -> float:
@@ -114,9 +112,9 @@ def by_changes(
     model = MotionModel.mrclam() if model is None else model
     err, cols = [], []
     for odometry, truth in runs:
-        _, e, pieces = windows(odometry, truth, length, model)
+        e, pieces = windows(odometry, truth, length, model)
         err.append(e)
-        for dt, _v, w, _vy in pieces:
+        for dt, _v, w in pieces:
             cols.append((float(dt.sum()), float(np.sum(np.abs(w) * dt)), changes(w, dt)))
     e = np.concatenate(err)
     X = np.array(cols)
@@ -152,10 +150,10 @@ def coverage(
     for name, model in models.items():
         nees, flips = [], []
         for odometry, truth in runs:
-            _, e, pieces = windows(odometry, truth, length, model)
-            var = np.array([integrate(dt, v, w, model, vy=vy)[1][2, 2] for dt, v, w, vy in pieces])
+            e, pieces = windows(odometry, truth, length, model)
+            var = np.array([integrate(dt, v, w, model)[1][2, 2] for dt, v, w in pieces])
             nees.append(e**2 / (var + 1e-6))  # the Vicon track's own heading noise
-            flips.append(np.array([changes(w, dt) for dt, _v, w, _vy in pieces]))
+            flips.append(np.array([changes(w, dt) for dt, _v, w in pieces]))
         q = np.concatenate(nees)
         f = np.concatenate(flips)
         top = f > np.quantile(f, 0.9)

@@ -116,6 +116,25 @@ def test_a_noise_value_nothing_exercises_is_fitted_as_none() -> None:
     assert fit.model.turn_per_rad * 0.1 + fit.model.turn_per_s > 0.0  # the heading drifts
 
 
+def test_a_noise_fit_beyond_what_the_model_takes_is_refused_as_the_datas(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # A search that comes back with a variance of 1e30 (data no robot's noise explains):
+    # refused by the fit, naming the value and asking about the data, not by MotionModel.
+    import omniloc.track.calibrate as cal
+
+    real = cal.minimize
+
+    def wild(fun, x0, **kw):  # type: ignore[no-untyped-def]
+        res = real(fun, x0, **kw)
+        res.x = np.full_like(res.x, np.log(1e30))
+        return res
+
+    monkeypatch.setattr(cal, "minimize", wild)
+    with pytest.raises(InputError, match=r"disagree far beyond .* are they of the same run"):
+        estimate_motion(*_recording())
+
+
 def test_a_jump_in_the_truth_is_left_out_of_the_latency_and_the_scales() -> None:
     # The truth carried 3 m off at 300 s and 4 m at 600 s (a kidnapping in the recording, a
     # tracking system's swap): least squares over every stretch followed the jumps (turns x
