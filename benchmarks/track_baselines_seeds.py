@@ -203,7 +203,13 @@ def markdown(meta: dict[str, Any], rows: list[dict[str, Any]]) -> str:
     intro = (
         f"# The tracker and the particle filter under several seeds "
         f"(`benchmarks/track_baselines_seeds.py`)\n\n{meta['date']}, {meta['machine']}; "
-        f"`{meta['command']}`, {meta['wall_s']} s. MRCLAM set 6, the five whole runs and "
+        f"`{meta['command']}`, {meta['wall_s']} s"
+        + (
+            f" (the filter's rows from {meta['filter_rows_from']})"
+            if meta.get("filter_rows_from")
+            else ""
+        )
+        + f". MRCLAM set 6, the five whole runs and "
         f"{meta['streams']} kidnapped and {meta['streams']} plain streams (`kidnap_streams`, "
         f"seed 0; the first {meta['large_streams']} of each from {LARGE:,} particles on); "
         "the tracker's `mrclam` preset with `TrackerConfig.seed` = seed, the filter seeded "
@@ -211,6 +217,33 @@ def markdown(meta: dict[str, Any], rows: list[dict[str, Any]]) -> str:
         "`results_tracking.md`).\n\n"
     )
     return intro + table(rows, list(meta["seeds"]))
+
+
+def _kept_rows(args: argparse.Namespace) -> tuple[list[dict[str, Any]], str]:
+    """``--tracker-only``: the filter's rows of the results file at ``--out`` (null figures
+    read back as NaN) and when and how they were measured; refused unless that file holds
+    them for the same seeds and streams."""
+    try:
+        old = json.loads(args.out.read_text())
+    except (OSError, ValueError) as exc:
+        raise SystemExit(f"--tracker-only reads the filter's rows from {args.out}: {exc}") from None
+    meta = old.get("meta", {})
+    same = (meta.get("seeds"), meta.get("streams"), meta.get("large_streams")) == (
+        args.seeds,
+        args.streams,
+        args.large_streams,
+    )
+    rows = [
+        {k: (math.nan if v is None else v) for k, v in r.items()}
+        for r in old.get("rows", [])
+        if r.get("kind") != "tracker"
+    ]
+    if not rows or not same:
+        raise SystemExit(
+            f"--tracker-only: {args.out} holds no filter rows for seeds {args.seeds}, "
+            f"{args.streams} streams and {args.large_streams} large streams: run it whole"
+        )
+    return rows, f"{meta.get('date')} ({meta.get('command')}, {meta.get('wall_s')} s)"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -229,6 +262,13 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--data", type=Path, default=DEFAULT_DATA)
     ap.add_argument("--out", type=Path, default=HERE / "results_tracking_seeds.json")
+    ap.add_argument(
+        "--tracker-only",
+        action="store_true",
+        help="run omniloc's Tracker only and put its rows beside the filter's rows already in "
+        "--out (the filter is seeded and does not use omniloc's presets: its figures do not "
+        "change when the tracker does)",
+    )
     args = ap.parse_args(argv)
     if not (args.data / "landmarks.csv").is_file():
         raise SystemExit(f"no MRCLAM set 6 at {args.data} (landmarks.csv missing): --data PATH")
@@ -245,11 +285,16 @@ def main(argv: list[str] | None = None) -> int:
             f"--streams and --large-streams must be at least 0, got {args.streams} and "
             f"{args.large_streams}"
         )
+    kept, kept_meta = _kept_rows(args) if args.tracker_only else ([], None)
     # The slowest jobs first, so that the pool's last minutes are not one long job alone.
-    jobs = [("pf", n, s) for n in sorted(counts, reverse=True) for s in args.seeds]
+    jobs = (
+        []
+        if args.tracker_only
+        else [("pf", n, s) for n in sorted(counts, reverse=True) for s in args.seeds]
+    )
     jobs += [("tracker", 0, s) for s in args.seeds]
     t0 = time.time()
-    rows: list[dict[str, Any]] = []
+    rows: list[dict[str, Any]] = list(kept)
     with ProcessPoolExecutor(max_workers=args.workers) as pool:
         futs = [
             pool.submit(_job, k, n, s, str(args.data), args.streams, args.large_streams)
@@ -271,6 +316,7 @@ def main(argv: list[str] | None = None) -> int:
         streams=args.streams,
         large_streams=args.large_streams,
         wall_s=round(time.time() - t0),
+        **({"filter_rows_from": kept_meta} if kept_meta else {}),
     )
     # (JSON has no inf or NaN: a time never reached, or a figure not defined, is null.)
     write_results(args.out, meta, rows=[{k: jsonable(v) for k, v in r.items()} for r in rows])

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 from pathlib import Path
@@ -131,3 +132,47 @@ def test_a_job_scores_each_kind_of_stream_apart(
     # From LARGE particles on, only the first --large-streams streams of each kind.
     monkeypatch.setattr(track_baselines_seeds, "LARGE", 100)
     assert [r["streams"] for r in _job("pf", 200, 0, str(data), 1, 0)] == ["whole runs"]
+
+
+def test_tracker_only_keeps_the_filter_s_rows_and_says_when_they_were_measured(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The jobs run in threads here, and a tracker job is a stand-in row: what is checked is
+    # how --tracker-only merges, not the tracker.
+    from concurrent.futures import ThreadPoolExecutor
+
+    jobs: list[tuple[str, int]] = []
+
+    def job(kind: str, n: int, seed: int, *_: object) -> list[dict[str, object]]:
+        jobs.append((kind, seed))
+        return [{**_row("omniloc Tracker", kind, seed, 142.0, 0.151), "wall_s": 1.0}]
+
+    monkeypatch.setattr(track_baselines_seeds, "ProcessPoolExecutor", ThreadPoolExecutor)
+    monkeypatch.setattr(track_baselines_seeds, "_job", job)
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "landmarks.csv").write_text("x,y\n0,0\n")
+    out = tmp_path / "seeds.json"
+    args = ["--data", str(tmp_path / "data"), "--out", str(out), "--seeds", "0", "1"]
+    # No results file to take the filter's rows from, or one without them: refused.
+    with pytest.raises(SystemExit, match="--tracker-only reads the filter's rows from"):
+        main([*args, "--tracker-only"])
+    old_rows = [_row("PF 2,000 particles", "pf", s, 600.0, 0.155) for s in (0, 1)] + [
+        _row("omniloc Tracker", "tracker", s, 396.6, 0.162) for s in (0, 1)
+    ]
+    meta = {"date": "2026-12-06T09:33", "command": "x", "wall_s": 1286, "seeds": [0, 1]}
+    out.write_text(
+        json.dumps({"meta": {**meta, "streams": 20, "large_streams": 4}, "rows": old_rows})
+    )
+    with pytest.raises(SystemExit, match="no filter rows for seeds \\[0\\], 20 streams"):
+        main([*args[:-1], "--tracker-only"])  # another set of seeds than the file's
+    assert main([*args, "--tracker-only"]) == 0
+    assert sorted(jobs) == [("tracker", 0), ("tracker", 1)]
+    new = json.loads(out.read_text())
+    kept = [r for r in new["rows"] if r["kind"] == "pf"]
+    assert [r["correct_rate"] for r in kept] == [0.155, 0.155]
+    assert [r["correct_rate"] for r in new["rows"] if r["kind"] == "tracker"] == [0.151, 0.151]
+    assert new["meta"]["filter_rows_from"] == "2026-12-06T09:33 (x, 1286 s)"
+    assert (
+        "(the filter's rows from 2026-12-06T09:33 (x, 1286 s))"
+        in out.with_suffix(".md").read_text()
+    )
