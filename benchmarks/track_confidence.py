@@ -22,9 +22,11 @@ the Vicon track: within 0.3 m and 5 degrees, or not (``frames_within_tolerance``
   within ``RECENT_S`` of a localized one, localized frames included, one for the others;
   *one table*: without that split, as before 2026-12-05 08:40), against whether the
   truth is within tolerance of its pose.
-* *the preset's tables*: fitted on all five robots (and every seed given), printed as the
-  ``mrclam`` preset holds them -- those are in-sample on these runs; the held-out figures
-  are what to expect of them on a run they were not fitted on.
+* *the preset's tables*: fitted on all five robots (and every seed given), printed in the
+  form the ``mrclam`` preset holds them -- those are in-sample on these runs; the held-out
+  figures are what to expect of them on a run they were not fitted on. The preset takes
+  them only if they also calibrate the evaluation's streams better than its tables do
+  (they did not on 2026-12-06 nor on 2026-12-07: docs/tracking.md, "What to trust").
 
 Writes ``results_track_confidence.json`` and ``.md`` beside this file.
 """
