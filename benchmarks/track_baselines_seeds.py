@@ -243,7 +243,11 @@ def _kept_rows(args: argparse.Namespace) -> tuple[list[dict[str, Any]], str]:
             f"--tracker-only: {args.out} holds no filter rows for seeds {args.seeds}, "
             f"{args.streams} streams and {args.large_streams} large streams: run it whole"
         )
-    return rows, f"{meta.get('date')} ({meta.get('command')}, {meta.get('wall_s')} s)"
+    # (A file written by --tracker-only already says when its filter rows were measured.)
+    when = meta.get("filter_rows_from") or (
+        f"{meta.get('date')} ({meta.get('command')}, {meta.get('wall_s')} s)"
+    )
+    return rows, when
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -176,3 +176,8 @@ def test_tracker_only_keeps_the_filter_s_rows_and_says_when_they_were_measured(
         "(the filter's rows from 2026-12-06T09:33 (x, 1286 s))"
         in out.with_suffix(".md").read_text()
     )
+    # Run again on its own output: the filter's rows keep the date they were measured on.
+    assert main([*args, "--tracker-only"]) == 0
+    again = json.loads(out.read_text())
+    assert again["meta"]["filter_rows_from"] == "2026-12-06T09:33 (x, 1286 s)"
+    assert [r["kind"] for r in again["rows"]].count("pf") == 2
