@@ -87,6 +87,11 @@ def job(
     passes |= {f"{h:g}/all": backward_offline(h, "mrclam", settings, confirm_s=0.0) for h in every}
     scores: dict[str, list[Any]] = {"forward": [], **{v: [] for v in passes}}
     added: dict[str, list[dict[str, Any]]] = {v: [] for v in passes}
+    # Per variant and kind of stream: the frames the pass reported, those right, and the
+    # sum of the confidences they reported (TrackerConfig.confidence_backward's).
+    reported: dict[str, dict[str, list[float]]] = {
+        v: {k: [0, 0, 0.0] for k in KINDS} for v in passes
+    }
     for s in streams:
         est, cpu = run_stream(make(s.landmarks, None), s)
         scores["forward"].append(score_run(s, est, cpu_s=cpu))
@@ -98,6 +103,11 @@ def job(
             # The frames the scoring counts wrong (scored, not within tolerance) that the
             # pass backward reported, with how far off they are.
             scored, right = frames_within_tolerance(s, both)
+            mine = [i for i, e in enumerate(both) if e.backward and scored[i]]
+            tally = reported[v][_kind(s.name)]
+            tally[0] += len(mine)
+            tally[1] += int(sum(bool(right[i]) for i in mine))
+            tally[2] += sum(c for i in mine if (c := both[i].confidence) is not None)
             wrong = [i for i, e in enumerate(both) if e.backward and scored[i] and not right[i]]
             true, _ = s.truth_at(np.array([both[i].t for i in wrong]))
             for i, tp in zip(wrong, true, strict=True):
@@ -135,6 +145,9 @@ def job(
                 "recovered": tot["runs"] - tot["unrecovered"] if kind == KINDS[1] else None,
                 "cpu_per_s": sum(r.cpu_s for r in sel) / sum(r.duration_s for r in sel),
             }
+            if variant in reported:
+                n, ok, c = reported[variant][kind]
+                per[kind] |= {"backward_frames": n, "backward_right": ok, "backward_conf_sum": c}
         out["variants"][variant] = per
     return out
 
@@ -151,6 +164,13 @@ def _range(values: list[float], spec: str, scale: float = 1.0) -> str:
 def _share(localized: int, wrong: int, frames: int) -> str:
     """ "right %  (wrong)": the frames localized and right as a share of all."""
     return f"{100 * (localized - wrong) / frames:.1f} % ({wrong})" if frames else "-"
+
+
+def _reported(n: int, right: int, conf_sum: float) -> str:
+    """ "n, right % (mean confidence)" of the frames the pass backward reported."""
+    if not n:
+        return "none"
+    return f"{n:,}, {100 * right / n:.1f} % ({conf_sum / n:.3f})"
 
 
 def table(jobs: list[dict[str, Any]], variants: list[str]) -> list[str]:
@@ -189,6 +209,21 @@ def table(jobs: list[dict[str, Any]], variants: list[str]) -> list[str]:
     )
     row(f"{k}: position RMSE (m)", lambda v: _range(vals(v, k, "pos_rmse_m"), ".3f"))
     row(f"{k}: CPU per second of recording (s)", lambda v: _range(vals(v, k, "cpu_per_s"), ".4f"))
+    for kind in KINDS:
+        if not any(kind in j["variants"]["forward"] for j in jobs):
+            continue
+        row(
+            f"{kind}: frames the pass backward reports, right (their mean confidence)",
+            lambda v, k=kind: (
+                _reported(
+                    total(v, k, "backward_frames"),
+                    total(v, k, "backward_right"),
+                    sum(vals(v, k, "backward_conf_sum")),
+                )
+                if v != "forward"
+                else "-"
+            ),
+        )
     if any(KINDS[2] in j["variants"]["forward"] for j in jobs):
         row(
             "plain streams flagged kidnapped (%)",

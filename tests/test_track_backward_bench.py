@@ -13,9 +13,12 @@ from test_track_cli import _truncated_mrclam
 from track_backward import _label, _range, _share, job, table
 
 
-def _variant(localized: int, wrong: int, first: float) -> dict[str, object]:
+def _variant(localized: int, wrong: int, first: float, back: int = 0) -> dict[str, object]:
     return {
         "whole runs": {
+            "backward_frames": back,
+            "backward_right": back - wrong,
+            "backward_conf_sum": 0.95 * back,
             "frames": 1000,
             "localized": localized,
             "wrong": wrong,
@@ -32,10 +35,13 @@ def _variant(localized: int, wrong: int, first: float) -> dict[str, object]:
 
 def test_the_table_gives_totals_and_ranges_over_the_seeds() -> None:
     jobs = [
-        {"seed": 0, "variants": {"forward": _variant(100, 0, 50.0), "20": _variant(180, 1, 40.0)}},
+        {
+            "seed": 0,
+            "variants": {"forward": _variant(100, 0, 50.0), "20": _variant(180, 1, 40.0, 80)},
+        },
         {
             "seed": 1,
-            "variants": {"forward": _variant(120, 2, math.inf), "20": _variant(200, 3, 45.0)},
+            "variants": {"forward": _variant(120, 2, math.inf), "20": _variant(200, 3, 45.0, 80)},
         },
     ]
     lines = table(jobs, ["forward", "20"])
@@ -50,6 +56,11 @@ def test_the_table_gives_totals_and_ranges_over_the_seeds() -> None:
         "| whole runs: first correct, median over the runs (s) | 50.0-never | 40.0-45.0 |" in text
     )
     assert "kidnapped" not in text  # no such streams in these jobs
+    # The frames the pass reported: 160, of them 160 - 4 right, reporting 0.95 on average.
+    assert (
+        "| whole runs: frames the pass backward reports, right (their mean confidence) | - "
+        "| 160, 97.5 % (0.950) |" in text
+    )
     assert _range([0.1, None, math.nan], ".2f") == "0.10"
     assert _range([], ".2f") == "-"
     assert _share(0, 0, 0) == "-"
@@ -75,6 +86,12 @@ def test_a_job_scores_the_forward_pass_and_the_pass_backward(
     assert len(out["added_wrong"]["20"]) == back["wrong"] - fwd["wrong"]
     for w in out["added_wrong"]["20"]:
         assert w["position_m"] > 0.3 or w["heading_deg"] > 5.0
+    # The frames it reports: every one localized, counted with the wrong ones among them,
+    # and each carries the confidence of the preset's table for such frames (below 0.99).
+    assert back["backward_frames"] > 0
+    assert back["backward_right"] == back["backward_frames"] - len(out["added_wrong"]["20"])
+    n_back = back["backward_frames"]
+    assert 0.2 * n_back < back["backward_conf_sum"] < 0.99 * n_back
     lines = table([out], ["forward", "20", "20/all"])
     assert lines[2].startswith("| whole runs: localized and right")
     assert lines[0].endswith("| with the pass backward, 20 s, from every sure frame |")

@@ -154,6 +154,7 @@ def test_a_fit_keeps_the_states_apart() -> None:
         "confidence_recent": None,
         "confidence_hypothesis": None,
         "confidence_hypothesis_recent": None,
+        "confidence_backward": None,
     }
 
 
@@ -347,7 +348,9 @@ def test_fit_confidence_on_two_runs_writes_tables_that_track_reports(tmp_path, c
         "confidence_recent_s",
         "confidence_hypothesis",
         "confidence_hypothesis_recent",
+        "confidence_backward",
     }
+    assert tables["confidence_backward"] is None  # (no pass backward: none fitted)
     assert tables["confidence_recent_s"] == 20.0
     assert tables["confidence_localized"] is not None
     assert "every hypothesis's weight" in text and "each run's hypotheses" in text
@@ -771,3 +774,92 @@ def test_is_recent_is_the_one_rule_for_scalars_and_arrays() -> None:
     assert is_recent(None, 20.0) is False and is_recent(math.nan, 20.0) is False
     assert is_recent(np.float64(3.0), 20.0) is True
     assert is_recent([0.0, 25.0, math.nan, None], 20.0).tolist() == [True, False, False, False]
+
+
+def test_a_fit_gives_the_frames_of_the_pass_backward_a_table_of_their_own() -> None:
+    # At the same probability the forward pass's localized frames are right and the pass
+    # backward's are right in one of four: one table each, and the forward pass's table
+    # is fitted on its own frames alone.
+    n = 200
+    p = np.full(n, 0.995)
+    back = [False] * 100 + [True] * 100
+    right = [True] * 100 + [True, False, False, False] * 25
+    fit = fit_confidence(["localized"] * n, p, right, backward=back)
+    assert fit.frames["localized"] == 100 and fit.frames["backward"] == 100
+    assert fit.right["backward"] == 25
+    assert fit("localized", 0.995) > 0.99
+    assert fit("localized", 0.995, backward=True) == pytest.approx(25.5 / 101)
+    assert fit("ambiguous", 0.995, backward=True) is None  # (no ambiguous frame fitted)
+    assert fit.settings()["confidence_backward"] == fit.backward
+    # Only localized frames are the pass's: an ambiguous frame flagged stays ambiguous.
+    mixed = fit_confidence(["localized", "ambiguous"], [0.9, 0.5], [True, False], backward=[0, 1])
+    assert mixed.backward is None and mixed.frames["backward"] == 0
+    # Without the flags, every localized frame in one table, as before.
+    plain = fit_confidence(["localized"] * n, p, right)
+    assert plain.backward is None and plain.settings()["confidence_backward"] is None
+    assert plain("localized", 0.995, backward=True) is None
+    for bad, message in (([True], "one flag per frame"), (["yes"] * n, "booleans")):
+        with pytest.raises(InputError, match=message):
+            fit_confidence(["localized"] * n, p, right, backward=bad)
+
+
+def test_held_out_reads_the_backward_table_of_the_other_runs() -> None:
+    from omniloc.track.confidence import held_out_confidence
+
+    states = ["localized"] * 6
+    p = [0.99] * 6
+    back = [False, True] * 3
+    right = [True, False, True, True, True, False]
+    runs = ["a", "a", "b", "b", "c", "c"]
+    out = held_out_confidence(states, p, right, runs, backward=back)
+    # Run c's frame of the pass reads runs a and b's: two frames, one right (1.5 / 3).
+    assert out[5] == pytest.approx(1.5 / 3) and out[4] == pytest.approx(2.5 / 3)
+
+
+def test_a_frame_of_the_pass_backward_reads_its_own_table_or_reports_none() -> None:
+    from omniloc.track.backward import combine
+
+    f = TrackEstimate(1.0, TrackState.AMBIGUOUS, Pose(1.0, 2.0, 0.0), np.eye(3) * 1e-2)
+    # The backward pass's tracker read its frame with the forward pass's table for
+    # localized frames (0.99): reported so, that overstated how often such a frame is right.
+    b = TrackEstimate(
+        1.0,
+        TrackState.LOCALIZED,
+        Pose(1.0, 2.0, 0.0),
+        np.eye(3) * 1e-4,
+        probability=0.995,
+        confidence=0.99,
+    )
+    config = TrackerConfig(confidence_localized=((0.9, 0.99),))
+    (out,) = combine([f], [b], config)
+    assert out.backward and out.confidence is None
+    (out,) = combine([f], [b])
+    assert out.confidence is None
+    with_table = replace(config, confidence_backward=((0.99, 0.8), (1.0, 0.9)))
+    (out,) = combine([f], [b], with_table)
+    assert out.confidence == pytest.approx(0.85)
+
+
+def test_fit_confidence_with_the_pass_backward_fits_its_table(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    from omniloc.cli import main
+
+    mp = tmp_path / "map.csv"
+    mp.write_text("id,x,y\n" + "".join(f"{i},{x},{y}\n" for i, (x, y) in enumerate(GRID.xy)))
+    runs = _write_run(tmp_path, 1) + _write_run(tmp_path, 2)
+    out = tmp_path / "confidence.json"
+    common = ["--map", str(mp), "--set", "max_range=6", "--set", "p_detect=0.9"]
+    assert main(["fit-confidence", *common, *runs, "--backward", "20", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "localized by the forward pass:" in text and "localized by the pass backward:" in text
+    tables = json.loads(out.read_text())
+    assert tables["confidence_backward"] is not None
+    # track --backward with these settings: the pass's frames carry their table's confidence.
+    from omniloc.track.confidence import confidence_of, confidence_table
+
+    table = confidence_table("t", tables["confidence_backward"])
+    argv = ["track", *common, *runs[:6], "--config", str(out), "--backward", "20", "--json"]
+    assert main(argv) == 0
+    lines = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    back = [x for x in lines if x["backward"]]
+    assert back and all(x["state"] == "localized" for x in back)
+    assert all(x["confidence"] == confidence_of(table, x["probability"]) for x in back)

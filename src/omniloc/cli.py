@@ -449,6 +449,13 @@ def _add_fit_confidence_parser(sub: Any) -> None:
             help=f"{what}; one per run, repeated for several runs (in the same order)",
         )
     _add_tracker_options(fc)
+    fc.add_argument(
+        "--backward",
+        type=_nonnegative,
+        metavar="S",
+        help="run each recording with the pass backward over S seconds (as track --backward "
+        "S) and fit the table of the frames it reports (confidence_backward) beside the others",
+    )
     _add_settings_out(fc)
 
 
@@ -1491,6 +1498,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         "confidence_recent": None,
         "confidence_hypothesis": None,
         "confidence_hypothesis_recent": None,
+        "confidence_backward": None,
     }
     sensor, motion, config = with_settings(sensor, motion, config, settings)
     span = config.confidence_recent_s
@@ -1503,6 +1511,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
     probs: list[float] = []
     right: list[bool] = []
     since: list[float] = []
+    back: list[bool] = []
     group: list[int] = []
     h_weight: list[float] = []
     h_right: list[bool] = []
@@ -1512,7 +1521,9 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
     for k, (odo, frames, truth) in enumerate(runs):
         if not frames:
             raise InputError(f"{args.frames[k]}: no frames")
-        est = track(lm, odo, frames, sensor=sensor, motion=motion, config=config).estimates
+        est = track(
+            lm, odo, frames, sensor=sensor, motion=motion, config=config, backward_s=args.backward
+        ).estimates
         ok, d_pos, _ = errors_against(truth, est, config.tolerance_m, tol_hdg)
         true, _ = truth.at(np.array([e.t for e in est]))
         hyps = hypothesis_outcomes(
@@ -1529,6 +1540,7 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
             probs.append(e.probability)
             right.append(bool(r))
             since.append(_since_or_nan(e))
+            back.append(bool(e.backward))
             group.append(k)
     if not states:
         raise InputError("no frame with a pose and a ground truth: nothing to fit on")
@@ -1541,16 +1553,20 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         hypothesis_weights=h_weight if h_weight else None,
         hypothesis_right=h_right if h_weight else None,
         hypothesis_since_localized=h_since if h_weight else None,
+        backward=back if args.backward is not None else None,
     )
     tol = (
         f"within {config.tolerance_m:g} m and {np.rad2deg(config.tolerance_heading):g} deg of "
         "the truth"
     )
-    for name, what in (
-        ("localized", "localized"),
+    kinds = [
+        ("localized", "localized" if args.backward is None else "localized by the forward pass"),
         ("recent", f"ambiguous within {span:g} s of a localized frame"),
         ("ambiguous", "ambiguous, other"),
-    ):
+    ]
+    if args.backward is not None:
+        kinds.append(("backward", "localized by the pass backward"))
+    for name, what in kinds:
         print(
             f"{what}: {fit.frames[name]} frames, {fit.right[name]} of them {tol}; table of "
             f"{len(getattr(fit, name) or ())} knots"
@@ -1568,7 +1584,13 @@ def _cmd_fit_confidence(args: argparse.Namespace) -> int:
         )
     if n > 1:
         held = held_out_confidence(
-            states, probs, right, group, since_localized=since, recent_s=span
+            states,
+            probs,
+            right,
+            group,
+            since_localized=since,
+            recent_s=span,
+            backward=back if args.backward is not None else None,
         )
         use = np.isfinite(held)
         print(

@@ -411,13 +411,18 @@ def _tell(tracker: Tracker, estimate: TrackEstimate) -> bool:
 
 
 def combine(
-    forward: Sequence[TrackEstimate], backward: Sequence[TrackEstimate | None]
+    forward: Sequence[TrackEstimate],
+    backward: Sequence[TrackEstimate | None],
+    config: TrackerConfig | None = None,
 ) -> list[TrackEstimate]:
     """Per frame: the forward estimate where it is ``localized`` or the backward pass did
     not localize the frame; else the backward pass's (``backward`` True), its reason saying
-    so (and the seconds to the sure frame it was carried from, its ``since_localized``) and
-    its ``kidnapped`` the forward pass's (the frame at which it noticed a kidnapping stays
-    flagged)."""
+    so (and the seconds to the sure frame it was carried from, its ``since_localized``), its
+    ``kidnapped`` the forward pass's (the frame at which it noticed a kidnapping stays
+    flagged) and its ``confidence`` read from ``config``'s table for such frames
+    (``confidence_backward``; None without one: the forward pass's table for localized
+    frames would overstate it, a place carried back being right less often)."""
+    table = None if config is None else config.confidence_backward
     if len(forward) != len(backward):
         raise InputError(
             f"forward and backward must hold one estimate per frame: {len(forward)} and "
@@ -436,6 +441,7 @@ def combine(
                 b,
                 backward=True,
                 kidnapped=f.kidnapped,  # (a kidnapping is the forward pass's to flag)
+                confidence=None if b.probability is None else confidence_of(table, b.probability),
                 reason=f"from the pass backward{ahead}: {b.reason}",
             )
         )
@@ -479,7 +485,7 @@ def refine(
         config=config,
         confirm_s=0.0,  # (hold left localized only the places the forward pass holds)
     )
-    return since_reported(combine(held, behind), forward)
+    return since_reported(combine(held, behind, config), forward)
 
 
 def since_reported(

@@ -194,6 +194,10 @@ class ConfidenceFit:
         The table of the hypotheses of the frames at most ``recent_s`` seconds after a
         localized one (localized frames included; then ``hypothesis`` is fitted on the
         others). None: not fitted (no ``hypothesis_since_localized``) or no such hypothesis.
+    backward : tuple of (probability, confidence), or None
+        The table of the frames the pass backward reported ``localized`` (then
+        ``localized`` is fitted on the others). None: not fitted (no ``backward`` flags) or
+        no such frame.
     """
 
     localized: Knots | None
@@ -204,30 +208,40 @@ class ConfidenceFit:
     recent: Knots | None = None
     recent_s: float | None = None
     hypothesis_recent: Knots | None = None
+    backward: Knots | None = None
 
     def settings(self) -> dict[str, Any]:
         """The tables as tracker settings (``with_settings``, ``--config``): every table
         (``confidence_localized``, ``confidence_ambiguous``, ``confidence_recent``,
-        ``confidence_hypothesis``, ``confidence_hypothesis_recent``; None where this fit
-        has none, so that applied over a preset's tables it leaves none of them behind to
-        be read beside its own), and ``confidence_recent_s`` when a span was fitted."""
+        ``confidence_hypothesis``, ``confidence_hypothesis_recent``,
+        ``confidence_backward``; None where this fit has none, so that applied over a
+        preset's tables it leaves none of them behind to be read beside its own), and
+        ``confidence_recent_s`` when a span was fitted."""
         out: dict[str, Any] = {
             "confidence_localized": self.localized,
             "confidence_ambiguous": self.ambiguous,
             "confidence_recent": self.recent,
             "confidence_hypothesis": self.hypothesis,
             "confidence_hypothesis_recent": self.hypothesis_recent,
+            "confidence_backward": self.backward,
         }
         if self.recent_s is not None:
             out["confidence_recent_s"] = self.recent_s
         return out
 
     def __call__(
-        self, state: TrackState | str, probability: float, since_localized: float | None = None
+        self,
+        state: TrackState | str,
+        probability: float,
+        since_localized: float | None = None,
+        *,
+        backward: bool = False,
     ) -> float | None:
         """The confidence of a frame in ``state`` with the model's ``probability``, and
         ``since_localized`` seconds after the last localized frame (None: none since the
-        tracker started or was flagged kidnapped)."""
+        tracker started or was flagged kidnapped); ``backward``: a frame the pass backward
+        reported (:attr:`~omniloc.track.TrackEstimate.backward`), read by the ``backward``
+        table (None without one)."""
         s = TrackState(state)
         if since_localized is not None:
             real = (int, float, np.integer, np.floating)
@@ -245,6 +259,8 @@ class ConfidenceFit:
                 )
         if s is TrackState.LOST:
             return None
+        if backward and s is TrackState.LOCALIZED:
+            return confidence_of(self.backward, probability)
         return confidence_of(self._table(s, since_localized), probability)
 
     def _table(self, state: TrackState, since_localized: float | None) -> Knots | None:
@@ -409,6 +425,7 @@ def fit_confidence(
     hypothesis_weights: ArrayLike | None = None,
     hypothesis_right: ArrayLike | None = None,
     hypothesis_since_localized: ArrayLike | None = None,
+    backward: ArrayLike | None = None,
 ) -> ConfidenceFit:
     """Fit confidence tables on frames scored against a ground truth.
 
@@ -435,6 +452,10 @@ def fit_confidence(
         Each hypothesis's frame's ``since_localized``: with it, the hypotheses of the frames
         at most ``recent_s`` seconds after a localized one (localized frames included) get
         a table of their own (``hypothesis_recent``).
+    backward : array_like of bool, shape (n,), optional
+        Whether each frame was reported by the pass backward over a recording
+        (:attr:`~omniloc.track.TrackEstimate.backward`): the localized ones get a table of
+        their own (``backward``), and ``localized`` is fitted on the others.
 
     Returns
     -------
@@ -460,11 +481,14 @@ def fit_confidence(
     """
     kind, p, ok = _frames(states, probabilities, right)
     ctx, span, _ = _contexts(kind, since_localized, recent_s, kind.size)
+    flags = _backward(backward, kind)
+    if flags is not None:
+        ctx[flags] = "backward"
     tables: dict[str, Knots | None] = {}
     frames: dict[str, int] = {}
     rights: dict[str, int] = {}
-    for name in CONTEXTS:
-        if name == "recent" and span is None:
+    for name in (*CONTEXTS, "backward"):
+        if (name == "recent" and span is None) or (name == "backward" and flags is None):
             continue
         sel = ctx == name
         frames[name] = int(sel.sum())
@@ -504,7 +528,28 @@ def fit_confidence(
         tables.get("recent"),
         span,
         hyp_recent,
+        tables.get("backward"),
     )
+
+
+def _backward(flags: Any, kind: np.ndarray) -> np.ndarray | None:
+    """The pass backward's flags checked (one bool per frame), as the localized frames they
+    mark; None without flags."""
+    if flags is None:
+        return None
+    if isinstance(flags, (str, bytes, dict)):
+        raise InputError(f"backward must hold one flag per frame, got {shorten(flags)}")
+    b = np.asarray(flags)
+    if b.ndim != 1 or b.size != kind.size:
+        raise InputError(
+            f"backward must hold one flag per frame (1-D), got shape {b.shape} for "
+            f"{kind.size} frames"
+        )
+    if b.dtype != np.bool_:
+        if not (b.dtype.kind in "iuf" and np.isin(b, (0, 1)).all()):
+            raise InputError("backward must hold booleans (reported by the pass backward or not)")
+        b = b.astype(bool)
+    return b & (kind == TrackState.LOCALIZED.value)
 
 
 def held_out_confidence(
@@ -515,13 +560,14 @@ def held_out_confidence(
     *,
     since_localized: ArrayLike | None = None,
     recent_s: float = RECENT_S,
+    backward: ArrayLike | None = None,
 ) -> np.ndarray:
     """Each frame's confidence from tables fitted on the frames of the other groups (runs,
     robots): how a table fitted on some runs does on another.
 
     Parameters
     ----------
-    states, probabilities, right, since_localized, recent_s
+    states, probabilities, right, since_localized, recent_s, backward
         As for :func:`fit_confidence`.
     groups : array_like, shape (n,)
         Each frame's run (any labels); at least two.
@@ -539,6 +585,7 @@ def held_out_confidence(
     """
     st, p, ok = _frames(states, probabilities, right)
     _, span, since = _contexts(st, since_localized, recent_s, st.size)
+    flags = _backward(backward, st)
     g, labels = _groups(groups, st.size)
     out = np.full(st.size, np.nan)
     for label in labels:
@@ -552,9 +599,15 @@ def held_out_confidence(
             ok[~mine],
             since_localized=None if since is None else since[~mine],
             recent_s=RECENT_S if span is None else span,
+            backward=None if flags is None else flags[~mine],
         )
         for i in np.flatnonzero(mine & (st != TrackState.LOST.value)).tolist():
-            c = fit(st[i], float(p[i]), None if since is None else float(since[i]))
+            c = fit(
+                st[i],
+                float(p[i]),
+                None if since is None else float(since[i]),
+                backward=flags is not None and bool(flags[i]),
+            )
             out[i] = np.nan if c is None else c
     return out
 

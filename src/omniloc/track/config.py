@@ -64,6 +64,7 @@ _CONFIDENCE_TABLES = (
     "confidence_recent",
     "confidence_hypothesis",
     "confidence_hypothesis_recent",
+    "confidence_backward",
 )
 #: Largest accepted value of a real-valued setting (seconds, metres, radians, rates): beyond
 #: it products and squares in the filter would overflow long before anything useful happens.
@@ -430,6 +431,12 @@ class TrackerConfig:
         The hypotheses' table for the frames at most ``confidence_recent_s`` seconds after a
         localized one, localized frames included (None, the default:
         ``confidence_hypothesis`` reads them too).
+    confidence_backward : tuple of (float, float), or None
+        The table of the frames that the pass backward over a recording reports
+        ``localized`` (offline, ``track(..., backward_s=)``; :mod:`omniloc.track.backward`):
+        a place carried back from a sure frame is right less often than a frame the forward
+        pass localized at the same probability. None (the default): such frames report no
+        ``confidence`` (not the forward pass's table, which would overstate it).
     seed : int
         Seed of elsewhere's particles (their uniform start, motion noise, resampling and
         injection): a run is the same for the same seed; other seeds show how much of a
@@ -510,6 +517,7 @@ class TrackerConfig:
     confidence_recent: tuple[tuple[float, float], ...] | None = None
     confidence_recent_s: float = RECENT_S
     confidence_hypothesis_recent: tuple[tuple[float, float], ...] | None = None
+    confidence_backward: tuple[tuple[float, float], ...] | None = None
     seed: int = 0
 
     def __post_init__(self) -> None:
