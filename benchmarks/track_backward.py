@@ -3,18 +3,21 @@ set 6: how many more frames it localizes, and how many of them are wrong, agains
 forward pass alone, under several seeds of the tracker and several horizons.
 
 Run:  python benchmarks/track_backward.py [--data PATH] [--seeds 0 1 2 3 4]
-          [--horizons 10 20 40] [--every-sure 20] [--kidnap 20] [--jobs 2] [--out PATH]
+          [--horizons 10 20 40] [--every-sure 20] [--as-reported 20] [--kidnap 20]
+          [--jobs 2] [--out PATH]
 
 For each seed of the tracker's random particles (``TrackerConfig.seed``), the five whole runs
 and ``--kidnap`` kidnapped streams with as many without a jump (``kidnap_streams`` seeded 0,
 as ``omniloc evaluate --dataset mrclam-track --kidnap 20``): the forward pass once per stream
 (the ``mrclam`` preset), then the pass backward over its estimates at each horizon
 (``omniloc.evaluate.tracking.backward_offline``: from the sure frames whose place the forward
-pass keeps, ``omniloc.track.backward.kept_frames``), and at each ``--every-sure`` horizon
-also from every sure frame (``confirm_s`` 0), every result scored by the evaluation's own
-``score_run``. Each wrong frame the pass backward added is listed (its stream, time, position
-and heading error). Writes ``results_track_backward.json`` and ``.md`` beside this file
-(about 20 minutes with two jobs).
+pass keeps, ``omniloc.track.backward.kept_frames``, told each sure pose's covariance times
+``omniloc.track.backward.TOLD_SCALE``), at each ``--as-reported`` horizon also told the
+covariance as the forward pass reports it (the pass before 2026-12-07), and at each
+``--every-sure`` horizon also from every sure frame (``confirm_s`` 0), every result scored by
+the evaluation's own ``score_run``. Each wrong frame the pass backward added is listed (its
+stream, time, position and heading error). Writes ``results_track_backward.json`` and ``.md``
+beside this file (about 25 minutes with two jobs).
 """
 
 from __future__ import annotations
@@ -66,12 +69,19 @@ def _label(variant: str) -> str:
     ("20/all")."""
     if variant == "forward":
         return "the forward pass alone"
-    h, _, every = variant.partition("/")
-    return f"with the pass backward, {h} s" + (", from every sure frame" if every else "")
+    h, _, how = variant.partition("/")
+    if how == "reported":
+        return f"with the pass backward, {h} s, told the covariance as reported"
+    return f"with the pass backward, {h} s" + (", from every sure frame" if how else "")
 
 
 def job(
-    data: str, seed: int, horizons: list[float], kidnap: int, every: list[float]
+    data: str,
+    seed: int,
+    horizons: list[float],
+    kidnap: int,
+    every: list[float],
+    reported: list[float] | None = None,
 ) -> dict[str, Any]:
     """One seed: the forward pass on every stream, then the pass backward at each horizon.
     Returns, per variant ("forward" or the horizon), per kind of stream, the totals of the
@@ -85,11 +95,15 @@ def job(
     make = tracker_factory("mrclam", settings)
     passes = {f"{h:g}": backward_offline(h, "mrclam", settings) for h in horizons}
     passes |= {f"{h:g}/all": backward_offline(h, "mrclam", settings, confirm_s=0.0) for h in every}
+    passes |= {
+        f"{h:g}/reported": backward_offline(h, "mrclam", settings, told_scale=1.0)
+        for h in reported or []
+    }
     scores: dict[str, list[Any]] = {"forward": [], **{v: [] for v in passes}}
     added: dict[str, list[dict[str, Any]]] = {v: [] for v in passes}
     # Per variant and kind of stream: the frames the pass reported, those right, and the
     # sum of the confidences they reported (TrackerConfig.confidence_backward's).
-    reported: dict[str, dict[str, list[float]]] = {
+    tallies: dict[str, dict[str, list[float]]] = {
         v: {k: [0, 0, 0.0] for k in KINDS} for v in passes
     }
     for s in streams:
@@ -104,7 +118,7 @@ def job(
             # pass backward reported, with how far off they are.
             scored, right = frames_within_tolerance(s, both)
             mine = [i for i, e in enumerate(both) if e.backward and scored[i]]
-            tally = reported[v][_kind(s.name)]
+            tally = tallies[v][_kind(s.name)]
             tally[0] += len(mine)
             tally[1] += int(sum(bool(right[i]) for i in mine))
             tally[2] += sum(c for i in mine if (c := both[i].confidence) is not None)
@@ -145,8 +159,8 @@ def job(
                 "recovered": tot["runs"] - tot["unrecovered"] if kind == KINDS[1] else None,
                 "cpu_per_s": sum(r.cpu_s for r in sel) / sum(r.duration_s for r in sel),
             }
-            if variant in reported:
-                n, ok, c = reported[variant][kind]
+            if variant in tallies:
+                n, ok, c = tallies[variant][kind]
                 per[kind] |= {"backward_frames": n, "backward_right": ok, "backward_conf_sum": c}
         out["variants"][variant] = per
     return out
@@ -247,19 +261,36 @@ def main(argv: list[str] | None = None) -> int:
         default=[20.0],
         help="horizons to run also from every sure frame (none given up)",
     )
+    ap.add_argument(
+        "--as-reported",
+        type=float,
+        nargs="*",
+        default=[20.0],
+        help="horizons to run also told the forward pass's covariance as reported "
+        "(told_scale 1, the pass before 2026-12-07 16:00)",
+    )
     ap.add_argument("--kidnap", type=int, default=20, help="kidnapped streams (and as many plain)")
     ap.add_argument("--jobs", type=int, default=2, help="processes, one seed each")
     ap.add_argument("--out", type=Path, default=HERE / "results_track_backward.json")
     args = ap.parse_args(argv)
     if not (args.data / "landmarks.csv").is_file():
         ap.error(f"{args.data}: not the mrclam-ds6 folder")
-    if any(not (math.isfinite(h) and h >= 0) for h in [*args.horizons, *args.every_sure]):
-        ap.error("--horizons, --every-sure: seconds >= 0")
+    if any(
+        not (math.isfinite(h) and h >= 0)
+        for h in [*args.horizons, *args.every_sure, *args.as_reported]
+    ):
+        ap.error("--horizons, --every-sure, --as-reported: seconds >= 0")
     w0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
         futures = [
             pool.submit(
-                job, str(args.data), s, list(args.horizons), args.kidnap, list(args.every_sure)
+                job,
+                str(args.data),
+                s,
+                list(args.horizons),
+                args.kidnap,
+                list(args.every_sure),
+                list(args.as_reported),
             )
             for s in args.seeds
         ]
@@ -268,7 +299,9 @@ def main(argv: list[str] | None = None) -> int:
     variants = [
         "forward",
         *sorted(
-            [f"{h:g}" for h in args.horizons] + [f"{h:g}/all" for h in args.every_sure],
+            [f"{h:g}" for h in args.horizons]
+            + [f"{h:g}/all" for h in args.every_sure]
+            + [f"{h:g}/reported" for h in args.as_reported],
             key=lambda v: (float(v.split("/")[0]), v),
         ),
     ]

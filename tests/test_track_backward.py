@@ -15,13 +15,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from omniloc import Pose
+from omniloc import LandmarkMap, Pose
 from omniloc.cli import main
 from omniloc.errors import InputError
 from omniloc.evaluate.tracking import backward_offline, evaluate_tracking, whole_run
 from omniloc.track import Frame, MotionModel, Odometry, TrackerConfig, TrackEstimate, track
 from omniloc.track.backward import (
     CONFIRM_S,
+    TOLD_SCALE,
     backward_pass,
     combine,
     held_frames,
@@ -299,7 +300,7 @@ def test_the_evaluation_on_mrclam_says_it_ran_the_pass_backward(
 ) -> None:
     from test_track_cli import _truncated_mrclam
 
-    data = _truncated_mrclam(tmp_path / "mrclam", 120.0)
+    data = _truncated_mrclam(tmp_path / "mrclam", 200.0)
     argv = ["-q", "evaluate", "--dataset", "mrclam-track", str(data), "--kidnap", "0"]
     assert main([*argv, "--out", str(tmp_path / "one")]) == 0
     one = capsys.readouterr().out
@@ -307,7 +308,8 @@ def test_the_evaluation_on_mrclam_says_it_ran_the_pass_backward(
     two = capsys.readouterr().out
     assert "tracker: whole runs" in one and "pass backward" not in one
     assert "tracker with the pass backward (20 s): whole runs" in two
-    # Robot 3 is sure of its place within a minute: the pass backward localizes more.
+    # Robot 3 is sure of its place within a minute: the pass backward localizes more
+    # (within its first 200 s; told twice the covariance, none of the first 120 s).
     rows = [
         {
             r.split(",")[0]: r
@@ -584,3 +586,73 @@ def test_since_localized_of_the_example_with_the_pass_backward_is_since_a_report
         if e.state is TrackState.LOCALIZED:
             last = e.t
         assert e.since_localized == (None if last is None else e.t - last), e.t
+
+
+def test_the_pass_is_told_each_sure_pose_with_its_covariance_times_told_scale(
+    monkeypatch,
+) -> None:
+    # The forward pass's covariance is too small (a near miss told sure is carried back
+    # sure): the pass is told it times TOLD_SCALE, or the factor given.
+    from omniloc.track import Tracker
+
+    run = simulate_run(EXAMPLE_MAP, EXAMPLE_SENSOR, Pose(6.0, 4.0, 0.3), duration_s=40.0, rng=0)
+    kw = dict(sensor=EXAMPLE_SENSOR, motion=EXAMPLE_MOTION)
+    fwd = track(EXAMPLE_MAP, run.odometry, run.frames, **kw).estimates
+    told: list[tuple[Pose, np.ndarray]] = []
+    real = Tracker.set_pose
+
+    def spy(self, pose, covariance):  # type: ignore[no-untyped-def]
+        told.append((pose, np.array(covariance)))
+        return real(self, pose, covariance)
+
+    monkeypatch.setattr(Tracker, "set_pose", spy)
+    cov = {e.pose: e.covariance for e in fwd if e.pose is not None}
+    counts = {}
+    for scale in (1.0, TOLD_SCALE, 400.0):
+        told.clear()
+        back = backward_pass(
+            EXAMPLE_MAP, run.odometry, run.frames, fwd, horizon_s=30.0, told_scale=scale, **kw
+        )
+        assert told and all(np.allclose(c, cov[p] * scale) for p, c in told)
+        counts[scale] = sum(b is not None and b.state is TrackState.LOCALIZED for b in back)
+    assert TOLD_SCALE == 2.0
+    # A pose told less sure is held localized over fewer frames before it, never more.
+    assert counts[1.0] >= counts[TOLD_SCALE] >= counts[400.0]
+    assert counts[1.0] > counts[400.0], counts
+    for bad in (0.5, math.nan, "2"):
+        with pytest.raises(InputError, match="told_scale"):
+            backward_pass(
+                EXAMPLE_MAP, run.odometry, run.frames, fwd, horizon_s=30.0, told_scale=bad, **kw
+            )
+
+
+def test_on_mrclam_the_frames_of_the_pass_read_the_presets_table_for_them(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    # Robot 3's first 200 s: the pass localizes frames before its sure ones. Each such
+    # frame's confidence is the backward table's, not the forward pass's table for
+    # localized frames (which said 0.997 of frames right in 96 % when the pass was told the
+    # forward covariance as reported).
+    from omniloc.track import load_frames, load_odometry, preset
+    from omniloc.track.confidence import confidence_of
+    from test_track_cli import _truncated_mrclam
+
+    data = _truncated_mrclam(tmp_path / "mrclam", 200.0)
+    sensor, motion, config = preset("mrclam")
+    lm = LandmarkMap.load(data / "landmarks.csv")
+    odo = load_odometry(data / "robot3_odometry.csv")
+    frames = load_frames(data / "robot3_frames.csv")
+    run = track(lm, odo, frames, sensor=sensor, motion=motion, config=config, backward_s=20.0)
+    back = [e for e in run.estimates if e.backward]
+    fwd = [e for e in run.estimates if e.localized and not e.backward]
+    assert back and fwd and config.confidence_backward is not None
+    for e in back:
+        assert e.probability is not None
+        assert e.confidence == confidence_of(config.confidence_backward, e.probability)
+    for e in fwd:
+        assert e.probability is not None
+        assert e.confidence == confidence_of(config.confidence_localized, e.probability)
+    # (The two tables differ where these frames are.)
+    assert any(
+        confidence_of(config.confidence_localized, e.probability) != e.confidence for e in back
+    )

@@ -87,11 +87,11 @@ def test_a_job_scores_the_forward_pass_and_the_pass_backward(
     for w in out["added_wrong"]["20"]:
         assert w["position_m"] > 0.3 or w["heading_deg"] > 5.0
     # The frames it reports: every one localized, counted with the wrong ones among them,
-    # and each carries the confidence of the preset's table for such frames (below 0.99).
+    # and each carries a confidence (the preset's table for such frames).
     assert back["backward_frames"] > 0
     assert back["backward_right"] == back["backward_frames"] - len(out["added_wrong"]["20"])
     n_back = back["backward_frames"]
-    assert 0.2 * n_back < back["backward_conf_sum"] < 0.99 * n_back
+    assert 0.9 * n_back < back["backward_conf_sum"] <= n_back
     lines = table([out], ["forward", "20", "20/all"])
     assert lines[2].startswith("| whole runs: localized and right")
     assert lines[0].endswith("| with the pass backward, 20 s, from every sure frame |")

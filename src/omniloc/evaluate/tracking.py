@@ -1103,14 +1103,16 @@ def backward_offline(
     preset_name: str = "mrclam",
     settings: Mapping[str, Any] | None = None,
     confirm_s: float | None = None,
+    told_scale: float | None = None,
 ) -> Callable[[Stream, list[TrackEstimate]], list[TrackEstimate]]:
     """``offline`` for :func:`evaluate_tracking`: the tracker's second pass backward in time
     (:mod:`omniloc.track.backward`) over the frames within ``horizon_s`` before a sure frame,
     with a named preset's parameters changed by ``settings`` (those of
     :func:`tracker_factory`'s trackers), as ``track(..., backward_s=horizon_s)`` runs it
     (:func:`~omniloc.track.backward.refine`); ``confirm_s``: how long the forward pass must
-    hold a place for it to stay localized and start the pass (None: its default)."""
-    from ..track.backward import CONFIRM_S, refine
+    hold a place for it to stay localized and start the pass, ``told_scale``: the factor on
+    the covariance it is told (None: their defaults)."""
+    from ..track.backward import CONFIRM_S, TOLD_SCALE, refine
 
     h = finite_number(horizon_s, "the pass backward's horizon")
     if h < 0.0:
@@ -1131,6 +1133,7 @@ def backward_offline(
             motion=motion,
             config=config,
             confirm_s=keep,
+            told_scale=TOLD_SCALE if told_scale is None else told_scale,
         )
 
     return run

@@ -108,11 +108,11 @@ _MRCLAM_CONFIDENCE_HYPOTHESIS_RECENT = (
     (0.99213, 0.9672), (0.9933, 0.9797), (0.99431, 0.9864), (0.99649, 0.9885), (0.99783, 0.9896),
     (0.99814, 0.9896), (0.99918, 0.995), (0.99999, 0.995),
 )
-#: The frames the pass backward reports localized (``track(..., backward_s=20)``), fitted
-#: on the five whole runs under the tracker's seeds 0-4 (2026-12-07, 4,857 frames, 96.4 %
-#: right; the forward pass's localized frames 99.85 %).
+#: The frames the pass backward reports localized (``track(..., backward_s=20)``, told twice
+#: the forward pass's covariance), fitted on the five whole runs under the tracker's seeds
+#: 0-4 (2026-12-07, 2,798 frames, 99.4 % right; the forward pass's localized frames 99.85 %).
 _MRCLAM_CONFIDENCE_BACKWARD = (
-    (0.94674, 0.25), (0.98319, 0.96067), (0.99838, 0.96481), (0.99999, 0.98276),
+    (0.96959, 0.92917), (0.98556, 0.97897), (0.99449, 0.99328), (0.99908, 0.9997),
 )
 # fmt: on
 
@@ -268,10 +268,11 @@ def preset(name: Preset | str) -> tuple[SensorModel, MotionModel, TrackerConfig]
         # others: held out by robot, the hypotheses' confidences from 0.1 up 0.036 -> 0.026
         # (all of them 0.007 -> 0.005); with 7.5 m, one table 0.020, split 0.016.
         # confidence_backward (2026-12-07): the frames the pass backward reports localized
-        # (offline, backward_s 20) are right in 96.4 % of the five whole runs under the
-        # tracker's seeds 0-4 (robot 2's near miss carried back: 87 % of its 1,217), where
-        # they read 0.997 from the forward pass's table; their own table, held out by robot,
-        # is off by 0.020 where the forward table was by 0.033 (robot 2's then read 0.98).
+        # (offline, backward_s 20) read the forward pass's table for localized frames,
+        # 0.997 on average, where told the forward covariance as reported they were right in
+        # 96.4 % (robot 2's near miss carried back). Told twice that covariance
+        # (backward.TOLD_SCALE) they are right in 99.4 % of the five whole runs' 2,798 under
+        # the tracker's seeds 0-4; their own table, held out by robot, is off by 0.006.
         # min_landmarks 4 (since 2026-12-05 19:45): a place is localized by the full tests
         # only when the bearings of the last 20 s name four landmarks or more from it (three
         # fix a pose, a fourth checks it). Robot 3 at 545-570 s saw nothing but another
