@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
@@ -27,6 +28,9 @@ from omniloc.pose import (
     refine_pose,
 )
 from omniloc.sensor import SensorModel
+
+#: (Timed calls: the kernels are compiled before the first, not during it.)
+pytestmark = pytest.mark.usefixtures("compiled_kernels")
 
 # ---- strategies -----------------------------------------------------------------------------
 

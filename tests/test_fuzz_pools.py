@@ -15,6 +15,9 @@ import pytest
 
 import _fuzz as F
 
+#: (Timed calls: the kernels are compiled before the first, not during it.)
+pytestmark = pytest.mark.usefixtures("compiled_kernels")
+
 TARGETS = F.all_targets()
 CLI = F.cli_targets()
 

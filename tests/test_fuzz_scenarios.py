@@ -22,6 +22,9 @@ from omniloc.errors import DegenerateGeometryError, InputError, OmnilocError
 from omniloc.pose import crlb, estimate_pose, pose_covariance, predict_bearings, refine_pose
 from omniloc.sensor import SensorModel
 
+#: (Timed calls: the kernels are compiled before the first, not during it.)
+pytestmark = pytest.mark.usefixtures("compiled_kernels")
+
 
 @pytest.fixture
 def room() -> omniloc.LandmarkMap:
