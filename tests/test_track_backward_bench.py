@@ -87,7 +87,8 @@ def test_a_job_scores_the_forward_pass_and_the_pass_backward(
     for w in out["added_wrong"]["20"]:
         assert w["position_m"] > 0.3 or w["heading_deg"] > 5.0
     # The frames it reports: every one localized, counted with the wrong ones among them,
-    # and each carries a confidence (the preset's table for such frames).
+    # and each carries a confidence, summed (which table gives it is
+    # test_track_backward's test_on_mrclam_the_frames_of_the_pass_read_the_presets_table_for_them).
     assert back["backward_frames"] > 0
     assert back["backward_right"] == back["backward_frames"] - len(out["added_wrong"]["20"])
     n_back = back["backward_frames"]

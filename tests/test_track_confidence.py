@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -327,14 +328,20 @@ def _write_run(folder, seed: int) -> list[str]:  # type: ignore[no-untyped-def]
     return ["--odometry", str(paths[0]), "--frames", str(paths[1]), "--groundtruth", str(paths[2])]
 
 
+def _fit_confidence_inputs(folder: Path) -> tuple[list[str], list[str], Path]:
+    """The grid map and two simulated runs written in ``folder``: the map and model options,
+    the runs' file options, and the settings file to write."""
+    mp = folder / "map.csv"
+    mp.write_text("id,x,y\n" + "".join(f"{i},{x},{y}\n" for i, (x, y) in enumerate(GRID.xy)))
+    runs = _write_run(folder, 1) + _write_run(folder, 2)
+    common = ["--map", str(mp), "--set", "max_range=6", "--set", "p_detect=0.9"]
+    return common, runs, folder / "confidence.json"
+
+
 def test_fit_confidence_on_two_runs_writes_tables_that_track_reports(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     from omniloc.cli import main
 
-    mp = tmp_path / "map.csv"
-    mp.write_text("id,x,y\n" + "".join(f"{i},{x},{y}\n" for i, (x, y) in enumerate(GRID.xy)))
-    runs = _write_run(tmp_path, 1) + _write_run(tmp_path, 2)
-    out = tmp_path / "confidence.json"
-    common = ["--map", str(mp), "--set", "max_range=6", "--set", "p_detect=0.9"]
+    common, runs, out = _fit_confidence_inputs(tmp_path)
     assert main(["fit-confidence", *common, *runs, "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "localized:" in text and "own probability" in text
@@ -843,11 +850,7 @@ def test_a_frame_of_the_pass_backward_reads_its_own_table_or_reports_none() -> N
 def test_fit_confidence_with_the_pass_backward_fits_its_table(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     from omniloc.cli import main
 
-    mp = tmp_path / "map.csv"
-    mp.write_text("id,x,y\n" + "".join(f"{i},{x},{y}\n" for i, (x, y) in enumerate(GRID.xy)))
-    runs = _write_run(tmp_path, 1) + _write_run(tmp_path, 2)
-    out = tmp_path / "confidence.json"
-    common = ["--map", str(mp), "--set", "max_range=6", "--set", "p_detect=0.9"]
+    common, runs, out = _fit_confidence_inputs(tmp_path)
     assert main(["fit-confidence", *common, *runs, "--backward", "20", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert "localized by the forward pass:" in text and "localized by the pass backward:" in text

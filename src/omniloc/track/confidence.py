@@ -314,10 +314,7 @@ def _frames(
             f"states, probabilities and right must have one entry per frame (1-D), got "
             f"{kind.size}, shape {p.shape} and shape {ok.shape}"
         )
-    if ok.dtype != np.bool_:
-        if not (ok.dtype.kind in "iuf" and np.isin(ok, (0, 1)).all()):
-            raise InputError("right must hold booleans (within tolerance or not)")
-        ok = ok.astype(bool)
+    ok = _booleans(ok, "right must hold booleans (within tolerance or not)")
     posed = kind != TrackState.LOST.value
     if not posed.any():
         raise InputError("states: every frame is lost; a fit needs frames with a pose")
@@ -545,11 +542,18 @@ def _backward(flags: Any, kind: np.ndarray) -> np.ndarray | None:
             f"backward must hold one flag per frame (1-D), got shape {b.shape} for "
             f"{kind.size} frames"
         )
-    if b.dtype != np.bool_:
-        if not (b.dtype.kind in "iuf" and np.isin(b, (0, 1)).all()):
-            raise InputError("backward must hold booleans (reported by the pass backward or not)")
-        b = b.astype(bool)
+    b = _booleans(b, "backward must hold booleans (reported by the pass backward or not)")
     return b & (kind == TrackState.LOCALIZED.value)
+
+
+def _booleans(a: np.ndarray, message: str) -> np.ndarray:
+    """``a`` as booleans: bools as they are, numbers 0 and 1 converted; else InputError
+    with ``message``."""
+    if a.dtype == np.bool_:
+        return a
+    if not (a.dtype.kind in "iuf" and np.isin(a, (0, 1)).all()):
+        raise InputError(message)
+    return a.astype(bool)
 
 
 def held_out_confidence(
