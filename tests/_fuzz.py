@@ -1560,7 +1560,9 @@ def _settings_targets() -> list[Target]:
     from omniloc.track import (
         Frame,
         GroundTruth,
+        MotionModel,
         Odometry,
+        check_motion,
         estimate_frame_sensor,
         estimate_motion,
         estimate_mount,
@@ -1719,12 +1721,14 @@ def _settings_targets() -> list[Target]:
                         ("empty", []),
                         ("words", "ab"),
                         ("longer than the run", [100.0]),
+                        ("tiny", [1e-300]),
                     ),
                 ),
                 "delays": Arg(("delays",), (("inf", [float("inf")]), ("2-D", [[0.1]]))),
                 "max_gap_s": Arg(("max_gap_s",), (("zero", 0.0), ("nan", float("nan")))),
                 "delay_stretch_s": Arg(
-                    ("delay_stretch_s", "overlap"), (("huge", 1e300), ("negative", -1.0))
+                    ("delay_stretch_s", "overlap"),
+                    (("huge", 1e300), ("negative", -1.0), ("tiny", 1e-300)),
                 ),
                 "turn_scales": Arg(
                     ("turn_scales",), (("a string", "yes"), ("an int", 1), ("None", None))
@@ -1772,6 +1776,43 @@ def _settings_targets() -> list[Target]:
             },
             check=lambda kw, v: _finite(np.array([v.model.delay_s, v.model.v_scale]), "model"),
             limit_s=60.0,
+        ),
+        Target(
+            "check_motion",
+            lambda kw: check_motion(**kw),
+            lambda: {"odometry": odo, "truth": good, "model": MotionModel()},
+            {
+                "odometry": Arg(
+                    ("Odometry", "odometry"),
+                    (("None", None), ("list", [1, 2]), ("two runs", [odo, odo])),
+                ),
+                "truth": Arg(
+                    ("GroundTruth", "overlap", "truth"),
+                    (("None", None), ("short", short), ("far away in time", far)),
+                ),
+                "model": Arg(
+                    ("model", "MotionModel"), (("None", None), ("a dict", {"delay_s": 0.1}))
+                ),
+                "length": Arg(
+                    ("length", "stretch"),
+                    (
+                        ("nan", float("nan")),
+                        ("zero", 0.0),
+                        ("longer than the run", 100.0),
+                        ("huge", 1e300),
+                        ("tiny", 1e-300),
+                        ("a string", "2"),
+                    ),
+                ),
+                "max_gap_s": Arg(("max_gap_s",), (("zero", 0.0), ("inf", float("inf")))),
+                "skip_s": Arg(
+                    ("skip_s", "stretch"),
+                    (("negative", -1.0), ("nan", float("nan")), ("the whole run", 1000.0)),
+                ),
+            },
+            check=lambda kw, v: _finite(
+                np.array([v.inside(0.99), v.inside(0.5, "heading")]), "share"
+            ),
         ),
     ]
 
@@ -2726,6 +2767,21 @@ def cli_targets() -> dict[str, CliTarget]:
         },
         limit_s=60.0,
     )
+    check_motion = CliTarget(
+        "check-motion",
+        (("--odometry", fit_odo_file), ("--groundtruth", fit_gt_file)),
+        {
+            "--odometry": (
+                *ODOMETRY_FILES,
+                ("two for one track", (fit_odo_file, fit_odo_file)),
+            ),
+            "--groundtruth": (
+                *GROUNDTRUTH_FILES,
+                ("two for one run", (fit_gt_file, fit_gt_file)),
+            ),
+            "--length": CLI_NUMBERS,
+        },
+    )
     sensor_frames = "t,bearing\n" + "".join(
         f"{0.2 * k!r},{b!r}\n" for k in range(8) for b in z.tolist()
     )
@@ -2750,4 +2806,5 @@ def cli_targets() -> dict[str, CliTarget]:
             "--mount": CLI_MOUNTS,
         },
     )
-    return {t.name: t for t in (localize, bearings, demo, evaluate, track, fit_motion, fit_sensor)}
+    targets = (localize, bearings, demo, evaluate, track, fit_motion, check_motion, fit_sensor)
+    return {t.name: t for t in targets}

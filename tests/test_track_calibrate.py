@@ -967,3 +967,115 @@ def test_a_log_of_frames_with_a_bearing_gives_the_rates_per_camera_frame(
     settings = load_settings(out)
     assert settings["nonempty_frames"] is True
     assert settings["p_detect"] == pytest.approx(fit.p_detect, rel=1e-9)
+
+
+def test_check_motion_holds_a_models_own_noise_and_not_a_narrower_one() -> None:
+    from omniloc.track import check_motion
+
+    odometry, truth = _recording()
+    check = check_motion(odometry, truth, TRUE, length=2.0)
+    n = check.start.size
+    assert n == check.errors.shape[0] == check.covariance.shape[0] == len(check.pieces) > 400
+    assert check.length == 2.0 and (check.run == 0).all()
+    assert np.all(np.diff(check.start) == pytest.approx(2.0))
+    later = check_motion(odometry, truth, TRUE, skip_s=60.5)
+    assert later.start[0] == pytest.approx(check.start[0] + 60.5)
+    assert later.start.size == n - 30
+    # The simulated motion gathers exactly the model's noise: its regions hold what they
+    # say, in the pose, the position and the heading alike.
+    for part in ("pose", "position", "heading"):
+        assert check.inside(0.99, part) == pytest.approx(0.99, abs=0.02), part
+        assert check.inside(0.5, part) == pytest.approx(0.5, abs=0.08), part
+    # A model a tenth as noisy is too sure; one on the wrong clock is off by more.
+    quiet = replace(TRUE, **{f: getattr(TRUE, f) / 10 for f in ("along_per_m", "turn_per_rad")})
+    assert check_motion(odometry, truth, quiet).inside(0.99) < 0.8
+    late = check_motion(odometry, truth, replace(TRUE, delay_s=-0.3))
+    assert np.sqrt(np.mean(late.errors[:, 2] ** 2)) > 2 * np.sqrt(np.mean(check.errors[:, 2] ** 2))
+    # Its squared errors are the chi-square the shares count.
+    q = check.squared("heading")
+    assert q == pytest.approx(check.errors[:, 2] ** 2 / check.covariance[:, 2, 2])
+
+
+def test_check_motion_of_several_runs_keeps_each_runs_stretches_apart() -> None:
+    from omniloc.track import check_motion
+
+    a, b = _recording(300.0, seed=4), _recording(200.0, seed=5)
+    both = check_motion([a[0], b[0]], [a[1], b[1]], TRUE)
+    one = check_motion(*a, TRUE)
+    two = check_motion(*b, TRUE)
+    assert np.array_equal(both.run, np.repeat([0, 1], [one.start.size, two.start.size]))
+    assert np.array_equal(both.errors, np.concatenate([one.errors, two.errors]))
+
+
+def test_check_motion_refuses_what_it_cannot_check() -> None:
+    from omniloc.track import check_motion
+
+    odometry, truth = _recording(300.0, seed=4)
+    with pytest.raises(InputError, match="model must be a MotionModel"):
+        check_motion(odometry, truth, {"delay_s": 0.1})  # type: ignore[arg-type]
+    for bad in (0.0, -1.0, float("nan"), 1e300):
+        with pytest.raises(InputError, match="length"):
+            check_motion(odometry, truth, TRUE, length=bad)
+    for bad in (-1.0, float("nan"), True):
+        with pytest.raises(InputError, match="skip_s must be seconds"):
+            check_motion(odometry, truth, TRUE, skip_s=bad)
+    with pytest.raises(InputError, match="length: stretches of 1e-09 s"):
+        check_motion(odometry, truth, TRUE, length=1e-9)
+    far = GroundTruth(truth.t + 1e6, truth.x, truth.y, truth.theta)
+    with pytest.raises(InputError, match=r"no stretch of 2 s .* do their times overlap"):
+        check_motion(odometry, far, TRUE)
+    check = check_motion(odometry, truth, TRUE)
+    for p in (0.0, 1.0, float("nan"), True):
+        with pytest.raises(InputError, match="probability"):
+            check.inside(p)
+    with pytest.raises(InputError, match="part must be one of pose, position, heading"):
+        check.inside(0.5, "xy")
+
+
+def test_a_stretch_too_short_to_count_is_refused_by_the_fit() -> None:
+    # (A length of 1e-300 s asked numpy for more stretches than it can hold: a ValueError
+    # from deep inside it, found by the fuzz battery.)
+    odometry, truth = _recording(300.0, seed=4)
+    with pytest.raises(InputError, match="stretch_s: stretches of 1e-300 s"):
+        estimate_motion(odometry, truth, stretch_s=[1e-300])
+    with pytest.raises(InputError, match="delay_stretch_s: stretches of"):
+        estimate_motion(odometry, truth, delay_stretch_s=1e-300)
+
+
+def test_check_motion_on_the_command_line_says_when_a_model_is_too_sure(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from omniloc.cli import main
+
+    odo, gt = _write_run(tmp_path, *_recording(300.0, seed=4))
+    settings = tmp_path / "motion.json"
+    fields = ("along_per_m", "across_per_m", "turn_per_rad", "turn_per_m", "turn_per_s")
+    settings.write_text(json.dumps({f: getattr(TRUE, f) for f in (*fields, "delay_s", "v_scale")}))
+    argv = ["check-motion", "--odometry", str(odo), "--groundtruth", str(gt)]
+    assert main([*argv, "--config", str(settings)]) == 0
+    text = capsys.readouterr().out
+    assert f"{odo}: 149 stretches, position error RMS" in text
+    assert "regions over 149 stretches of 2 s: position" in text
+    assert "hold the truth in at least 95 %" in text
+    # The same model a hundredth as noisy in its turns and distance: too sure.
+    quiet = [f"--set={f}={getattr(TRUE, f) / 100!r}" for f in fields]
+    assert main([*argv, "--config", str(settings), *quiet, "--length", "5"]) == 0
+    text = capsys.readouterr().out
+    assert "of 5 s" in text and "the model is too sure of this odometry" in text
+    # One track for two odometry files: one line, status 1.
+    assert main([*argv, "--odometry", str(odo)]) == 1
+    assert "2 --odometry and 1 --groundtruth" in capsys.readouterr().err
+
+
+def test_fit_motion_reports_its_check_in_sample(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omniloc.cli import main
+
+    odo, gt = _write_run(tmp_path, *_recording(300.0, seed=4))
+    assert main(["fit-motion", "--odometry", str(odo), "--groundtruth", str(gt)]) == 0
+    text = capsys.readouterr().out
+    assert "stretches of 2 s of the runs it was fitted on (in sample): position" in text
+    assert "omniloc check-motion" in text

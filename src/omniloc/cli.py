@@ -361,6 +361,7 @@ def _build_parser() -> argparse.ArgumentParser:
         "their order)",
     )
     _add_settings_out(f)
+    _add_check_motion_parser(sub)
     fs = sub.add_parser(
         "fit-sensor",
         help="fit the bearing sensor to frames and a ground-truth track (settings for track)",
@@ -428,6 +429,40 @@ def _build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _add_run_files(p: argparse.ArgumentParser, *files: tuple[str, str]) -> None:
+    """Required file options (name, what it holds) given once per run, for several runs."""
+    for name, what in files:
+        p.add_argument(
+            name,
+            required=True,
+            type=Path,
+            action="append",
+            help=f"{what}; one per run, repeated for several runs (in the same order)",
+        )
+
+
+def _add_check_motion_parser(sub: Any) -> None:
+
+    cm = sub.add_parser(
+        "check-motion",
+        help="check a motion model (a preset, fit-motion's settings) against odometry and a "
+        "ground-truth track it was not fitted on",
+    )
+    _add_run_files(
+        cm,
+        ("--odometry", ODOMETRY_HELP),
+        ("--groundtruth", "true track of the same run: CSV t,x,y,theta or a TUM file"),
+    )
+    _add_preset_and_settings(cm, "the motion model checked, before --config and --set")
+    cm.add_argument(
+        "--length",
+        type=_positive,
+        default=2.0,
+        metavar="S",
+        help="length of the stretches the motion is checked over, seconds (default 2)",
+    )
+
+
 def _add_fit_confidence_parser(sub: Any) -> None:
 
     fc = sub.add_parser(
@@ -436,18 +471,12 @@ def _add_fit_confidence_parser(sub: Any) -> None:
         "(settings for track)",
     )
     fc.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
-    for name, what in (
+    _add_run_files(
+        fc,
         ("--odometry", ODOMETRY_HELP),
         ("--frames", "frames: CSV t,bearing or MRCLAM robotR_frames.csv"),
         ("--groundtruth", "true track: CSV t,x,y,theta or a TUM file"),
-    ):
-        fc.add_argument(
-            name,
-            required=True,
-            type=Path,
-            action="append",
-            help=f"{what}; one per run, repeated for several runs (in the same order)",
-        )
+    )
     _add_tracker_options(fc)
     fc.add_argument(
         "--backward",
@@ -462,14 +491,20 @@ def _add_fit_confidence_parser(sub: Any) -> None:
 def _add_tracker_options(p: argparse.ArgumentParser) -> None:
     """``--degrees``, ``--preset``, ``--config`` and ``--set`` of the commands that run the
     tracker."""
-    from .track.presets import Preset
 
     p.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
+    _add_preset_and_settings(p, "sensor, motion and tracker parameters")
+
+
+def _add_preset_and_settings(p: argparse.ArgumentParser, what: str) -> None:
+    """``--preset`` (``what`` it gives), then ``--config`` and ``--set``."""
+    from .track.presets import Preset
+
     p.add_argument(
         "--preset",
         choices=[q.value for q in Preset],
         default=Preset.GENERIC.value,
-        help="sensor, motion and tracker parameters (default generic)",
+        help=f"{what} (default generic)",
     )
     _add_settings_options(p)
 
@@ -1323,15 +1358,9 @@ def _cmd_fit_motion(args: argparse.Namespace) -> int:
     import dataclasses
 
     from .io import write_text
-    from .track import estimate_motion, load_groundtruth, load_odometry
+    from .track import check_motion, estimate_motion
 
-    if len(args.odometry) != len(args.groundtruth):
-        raise InputError(
-            f"{len(args.odometry)} --odometry and {len(args.groundtruth)} --groundtruth: give "
-            "one ground-truth track per odometry file, in the same order"
-        )
-    odometry = [load_odometry(path) for path in args.odometry]
-    truths = [load_groundtruth(path) for path in args.groundtruth]
+    odometry, truths = _odometry_and_truths(args)
     fit = estimate_motion(
         odometry[0] if len(odometry) == 1 else odometry,
         truths[0] if len(truths) == 1 else truths,
@@ -1368,9 +1397,75 @@ def _cmd_fit_motion(args: argparse.Namespace) -> int:
             "  (0: the recording cannot tell that noise from none; the tracker needs some -- "
             "docs/tracking.md, 'Calibrating a robot of your own')"
         )
+    check = check_motion(odometry, truths, fit.model)
+    print(
+        _motion_check_line(check, "of the runs it was fitted on (in sample)")
+        + " (check it on other runs: omniloc check-motion --config SETTINGS.json)"
+    )
     if args.out is not None:
         write_text(args.out, json.dumps(values, indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")
+    return 0
+
+
+def _motion_check_line(check: Any, where: str) -> str:
+    """How often ``check``'s stretches lie inside the model's 50 % and 99 % regions."""
+    share = {
+        (part, p): 100 * check.inside(p, part)
+        for part in ("position", "heading")
+        for p in (0.5, 0.99)
+    }
+    where = f" {where}" if where else ""
+    return (
+        f"the truth inside the model's 50 % / 99 % regions over {check.start.size} stretches of "
+        f"{check.length:g} s{where}: position {share['position', 0.5]:.1f} / "
+        f"{share['position', 0.99]:.1f} %, heading {share['heading', 0.5]:.1f} / "
+        f"{share['heading', 0.99]:.1f} %"
+    )
+
+
+def _odometry_and_truths(args: argparse.Namespace) -> tuple[list[Any], list[Any]]:
+    """The runs of ``--odometry`` and ``--groundtruth``, one of each per run, read."""
+    from .track import load_groundtruth, load_odometry
+
+    if len(args.odometry) != len(args.groundtruth):
+        raise InputError(
+            f"{len(args.odometry)} --odometry and {len(args.groundtruth)} --groundtruth: give "
+            "one ground-truth track per odometry file, in the same order"
+        )
+    odometry = [load_odometry(path) for path in args.odometry]
+    return odometry, [load_groundtruth(path) for path in args.groundtruth]
+
+
+def _cmd_check_motion(args: argparse.Namespace) -> int:
+    from .track import check_motion, preset, with_settings
+
+    sensor, motion, config = preset(args.preset)
+    settings = _settings(args)
+    if settings:  # refused before the files are read
+        sensor, motion, config = with_settings(sensor, motion, config, settings)
+    odometry, truths = _odometry_and_truths(args)
+    check = check_motion(odometry, truths, motion, length=args.length)
+    for k, path in enumerate(args.odometry):
+        mine = check.run == k
+        if not mine.any():
+            print(f"{path}: no stretch of {args.length:g} s the odometry and the truth share")
+            continue
+        err = check.errors[mine]
+        print(
+            f"{path}: {int(mine.sum())} stretches, position error RMS "
+            f"{float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1)))):.3f} m, heading "
+            f"{float(np.degrees(np.sqrt(np.mean(err[:, 2] ** 2)))):.2f} deg"
+        )
+    print(_motion_check_line(check, "in all" if len(odometry) > 1 else ""))
+    low = check.inside(0.99, "position") < 0.95 or check.inside(0.99, "heading") < 0.95
+    print(
+        "the model is too sure of this odometry: widen its noise (--set, e.g. turn_per_s or "
+        "along_per_m) until its 99 % regions hold about 99 % of the stretches (or are the "
+        "odometry and the truth of one run, on one clock?)"
+        if low
+        else "the model's 99 % regions hold the truth in at least 95 % of the stretches"
+    )
     return 0
 
 
@@ -1624,6 +1719,7 @@ _COMMANDS = {
     "evaluate": _cmd_evaluate,
     "track": _cmd_track,
     "fit-motion": _cmd_fit_motion,
+    "check-motion": _cmd_check_motion,
     "fit-sensor": _cmd_fit_sensor,
     "fit-confidence": _cmd_fit_confidence,
 }

@@ -31,9 +31,11 @@ import types
 from typing import Any
 
 from .calibrate import (
+    MotionCheck,
     MotionFit,
     MountFit,
     SensorFit,
+    check_motion,
     estimate_frame_sensor,
     estimate_motion,
     estimate_mount,
@@ -61,6 +63,7 @@ __all__ = [
     "Frame",
     "GroundTruth",
     "Hypothesis",
+    "MotionCheck",
     "MotionFit",
     "MotionModel",
     "MountFit",
@@ -73,6 +76,7 @@ __all__ = [
     "TrackState",
     "Tracker",
     "TrackerConfig",
+    "check_motion",
     "estimate_frame_sensor",
     "estimate_motion",
     "estimate_mount",

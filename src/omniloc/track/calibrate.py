@@ -45,7 +45,7 @@ import itertools
 import logging
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TypeVar
 
 import numpy as np
@@ -65,10 +65,12 @@ log = logging.getLogger(__name__)
 
 __all__ = [
     "CoreTailFit",
+    "MotionCheck",
     "MotionFit",
     "MountFit",
     "SensorFit",
     "bias_by_bearing",
+    "check_motion",
     "empty_frame_times",
     "estimate_frame_sensor",
     "estimate_motion",
@@ -157,10 +159,24 @@ def _positive(name: str, value: object, top: float) -> None:
         )
 
 
-def _stretches(t0: float, t1: float, length: float, step: float) -> FloatArray:
-    """Starts of stretches ``[a, a + length]`` inside ``[t0, t1]``, ``step`` apart."""
+#: Most stretches of one length a run is cut into (a length of nanoseconds would ask for
+#: billions).
+MAX_STRETCHES = 1_000_000
+
+
+def _stretches(t0: float, t1: float, length: float, step: float, name: str) -> FloatArray:
+    """Starts of stretches ``[a, a + length]`` inside ``[t0, t1]``, ``step`` apart; more
+    than :data:`MAX_STRETCHES` of them, an InputError naming ``name`` (the argument that
+    gave the length)."""
     if t1 - t0 < length:
         return np.zeros(0)
+    count = (t1 - length - t0) / step + 1.0
+    if not count <= MAX_STRETCHES:
+        raise InputError(
+            f"{name}: stretches of {length:.3g} s, {step:.3g} s apart, over the {t1 - t0:.1f} s "
+            f"the odometry and the truth share would be {count:.3g}, at most {MAX_STRETCHES:,}: "
+            "take longer stretches"
+        )
     return np.arange(t0, t1 - length + 1e-9, step)
 
 
@@ -187,6 +203,25 @@ def _predicted(
         out[k] = integrate(dt, v, w, model)[0]
         pieces.append((dt, v, w))
     return out, pieces
+
+
+def _stretch_errors(
+    odometry: Odometry,
+    truth: GroundTruth,
+    span: tuple[float, float],
+    length: float,
+    max_gap_s: float,
+    model: MotionModel,
+    name: str = "stretch_s",
+) -> tuple[FloatArray, FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
+    """Over the non-overlapping stretches of ``length`` s within ``span`` where the truth has
+    no gap: their starts, the truth's relative motion less ``model``'s (n, 3), and the pieces
+    of each (:func:`_predicted`); ``name`` is the argument that gave the length."""
+    a = _stretches(span[0], span[1], length, length, name)
+    true = _true_motion(truth, a, a + length, max_gap_s)
+    ok = np.isfinite(true).all(axis=1)
+    pred, pieces = _predicted(odometry, a[ok], a[ok] + length, model)
+    return a[ok], _errors(true[ok], pred), pieces
 
 
 def _errors(true: FloatArray, pred: FloatArray) -> FloatArray:
@@ -469,7 +504,10 @@ def estimate_motion(
         (max(float(o.t[0]), float(g.t[0])) + margin, min(float(o.t[-1]), float(g.t[-1])) - margin)
         for o, g in pairs
     ]
-    starts = [_stretches(lo, hi, delay_stretch_s, 0.5 * delay_stretch_s) for lo, hi in spans]
+    starts = [
+        _stretches(lo, hi, delay_stretch_s, 0.5 * delay_stretch_s, "delay_stretch_s")
+        for lo, hi in spans
+    ]
     if sum(a.size for a in starts) < MIN_STRETCHES:
         lo, hi = spans[0]
         raise InputError(
@@ -528,19 +566,16 @@ def estimate_motion(
     for (o, g), (lo, hi) in zip(pairs, spans, strict=True):
         count = 0
         for length in lengths:
-            s = _stretches(lo, hi, float(length), float(length))
-            true = _true_motion(g, s, s + length, max_gap_s)
-            ok = np.isfinite(true).all(axis=1)
-            if not ok.any():
+            _, err, pieces = _stretch_errors(o, g, (lo, hi), float(length), max_gap_s, model)
+            if not pieces:
                 continue
-            pred, pieces = _predicted(o, s[ok], s[ok] + length, model)
-            errs.append(_errors(true[ok], pred))
+            errs.append(err)
             unit = []
             for j in range(len(NOISE_FIELDS)):
                 m = replace(model, **{f: float(i == j) for i, f in enumerate(NOISE_FIELDS)})
                 unit.append(np.stack([integrate(dt, v, w, m)[1] for dt, v, w in pieces]))
             parts.append(np.stack(unit, axis=1))  # (n, 7, 3, 3)
-            count += int(ok.sum())
+            count += len(pieces)
         by_run.append(count)
     if sum(by_run) < MIN_STRETCHES:
         raise InputError(
@@ -599,6 +634,168 @@ def estimate_motion(
         )
     model = replace(model, **noise)
     return MotionFit(model, tried, cost, int(use.sum()), int((~use).sum()), tuple(by_run), jumps)
+
+
+#: The parts of a relative motion :meth:`MotionCheck.inside` asks about, and their axes.
+MOTION_PARTS = {"pose": (0, 1, 2), "position": (0, 1), "heading": (2,)}
+
+
+@dataclass(frozen=True)
+class MotionCheck:
+    """How a motion model's predictions meet a ground truth (:func:`check_motion`): over
+    stretches of one length, the error of the relative motion the model predicts from the
+    odometry, and the covariance it gives that motion.
+
+    Attributes
+    ----------
+    start : ndarray, shape (n,)
+        The stretches' starts (s, the truth's clock; a stretch is ``[start, start +
+        length]``).
+    length : float
+        Their length (s).
+    run : ndarray of int, shape (n,)
+        Which run (0, 1, ...; in the order given) each stretch is of.
+    errors : ndarray, shape (n, 3)
+        The truth's relative motion less the model's: ``(dx, dy)`` in the robot's frame at the
+        stretch's start (m) and the heading (rad, wrapped).
+    covariance : ndarray, shape (n, 3, 3)
+        The covariance the model propagates over each stretch
+        (:func:`~omniloc.track.motion.integrate`), plus :data:`TRUTH_FLOOR` for the truth's
+        own error.
+    pieces : tuple of (ndarray, ndarray, ndarray)
+        Each stretch's odometry as the model integrates it: the pieces' durations (s),
+        forward velocities (m/s) and turn rates (rad/s), shifted by the model's latency.
+    """
+
+    start: FloatArray
+    length: float
+    run: NDArray[np.int64]
+    errors: FloatArray = field(repr=False)
+    covariance: FloatArray = field(repr=False)
+    pieces: tuple[tuple[FloatArray, FloatArray, FloatArray], ...] = field(repr=False)
+
+    def squared(self, part: str = "pose") -> FloatArray:
+        """Each stretch's squared error in the model's covariance (the normalised estimation
+        error squared) over ``part``: ``"pose"`` (3 degrees of freedom), ``"position"`` (2)
+        or ``"heading"`` (1)."""
+        axes = np.array(_motion_part(part))
+        e = self.errors[:, axes]
+        S = self.covariance[:, axes[:, None], axes[None, :]]
+        return np.asarray(np.einsum("ni,ni->n", e, np.linalg.solve(S, e[:, :, None])[:, :, 0]))
+
+    def inside(self, probability: float = 0.99, part: str = "pose") -> float:
+        """The share of the stretches whose error lies inside the model's region of
+        ``probability`` (chi-square over ``part``'s degrees of freedom): about
+        ``probability`` for a model whose covariance is honest, less for one too sure of
+        the odometry."""
+        if not (
+            isinstance(probability, (int, float))
+            and not isinstance(probability, bool)
+            and 0.0 < probability < 1.0
+        ):
+            raise InputError(f"probability must be a number in (0, 1), got {shorten(probability)}")
+        axes = _motion_part(part)
+        return float(np.mean(self.squared(part) <= chi2_quantile(float(probability), len(axes))))
+
+
+def _motion_part(part: object) -> tuple[int, ...]:
+    """The axes of ``part`` (a key of :data:`MOTION_PARTS`), or an InputError naming it."""
+    if not isinstance(part, str) or part not in MOTION_PARTS:
+        raise InputError(f"part must be one of {', '.join(MOTION_PARTS)}, got {shorten(part)}")
+    return MOTION_PARTS[part]
+
+
+def check_motion(
+    odometry: Odometry | Sequence[Odometry],
+    truth: GroundTruth | Sequence[GroundTruth],
+    model: MotionModel,
+    *,
+    length: float = 2.0,
+    max_gap_s: float = 0.5,
+    skip_s: float = 0.0,
+) -> MotionCheck:
+    """The errors of ``model``'s predictions against a ground truth, to check a motion model
+    (a fit, a preset, one widened by hand) on runs it was not fitted on.
+
+    Parameters
+    ----------
+    odometry : Odometry, or a list of them
+        One run's odometry, or a list of several runs' (as :func:`estimate_motion`).
+    truth : GroundTruth, or a list of them
+        The true track of the same run (runs, in the same order).
+    model : MotionModel
+        The model checked: its latency, scales and noise.
+    length : float
+        Length (s) of the stretches, which do not overlap.
+    max_gap_s : float
+        Stretches whose ends fall where the truth has a gap longer than this are left out.
+    skip_s : float
+        Seconds of each run left out before its first stretch, from the first time both
+        the truth and the odometry (at the model's latency) cover.
+
+    Returns
+    -------
+    MotionCheck
+        ``inside(0.99)`` is the share of stretches inside the model's 99 % region.
+
+    Raises
+    ------
+    InputError
+        ``model`` not a MotionModel, a length or gap out of range, runs given as in
+        :func:`estimate_motion` wrongly, or no stretch of ``length`` s without a gap in the
+        truth.
+
+    Examples
+    --------
+    A robot that goes straight at 0.2 m/s, exactly as its odometry says:
+
+    >>> from omniloc.track import GroundTruth, MotionModel, Odometry
+    >>> t = np.arange(0.0, 60.0, 0.1)
+    >>> odometry = Odometry(t, np.full(t.size, 0.2), np.zeros(t.size))
+    >>> truth = GroundTruth(t, 0.2 * t, np.zeros(t.size), np.zeros(t.size))
+    >>> check = check_motion(odometry, truth, MotionModel(), length=2.0)
+    >>> check.errors.shape, check.inside(0.99)
+    ((29, 3), 1.0)
+    """
+    if not isinstance(model, MotionModel):
+        raise InputError(f"model must be a MotionModel, got {type(model).__name__}")
+    _positive("length", length, MAX_STRETCH_S)
+    _positive("max_gap_s", max_gap_s, MAX_STRETCH_S)
+    if not (
+        isinstance(skip_s, (int, float))
+        and not isinstance(skip_s, bool)
+        and 0.0 <= skip_s <= MAX_STRETCH_S
+    ):
+        raise InputError(f"skip_s must be seconds in [0, {MAX_STRETCH_S:g}], got {shorten(skip_s)}")
+    pairs = _paired(odometry, truth, _odometry, "odometry", "run")
+    margin = abs(model.delay_s)
+    starts, runs, errs, covs, pieces = [], [], [], [], []
+    floor = np.diag(TRUTH_FLOOR)
+    for k, (o, g) in enumerate(pairs):
+        lo = max(float(o.t[0]) + margin, float(g.t[0])) + float(skip_s)
+        hi = min(float(o.t[-1]) + min(model.delay_s, 0.0), float(g.t[-1]))
+        a, err, parts = _stretch_errors(o, g, (lo, hi), float(length), max_gap_s, model, "length")
+        if not parts:
+            continue
+        starts.append(a)
+        runs.append(np.full(a.size, k, dtype=np.int64))
+        errs.append(err)
+        covs.append(np.stack([integrate(dt, v, w, model)[1] + floor for dt, v, w in parts]))
+        pieces.extend(parts)
+    if not starts:
+        raise InputError(
+            f"no stretch of {length:g} s that the odometry and the truth both cover without a "
+            f"gap in the truth (longer than max_gap_s = {max_gap_s:g} s): do their times "
+            "overlap?"
+        )
+    return MotionCheck(
+        np.concatenate(starts),
+        float(length),
+        np.concatenate(runs),
+        np.concatenate(errs),
+        np.concatenate(covs),
+        tuple(pieces),
+    )
 
 
 #: Turn-rate bins (rad/s) of :func:`turn_noise_fit`.
