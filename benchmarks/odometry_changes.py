@@ -80,11 +80,11 @@ TODAY = MotionModel(
 
 def windows(
     odometry: Odometry, truth: GroundTruth, length: float, model: MotionModel
-) -> tuple[FloatArray, FloatArray, tuple[tuple[FloatArray, FloatArray, FloatArray], ...]]:
+) -> tuple[FloatArray, FloatArray, tuple[tuple[FloatArray, ...], ...]]:
     """Non-overlapping windows of ``length`` s the odometry and the truth both cover
     (:func:`~omniloc.track.check_motion`): the heading error (the truth's change minus the
     model's), the model's variance of it (with the truth's own), and each window's pieces
-    (durations, v, w) in the odometry's time, shifted by the model's latency."""
+    (durations, v, w, vy) in the odometry's time, shifted by the model's latency."""
     check = check_motion(odometry, truth, model, length=length, max_gap_s=MAX_GAP_S, skip_s=SKIP_S)
     return check.errors[:, 2], check.covariance[:, 2, 2], check.pieces
 
@@ -107,7 +107,7 @@ def by_changes(
     for odometry, truth in runs:
         e, _var, pieces = windows(odometry, truth, length, model)
         err.append(e)
-        for dt, _v, w in pieces:
+        for dt, _v, w, _vy in pieces:
             cols.append((float(dt.sum()), float(np.sum(np.abs(w) * dt)), changes(w, dt)))
     e = np.concatenate(err)
     X = np.array(cols)
@@ -145,7 +145,7 @@ def coverage(
         for odometry, truth in runs:
             e, var, pieces = windows(odometry, truth, length, model)
             nees.append(e**2 / var)  # (var holds the Vicon track's own heading noise)
-            flips.append(np.array([changes(w, dt) for dt, _v, w in pieces]))
+            flips.append(np.array([changes(w, dt) for dt, _v, w, _vy in pieces]))
         q = np.concatenate(nees)
         f = np.concatenate(flips)
         top = f > np.quantile(f, 0.9)

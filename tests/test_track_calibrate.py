@@ -1007,6 +1007,20 @@ def test_check_motion_of_several_runs_keeps_each_runs_stretches_apart() -> None:
     assert np.array_equal(both.errors, np.concatenate([one.errors, two.errors]))
 
 
+def test_check_motion_moves_by_the_odometrys_sideways_part_as_the_tracker_does() -> None:
+    # A sensor frame that slides sideways at 0.2 m/s, exactly as its odometry (logged as
+    # poses) says: no error. Left out, the prediction would miss 0.4 m a stretch.
+    from omniloc.track import check_motion
+
+    t = np.arange(0.0, 60.0, 0.1)
+    zero = np.zeros(t.size)
+    odometry = Odometry(t, zero, zero, vy=np.full(t.size, 0.2))
+    truth = GroundTruth(t, zero, 0.2 * t, zero)
+    check = check_motion(odometry, truth, MotionModel(), length=2.0)
+    assert np.abs(check.errors).max() < 1e-9
+    assert all(np.allclose(vy, 0.2) for _dt, _v, _w, vy in check.pieces)
+
+
 def test_check_motion_refuses_what_it_cannot_check() -> None:
     from omniloc.track import check_motion
 

@@ -80,6 +80,9 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
+#: A stretch's odometry: the pieces' durations (s), forward velocities (m/s), turn rates
+#: (rad/s) and sideways velocities (m/s).
+Pieces = tuple[FloatArray, FloatArray, FloatArray, FloatArray]
 _T = TypeVar("_T")
 
 #: The noise values in the order of :attr:`MotionModel.noise`.
@@ -194,8 +197,8 @@ def _true_motion(truth: GroundTruth, a: FloatArray, b: FloatArray, max_gap_s: fl
 def _predicted(
     odometry: Odometry, a: FloatArray, b: FloatArray, model: MotionModel
 ) -> tuple[FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
-    """The odometry's relative motion over each ``[a, b]`` (its rows describe the motion
-    from ``t + delay_s``), and the pieces of each."""
+    """The odometry's forward motion and turns over each ``[a, b]`` (its rows describe the
+    motion from ``t + delay_s``), and the pieces of each."""
     out = np.empty((a.size, 3))
     pieces = []
     for k, (s, e) in enumerate(zip(a, b, strict=True)):
@@ -205,23 +208,35 @@ def _predicted(
     return out, pieces
 
 
-def _stretch_errors(
-    odometry: Odometry,
+def _predicted_with_cov(
+    odometry: Odometry, a: FloatArray, b: FloatArray, model: MotionModel
+) -> tuple[FloatArray, FloatArray, list[Pieces]]:
+    """As :func:`_predicted`, with any sideways motion of the odometry (as the tracker moves
+    by it), the covariance of each motion, and the pieces with their sideways velocities."""
+    out = np.empty((a.size, 3))
+    cov = np.empty((a.size, 3, 3))
+    pieces = []
+    for k, (s, e) in enumerate(zip(a, b, strict=True)):
+        dt, v, w, vy = odometry.pieces(s - model.delay_s, e - model.delay_s)
+        out[k], cov[k] = integrate(dt, v, w, model, vy)
+        pieces.append((dt, v, w, vy))
+    return out, cov, pieces
+
+
+def _clean_stretches(
     truth: GroundTruth,
     span: tuple[float, float],
     length: float,
     max_gap_s: float,
-    model: MotionModel,
-    name: str = "stretch_s",
-) -> tuple[FloatArray, FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
-    """Over the non-overlapping stretches of ``length`` s within ``span`` where the truth has
-    no gap: their starts, the truth's relative motion less ``model``'s (n, 3), and the pieces
-    of each (:func:`_predicted`); ``name`` is the argument that gave the length."""
+    name: str,
+) -> tuple[FloatArray, FloatArray]:
+    """The non-overlapping stretches of ``length`` s (given by the argument ``name``) within
+    ``span`` where the truth has no gap longer than ``max_gap_s``: their starts (n,) and the
+    truth's relative motion over each (n, 3)."""
     a = _stretches(span[0], span[1], length, length, name)
     true = _true_motion(truth, a, a + length, max_gap_s)
     ok = np.isfinite(true).all(axis=1)
-    pred, pieces = _predicted(odometry, a[ok], a[ok] + length, model)
-    return a[ok], _errors(true[ok], pred), pieces
+    return a[ok], true[ok]
 
 
 def _errors(true: FloatArray, pred: FloatArray) -> FloatArray:
@@ -566,10 +581,11 @@ def estimate_motion(
     for (o, g), (lo, hi) in zip(pairs, spans, strict=True):
         count = 0
         for length in lengths:
-            _, err, pieces = _stretch_errors(o, g, (lo, hi), float(length), max_gap_s, model)
-            if not pieces:
+            a, true = _clean_stretches(g, (lo, hi), float(length), max_gap_s, "stretch_s")
+            if not a.size:
                 continue
-            errs.append(err)
+            pred, pieces = _predicted(o, a, a + length, model)
+            errs.append(_errors(true, pred))
             unit = []
             for j in range(len(NOISE_FIELDS)):
                 m = replace(model, **{f: float(i == j) for i, f in enumerate(NOISE_FIELDS)})
@@ -662,9 +678,11 @@ class MotionCheck:
         The covariance the model propagates over each stretch
         (:func:`~omniloc.track.motion.integrate`), plus :data:`TRUTH_FLOOR` for the truth's
         own error.
-    pieces : tuple of (ndarray, ndarray, ndarray)
-        Each stretch's odometry as the model integrates it: the pieces' durations (s),
-        forward velocities (m/s) and turn rates (rad/s), shifted by the model's latency.
+    pieces : tuple of (ndarray, ndarray, ndarray, ndarray)
+        Each stretch's odometry as the model integrates it (as the tracker moves by it): the
+        pieces' durations (s), forward velocities (m/s), turn rates (rad/s) and sideways
+        velocities (m/s; zeros for odometry of velocities, or poses that move straight
+        ahead), shifted by the model's latency.
     """
 
     start: FloatArray
@@ -672,7 +690,7 @@ class MotionCheck:
     run: NDArray[np.int64]
     errors: FloatArray = field(repr=False)
     covariance: FloatArray = field(repr=False)
-    pieces: tuple[tuple[FloatArray, FloatArray, FloatArray], ...] = field(repr=False)
+    pieces: tuple[Pieces, ...] = field(repr=False)
 
     def squared(self, part: str = "pose") -> FloatArray:
         """Each stretch's squared error in the model's covariance (the normalised estimation
@@ -774,13 +792,14 @@ def check_motion(
     for k, (o, g) in enumerate(pairs):
         lo = max(float(o.t[0]) + margin, float(g.t[0])) + float(skip_s)
         hi = min(float(o.t[-1]) + min(model.delay_s, 0.0), float(g.t[-1]))
-        a, err, parts = _stretch_errors(o, g, (lo, hi), float(length), max_gap_s, model, "length")
-        if not parts:
+        a, true = _clean_stretches(g, (lo, hi), float(length), max_gap_s, "length")
+        if not a.size:
             continue
+        pred, cov, parts = _predicted_with_cov(o, a, a + length, model)
         starts.append(a)
         runs.append(np.full(a.size, k, dtype=np.int64))
-        errs.append(err)
-        covs.append(np.stack([integrate(dt, v, w, model)[1] + floor for dt, v, w in parts]))
+        errs.append(_errors(true, pred))
+        covs.append(cov + floor)
         pieces.extend(parts)
     if not starts:
         raise InputError(
