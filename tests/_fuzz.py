@@ -2780,6 +2780,7 @@ def cli_targets() -> dict[str, CliTarget]:
                 ("two for one run", (fit_gt_file, fit_gt_file)),
             ),
             "--length": CLI_NUMBERS,
+            "--plot": CLI_PLOTS,
         },
     )
     sensor_frames = "t,bearing\n" + "".join(

@@ -1007,6 +1007,15 @@ def test_check_motion_of_several_runs_keeps_each_runs_stretches_apart() -> None:
     assert np.array_equal(both.errors, np.concatenate([one.errors, two.errors]))
 
 
+def test_a_motion_check_is_drawn(tmp_path: Path) -> None:
+    from omniloc.plot import plot_motion_check
+    from omniloc.track import check_motion
+
+    a, b = _recording(300.0, seed=4), _recording(200.0, seed=5)
+    out = plot_motion_check(check_motion([a[0], b[0]], [a[1], b[1]], TRUE), tmp_path / "c.svg")
+    assert out == tmp_path / "c.svg" and "<svg" in out.read_text()[:400]
+
+
 def test_check_motion_moves_by_the_odometrys_sideways_part_as_the_tracker_does() -> None:
     # A sensor frame that slides sideways at 0.2 m/s, exactly as its odometry (logged as
     # poses) says: no error. Left out, the prediction would miss 0.4 m a stretch.
@@ -1078,6 +1087,13 @@ def test_check_motion_on_the_command_line_says_when_a_model_is_too_sure(
     assert main([*argv, "--config", str(settings), *quiet, "--length", "5"]) == 0
     text = capsys.readouterr().out
     assert "of 5 s" in text and "the model is too sure of this odometry" in text
+    # A figure of it, where asked; a path matplotlib cannot write, one line.
+    figure = tmp_path / "figs" / "check.png"
+    assert main([*argv, "--config", str(settings), "--plot", str(figure)]) == 0
+    assert f"figure: {figure}" in capsys.readouterr().out
+    assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main([*argv, "--plot", str(tmp_path / "check.xyz")]) == 1
+    assert "unknown format '.xyz'" in capsys.readouterr().err
     # One track for two odometry files: one line, status 1.
     assert main([*argv, "--odometry", str(odo)]) == 1
     assert "2 --odometry and 1 --groundtruth" in capsys.readouterr().err

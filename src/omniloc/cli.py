@@ -461,6 +461,13 @@ def _add_check_motion_parser(sub: Any) -> None:
         metavar="S",
         help="length of the stretches the motion is checked over, seconds (default 2)",
     )
+    cm.add_argument(
+        "--plot",
+        type=_out_path,
+        metavar="OUT.png",
+        help="save a figure: the heading errors against the model's band, and the squared "
+        "errors against the chi-square curves",
+    )
 
 
 def _add_fit_confidence_parser(sub: Any) -> None:
@@ -1466,6 +1473,11 @@ def _cmd_check_motion(args: argparse.Namespace) -> int:
         if low
         else "the model's 99 % regions hold the truth in at least 95 % of the stretches"
     )
+    if args.plot is not None:
+        from .plot.motion import plot_motion_check
+
+        given = [f"the {args.preset} preset", *(str(p.name) for p in args.config), *args.set]
+        print(f"figure: {plot_motion_check(check, args.plot, title=', '.join(given))}")
     return 0
 
 

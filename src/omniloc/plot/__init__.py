@@ -6,7 +6,9 @@ without a display and in threads.
 
 * :mod:`.scene` -- maps, bearings and solutions (like the seed paper's Figs. 4-6);
 * :mod:`.evaluation` -- figures of Monte Carlo sweeps and real-data runs;
-* :mod:`.vision` -- the vision front end's detections, its conventions, and the vision demo.
+* :mod:`.vision` -- the vision front end's detections, its conventions, and the vision demo;
+* :mod:`.track` -- a run over time; :mod:`.motion` -- a motion model checked against a
+  ground truth.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from .evaluation import (
     plot_rmse_vs_crlb,
     plot_success_vs_noise,
 )
+from .motion import plot_motion_check
 from .scene import draw_scene, plot_localization, plot_solutions_grid
 from .vision import plot_conventions, plot_detections, vision_demo
 
@@ -26,6 +29,7 @@ __all__ = [
     "plot_dataset_errors",
     "plot_detections",
     "plot_localization",
+    "plot_motion_check",
     "plot_reliability",
     "plot_rmse_vs_crlb",
     "plot_solutions_grid",
