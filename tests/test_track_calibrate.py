@@ -1109,3 +1109,21 @@ def test_fit_motion_reports_its_check_in_sample(
     text = capsys.readouterr().out
     assert "stretches of 2 s of the runs it was fitted on (in sample): position" in text
     assert "omniloc check-motion" in text
+
+
+def test_fit_motion_writes_its_settings_when_the_check_cannot_run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import omniloc.track
+    from omniloc.cli import main
+
+    def refuse(*args: object, **kw: object) -> None:
+        raise InputError("no stretch of 2 s to check")
+
+    monkeypatch.setattr(omniloc.track, "check_motion", refuse)
+    odo, gt = _write_run(tmp_path, *_recording(300.0, seed=4))
+    out = tmp_path / "motion.json"
+    argv = ["fit-motion", "--odometry", str(odo), "--groundtruth", str(gt), "--out", str(out)]
+    assert main(argv) == 0
+    assert "not checked in sample: no stretch of 2 s" in capsys.readouterr().out
+    assert out.exists()
