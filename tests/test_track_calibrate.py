@@ -1094,6 +1094,11 @@ def test_check_motion_on_the_command_line_says_when_a_model_is_too_sure(
     assert figure.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main([*argv, "--plot", str(tmp_path / "check.xyz")]) == 1
     assert "unknown format '.xyz'" in capsys.readouterr().err
+    # Two runs: each one's shares beside its errors, then the pooled line.
+    assert main([*argv, *argv[1:], "--config", str(settings)]) == 0
+    text = capsys.readouterr().out
+    assert text.count("; inside the 99 % regions: position") == 2
+    assert "over 298 stretches of 2 s in all" in text
     # One track for two odometry files: one line, status 1.
     assert main([*argv, "--odometry", str(odo)]) == 1
     assert "2 --odometry and 1 --groundtruth" in capsys.readouterr().err

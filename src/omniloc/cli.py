@@ -1454,18 +1454,30 @@ def _cmd_check_motion(args: argparse.Namespace) -> int:
     if settings:  # refused before the files are read
         sensor, motion, config = with_settings(sensor, motion, config, settings)
     odometry, truths = _odometry_and_truths(args)
+    from .sensor import chi2_quantile
+
     check = check_motion(odometry, truths, motion, length=args.length)
+    inside = {
+        part: check.squared(part) <= chi2_quantile(0.99, dof)
+        for part, dof in (("position", 2), ("heading", 1))
+    }
     for k, path in enumerate(args.odometry):
         mine = check.run == k
         if not mine.any():
             print(f"{path}: no stretch of {args.length:g} s the odometry and the truth share")
             continue
         err = check.errors[mine]
-        print(
+        line = (
             f"{path}: {int(mine.sum())} stretches, position error RMS "
             f"{float(np.sqrt(np.mean(np.sum(err[:, :2] ** 2, axis=1)))):.3f} m, heading "
             f"{float(np.degrees(np.sqrt(np.mean(err[:, 2] ** 2)))):.2f} deg"
         )
+        if len(odometry) > 1:
+            line += (
+                f"; inside the 99 % regions: position {100 * inside['position'][mine].mean():.1f}"
+                f" %, heading {100 * inside['heading'][mine].mean():.1f} %"
+            )
+        print(line)
     print(_motion_check_line(check, "in all" if len(odometry) > 1 else ""))
     low = check.inside(0.99, "position") < 0.95 or check.inside(0.99, "heading") < 0.95
     print(
