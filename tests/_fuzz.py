@@ -2747,18 +2747,17 @@ def cli_targets() -> dict[str, CliTarget]:
         f"{t!r},{2 * math.sin(0.1 * t)!r},{2 - 2 * math.cos(0.1 * t)!r},{0.1 * t!r}\n" for t in tt
     )
     fit_odo_file, fit_gt_file = file_with("odo.csv", fit_odo), file_with("gt.csv", fit_gt)
+    # (The runs fit-motion and check-motion read: one odometry and one track each.)
+    run_base = (("--odometry", fit_odo_file), ("--groundtruth", fit_gt_file))
+    run_files: dict[str, Pool] = {
+        "--odometry": (*ODOMETRY_FILES, ("two for one track", (fit_odo_file, fit_odo_file))),
+        "--groundtruth": (*GROUNDTRUTH_FILES, ("two for one run", (fit_gt_file, fit_gt_file))),
+    }
     fit_motion = CliTarget(
         "fit-motion",
-        (("--odometry", fit_odo_file), ("--groundtruth", fit_gt_file)),
+        run_base,
         {
-            "--odometry": (
-                *ODOMETRY_FILES,
-                ("two for one track", (fit_odo_file, fit_odo_file)),
-            ),
-            "--groundtruth": (
-                *GROUNDTRUTH_FILES,
-                ("two for one run", (fit_gt_file, fit_gt_file)),
-            ),
+            **run_files,
             "--out": (
                 ("a directory", Lazy(lambda f: f, needs_dir=True)),
                 ("under a file", Lazy(lambda f: _a_file(f) / "s.json", needs_dir=True)),
@@ -2769,19 +2768,8 @@ def cli_targets() -> dict[str, CliTarget]:
     )
     check_motion = CliTarget(
         "check-motion",
-        (("--odometry", fit_odo_file), ("--groundtruth", fit_gt_file)),
-        {
-            "--odometry": (
-                *ODOMETRY_FILES,
-                ("two for one track", (fit_odo_file, fit_odo_file)),
-            ),
-            "--groundtruth": (
-                *GROUNDTRUTH_FILES,
-                ("two for one run", (fit_gt_file, fit_gt_file)),
-            ),
-            "--length": CLI_NUMBERS,
-            "--plot": CLI_PLOTS,
-        },
+        run_base,
+        {**run_files, "--length": CLI_NUMBERS, "--plot": CLI_PLOTS},
     )
     sensor_frames = "t,bearing\n" + "".join(
         f"{0.2 * k!r},{b!r}\n" for k in range(8) for b in z.tolist()

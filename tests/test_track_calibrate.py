@@ -1005,6 +1005,17 @@ def test_check_motion_of_several_runs_keeps_each_runs_stretches_apart() -> None:
     two = check_motion(*b, TRUE)
     assert np.array_equal(both.run, np.repeat([0, 1], [one.start.size, two.start.size]))
     assert np.array_equal(both.errors, np.concatenate([one.errors, two.errors]))
+    # Each run's stretches apart, as checked alone.
+    for k, alone in enumerate((one, two)):
+        mine = both.of_run(k)
+        assert np.array_equal(mine.start, alone.start)
+        assert np.array_equal(mine.covariance, alone.covariance)
+        assert mine.inside(0.99, "position") == alone.inside(0.99, "position")
+        assert len(mine.pieces) == len(alone.pieces)
+    none = both.of_run(2)
+    assert none.start.size == 0
+    with pytest.raises(InputError, match="no stretch to check"):
+        none.inside(0.99)
 
 
 def test_a_motion_check_is_drawn(tmp_path: Path) -> None:
@@ -1084,9 +1095,13 @@ def test_check_motion_on_the_command_line_says_when_a_model_is_too_sure(
     assert "hold the truth in at least 95 %" in text
     # The same model a hundredth as noisy in its turns and distance: too sure.
     quiet = [f"--set={f}={getattr(TRUE, f) / 100!r}" for f in fields]
+    assert main([*argv, "--config", str(settings), *quiet]) == 0
+    assert "the model is too sure of this odometry" in capsys.readouterr().out
+    # 59 stretches of 5 s: too few to judge either way.
     assert main([*argv, "--config", str(settings), *quiet, "--length", "5"]) == 0
     text = capsys.readouterr().out
-    assert "of 5 s" in text and "the model is too sure of this odometry" in text
+    assert "of 5 s" in text and "59 stretches: too few to tell" in text
+    assert "the model is too sure" not in text and "hold the truth" not in text
     # A figure of it, where asked; a path matplotlib cannot write, one line.
     figure = tmp_path / "figs" / "check.png"
     assert main([*argv, "--config", str(settings), "--plot", str(figure)]) == 0

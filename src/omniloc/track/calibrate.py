@@ -195,29 +195,19 @@ def _true_motion(truth: GroundTruth, a: FloatArray, b: FloatArray, max_gap_s: fl
 
 
 def _predicted(
-    odometry: Odometry, a: FloatArray, b: FloatArray, model: MotionModel
-) -> tuple[FloatArray, list[tuple[FloatArray, FloatArray, FloatArray]]]:
-    """The odometry's forward motion and turns over each ``[a, b]`` (its rows describe the
-    motion from ``t + delay_s``), and the pieces of each."""
-    out = np.empty((a.size, 3))
-    pieces = []
-    for k, (s, e) in enumerate(zip(a, b, strict=True)):
-        dt, v, w = odometry.between(s - model.delay_s, e - model.delay_s)
-        out[k] = integrate(dt, v, w, model)[0]
-        pieces.append((dt, v, w))
-    return out, pieces
-
-
-def _predicted_with_cov(
-    odometry: Odometry, a: FloatArray, b: FloatArray, model: MotionModel
+    odometry: Odometry, a: FloatArray, b: FloatArray, model: MotionModel, *, sideways: bool = False
 ) -> tuple[FloatArray, FloatArray, list[Pieces]]:
-    """As :func:`_predicted`, with any sideways motion of the odometry (as the tracker moves
-    by it), the covariance of each motion, and the pieces with their sideways velocities."""
+    """The odometry's relative motion over each ``[a, b]`` (its rows describe the motion
+    from ``t + delay_s``), its covariance, and the pieces of each. ``sideways`` False: the
+    forward motion and turns alone, the motion the fit is of (the pieces' sideways
+    velocities zeros); True: with the odometry's sideways part, as the tracker moves by it."""
     out = np.empty((a.size, 3))
     cov = np.empty((a.size, 3, 3))
     pieces = []
     for k, (s, e) in enumerate(zip(a, b, strict=True)):
         dt, v, w, vy = odometry.pieces(s - model.delay_s, e - model.delay_s)
+        if not sideways:
+            vy = np.zeros_like(vy)
         out[k], cov[k] = integrate(dt, v, w, model, vy)
         pieces.append((dt, v, w, vy))
     return out, cov, pieces
@@ -334,7 +324,7 @@ def _fit_scales(
     true = np.concatenate([t for _, _, t in runs])
     turn, parts = np.zeros(0), []
     for odometry, a, _ in runs:
-        pred, pieces = _predicted(odometry, a, a + length, unit)
+        pred, _, pieces = _predicted(odometry, a, a + length, unit)
         turn = np.concatenate([turn, pred[:, 2]])  # (the angle turned, not wrapped)
         parts += pieces
     w_scale = 1.0
@@ -348,8 +338,8 @@ def _fit_scales(
                 "rate counter-clockwise positive?"
             )
     at = replace(unit, w_scale=w_scale)
-    p0 = np.stack([integrate(dt, v, w, at)[0][:2] for dt, v, w in parts])
-    p1 = np.stack([integrate(dt, v * np.abs(w), w, at)[0][:2] for dt, v, w in parts])
+    p0 = np.stack([integrate(dt, v, w, at)[0][:2] for dt, v, w, _ in parts])
+    p1 = np.stack([integrate(dt, v * np.abs(w), w, at)[0][:2] for dt, v, w, _ in parts])
     if not float(np.sum(p0**2)) > 0:
         raise InputError("the odometry never moves in the span it shares with the truth")
     # true ~ v_scale * p0 - (v_scale * turn_slowdown) * p1 (the true displacement along the
@@ -584,12 +574,12 @@ def estimate_motion(
             a, true = _clean_stretches(g, (lo, hi), float(length), max_gap_s, "stretch_s")
             if not a.size:
                 continue
-            pred, pieces = _predicted(o, a, a + length, model)
+            pred, _, pieces = _predicted(o, a, a + length, model)
             errs.append(_errors(true, pred))
             unit = []
             for j in range(len(NOISE_FIELDS)):
                 m = replace(model, **{f: float(i == j) for i, f in enumerate(NOISE_FIELDS)})
-                unit.append(np.stack([integrate(dt, v, w, m)[1] for dt, v, w in pieces]))
+                unit.append(np.stack([integrate(dt, v, w, m)[1] for dt, v, w, _ in pieces]))
             parts.append(np.stack(unit, axis=1))  # (n, 7, 3, 3)
             count += len(pieces)
         by_run.append(count)
@@ -701,6 +691,19 @@ class MotionCheck:
         S = self.covariance[:, axes[:, None], axes[None, :]]
         return np.asarray(np.einsum("ni,ni->n", e, np.linalg.solve(S, e[:, :, None])[:, :, 0]))
 
+    def of_run(self, k: int) -> MotionCheck:
+        """The stretches of run ``k`` alone (0, 1, ... in the order the runs were given;
+        none, if that run gave none)."""
+        mine = np.flatnonzero(self.run == k)
+        return MotionCheck(
+            self.start[mine],
+            self.length,
+            self.run[mine],
+            self.errors[mine],
+            self.covariance[mine],
+            tuple(self.pieces[i] for i in mine.tolist()),
+        )
+
     def inside(self, probability: float = 0.99, part: str = "pose") -> float:
         """The share of the stretches whose error lies inside the model's region of
         ``probability`` (chi-square over ``part``'s degrees of freedom): about
@@ -713,6 +716,8 @@ class MotionCheck:
         ):
             raise InputError(f"probability must be a number in (0, 1), got {shorten(probability)}")
         axes = _motion_part(part)
+        if not self.start.size:
+            raise InputError("no stretch to check: the share inside a region needs one")
         return float(np.mean(self.squared(part) <= chi2_quantile(float(probability), len(axes))))
 
 
@@ -795,7 +800,7 @@ def check_motion(
         a, true = _clean_stretches(g, (lo, hi), float(length), max_gap_s, "length")
         if not a.size:
             continue
-        pred, cov, parts = _predicted_with_cov(o, a, a + length, model)
+        pred, cov, parts = _predicted(o, a, a + length, model, sideways=True)
         starts.append(a)
         runs.append(np.full(a.size, k, dtype=np.int64))
         errs.append(_errors(true, pred))
