@@ -1563,6 +1563,7 @@ def _settings_targets() -> list[Target]:
         MotionModel,
         Odometry,
         check_motion,
+        check_sensor,
         estimate_frame_sensor,
         estimate_motion,
         estimate_mount,
@@ -1812,6 +1813,35 @@ def _settings_targets() -> list[Target]:
             },
             check=lambda kw, v: _finite(
                 np.array([v.inside(0.99), v.inside(0.5, "heading")]), "share"
+            ),
+        ),
+        Target(
+            "check_sensor",
+            lambda kw: check_sensor(**kw),
+            lambda: {
+                "landmarks": room(),
+                "frames": frames,
+                "truth": still,
+                "sensor": omniloc.SensorModel(sigma=0.01),
+            },
+            {
+                **{
+                    k: v
+                    for k, v in sensor_fit_args(("no bearing",)).items()
+                    if k not in ("fov", "max_range")
+                },
+                "sensor": Arg(
+                    ("sensor", "SensorModel"), (("None", None), ("a dict", {"sigma": 0.01}))
+                ),
+                "config": Arg(
+                    ("config", "TrackerConfig"),
+                    (("a dict", {"core_share": 0.5}), ("a string", "x")),
+                ),
+                "frame_period_s": view_arg("frame_period_s"),
+            },
+            check=lambda kw, v: _finite(
+                np.array([v.inside(0.99), v.inside(0.5), v.detected(), v.clutter_per_frame()]),
+                "share",
             ),
         ),
     ]
@@ -2776,17 +2806,22 @@ def cli_targets() -> dict[str, CliTarget]:
     )
     p = ROOM_POSE
     still_gt = f"t,x,y,theta\n0,{p.x!r},{p.y!r},{p.theta!r}\n2,{p.x!r},{p.y!r},{p.theta!r}\n"
+    # (The recording fit-sensor and check-sensor read: the room seen from one pose.)
+    sensor_run = (
+        ("--map", file_with("room.csv", ROOM_CSV)),
+        ("--frames", file_with("frames.csv", sensor_frames)),
+        ("--groundtruth", file_with("gt.csv", still_gt)),
+    )
+    sensor_files: dict[str, Pool] = {
+        "--map": MAP_FILES,
+        "--frames": FRAME_FILES,
+        "--groundtruth": GROUNDTRUTH_FILES,
+    }
     fit_sensor = CliTarget(
         "fit-sensor",
-        (
-            ("--map", file_with("room.csv", ROOM_CSV)),
-            ("--frames", file_with("frames.csv", sensor_frames)),
-            ("--groundtruth", file_with("gt.csv", still_gt)),
-        ),
+        sensor_run,
         {
-            "--map": MAP_FILES,
-            "--frames": FRAME_FILES,
-            "--groundtruth": GROUNDTRUTH_FILES,
+            **sensor_files,
             "--out": (
                 ("a directory", Lazy(lambda f: f, needs_dir=True)),
                 ("under a file", Lazy(lambda f: _a_file(f) / "s.json", needs_dir=True)),
@@ -2795,5 +2830,24 @@ def cli_targets() -> dict[str, CliTarget]:
             "--mount": CLI_MOUNTS,
         },
     )
-    targets = (localize, bearings, demo, evaluate, track, fit_motion, check_motion, fit_sensor)
+    check_sensor = CliTarget(
+        "check-sensor",
+        sensor_run,
+        {
+            **sensor_files,
+            **{k: CLI_NUMBERS for k in ("--gate", "--frame-period")},
+            "--plot": CLI_PLOTS,
+        },
+    )
+    targets = (
+        localize,
+        bearings,
+        demo,
+        evaluate,
+        track,
+        fit_motion,
+        check_motion,
+        fit_sensor,
+        check_sensor,
+    )
     return {t.name: t for t in targets}

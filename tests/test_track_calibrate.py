@@ -1147,3 +1147,281 @@ def test_fit_motion_writes_its_settings_when_the_check_cannot_run(
     assert main(argv) == 0
     assert "not checked in sample: no stretch of 2 s" in capsys.readouterr().out
     assert out.exists()
+
+
+@cache
+def _narrow_run() -> tuple[np.ndarray, list[Frame], GroundTruth]:
+    """A simulated run of a 90-deg camera with 0.5 deg noise, p_detect 0.6, clutter 0.4."""
+    import math
+
+    import omniloc
+    from omniloc.track import simulate_run
+
+    room = omniloc.demo_room()
+    sensor = omniloc.SensorModel(
+        sigma=math.radians(0.5), fov=math.radians(90.0), p_detect=0.6, clutter=0.4
+    )
+    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=300.0, rng=6)
+    return room.xy, run.frames, run.truth
+
+
+def _narrow_sensor(**changes: object) -> object:
+    import math
+
+    import omniloc
+
+    values: dict[str, object] = {
+        "sigma": math.radians(0.5),
+        "fov": math.radians(90.0),
+        "p_detect": 0.6,
+        "clutter": 0.4,
+    }
+    return omniloc.SensorModel(**{**values, **changes})  # type: ignore[arg-type]
+
+
+def test_check_sensor_holds_a_sensors_own_noise_and_not_a_narrower_one() -> None:
+    import math
+
+    from omniloc.track import check_sensor, estimate_frame_sensor
+
+    xy, frames, truth = _narrow_run()
+    check = check_sensor(xy, frames, truth, _narrow_sensor())
+    # The simulator's clutter within the gate is no landmark's noise (a few per cent of the
+    # errors, beyond the 99 % region), the rest is the model's own Gaussian.
+    assert check.inside(0.5) == pytest.approx(0.5, abs=0.04)
+    assert 0.96 <= check.inside(0.99) <= 0.995
+    assert check.core_share == 0.0 and np.all(check.sd == math.radians(0.5))
+    levels = check.levels()
+    assert levels.min() >= 0.0 and levels.max() <= 1.0 and levels.size == check.errors.size
+    # The detections and the clutter are counted as the fit counts them, in the same view.
+    fit = estimate_frame_sensor(xy, frames, truth, fov=math.radians(90.0))
+    assert check.detected() == pytest.approx(fit.p_detect, rel=1e-12)
+    assert check.clutter_per_frame() == pytest.approx(fit.clutter, rel=1e-12)
+    assert check.errors.size == fit.matched and check.frame_run.size == fit.frames
+    assert check.detected() == pytest.approx(0.6, abs=0.05)
+    assert check.p_detect == 0.6 and check.clutter_rate == pytest.approx(0.4)
+    # The sensor's own view: landmarks nearer than its min_range are neither in view nor a
+    # bearing's candidates.
+    near = check_sensor(xy, frames, truth, _narrow_sensor(min_range=3.0))
+    assert near.visible.sum() < check.visible.sum() and near.errors.size < check.errors.size
+    assert near.clutter.sum() > check.clutter.sum()
+    # A model a third as noisy is too sure; one three times as noisy too wide.
+    assert (
+        check_sensor(xy, frames, truth, _narrow_sensor(sigma=math.radians(0.17))).inside(0.99) < 0.8
+    )
+    wide = check_sensor(xy, frames, truth, _narrow_sensor(sigma=math.radians(1.5)))
+    assert wide.inside(0.5) > 0.8 and wide.inside(0.99) > 0.99
+    # A constant turn of the camera is taken out (the tracker's heading takes it in).
+    turned = [Frame(f.t, f.bearings + math.radians(0.7), f.truth) for f in frames]
+    moved = check_sensor(xy, turned, truth, _narrow_sensor())
+    assert moved.offset[0] == pytest.approx(check.offset[0] + math.radians(0.7), abs=1e-3)
+    assert moved.inside(0.99) == pytest.approx(check.inside(0.99), abs=0.01)
+
+
+def test_check_sensor_scores_a_sharp_core_as_the_frame_model_takes_it() -> None:
+    import math
+
+    import omniloc
+    from omniloc.track import TrackerConfig, check_sensor
+
+    # Errors of 60 % at 0.3 deg and 40 % at 1.2 deg: the mixture is honest, one Gaussian of
+    # either width is not (the narrow one too sure, the wide one at its centre too wide).
+    xy, frames, truth = _sharp_core_run()
+    sensor = omniloc.SensorModel(sigma=math.radians(1.2), p_detect=0.7, clutter=0.5)
+    mixture = TrackerConfig(core_share=0.6, core_sigma=math.radians(0.3))
+    honest = check_sensor(xy, frames, truth, sensor, mixture)
+    assert honest.core_share == 0.6
+    assert honest.inside(0.5) == pytest.approx(0.5, abs=0.04)
+    assert honest.inside(0.99) > 0.96
+    narrow = check_sensor(xy, frames, truth, sensor.replace(sigma=math.radians(0.3)))
+    assert narrow.inside(0.99) < 0.85  # (the core, and a fifth of the tail)
+    wide = check_sensor(xy, frames, truth, sensor)
+    assert wide.inside(0.5) > 0.65
+    # A core too sharp for these bearings: its 50 % regions hold too few.
+    sharp = TrackerConfig(core_share=0.9, core_sigma=math.radians(0.1))
+    assert check_sensor(xy, frames, truth, sensor, sharp).inside(0.5) < 0.4
+    # The turn noise widens both parts by the truth's turn rate.
+    turning = check_sensor(xy, frames, truth, sensor, replace(mixture, turn_noise_s=0.05))
+    assert np.all(turning.sd >= honest.sd) and np.all(turning.core_sd >= honest.core_sd)
+    assert np.any(turning.core_sd > honest.core_sd)
+
+
+def test_check_sensor_of_several_runs_keeps_each_runs_bearings_and_frames_apart() -> None:
+    import math
+
+    import omniloc
+    from omniloc.track import check_sensor, simulate_run
+
+    room = omniloc.demo_room()
+    sensor = _narrow_sensor()
+    runs = [
+        simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=60.0, rng=k)  # type: ignore[arg-type]
+        for k in (7, 8)
+    ]
+    both = check_sensor(room, [r.frames for r in runs], [r.truth for r in runs], sensor)  # type: ignore[arg-type]
+    for k, r in enumerate(runs):
+        alone = check_sensor(room, r.frames, r.truth, sensor)  # type: ignore[arg-type]
+        mine = both.of_run(k)
+        np.testing.assert_array_equal(mine.errors, alone.errors)
+        np.testing.assert_array_equal(mine.seen, alone.seen)
+        assert mine.inside(0.99) == alone.inside(0.99)
+        assert mine.detected() == alone.detected() and mine.offset[0] == alone.offset[0]
+        assert np.all(mine.run == k) and np.all(mine.frame_run == k)
+    assert both.errors.size == sum(both.of_run(k).errors.size for k in (0, 1))
+    assert math.isnan(both.of_run(5).detected()) and both.of_run(5).errors.size == 0
+
+
+def test_check_sensor_reads_the_bearings_from_the_sensors_mount() -> None:
+    import math
+
+    import omniloc
+    from omniloc.track import check_sensor, simulate_run
+
+    room = omniloc.demo_room()
+    seat = (0.3, 0.1, math.radians(25.0))
+    sensor = _narrow_sensor(mount=seat)
+    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=120.0, rng=9)  # type: ignore[arg-type]
+    on = check_sensor(room, run.frames, run.truth, sensor)  # type: ignore[arg-type]
+    off = check_sensor(room, run.frames, run.truth, _narrow_sensor())  # type: ignore[arg-type]
+    assert on.inside(0.99) > 0.95 and on.detected() == pytest.approx(0.6, abs=0.07)
+    assert off.inside(0.99) < on.inside(0.99) - 0.1 or off.errors.size < 0.8 * on.errors.size
+
+
+def test_check_sensor_counts_the_frames_a_log_left_out_when_the_model_does() -> None:
+    import math
+
+    import omniloc
+    from omniloc.track import TrackerConfig, check_sensor, estimate_frame_sensor, simulate_run
+
+    room = omniloc.demo_room()
+    fov = math.radians(60.0)
+    sensor = omniloc.SensorModel(sigma=math.radians(0.5), fov=fov, p_detect=0.4, clutter=0.3)
+    run = simulate_run(
+        room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=200.0, frame_hz=4.0, rng=4
+    )
+    listed = [f for f in run.frames if f.bearings.size]
+    per_camera = TrackerConfig(nonempty_frames=True)
+    check = check_sensor(room, listed, run.truth, sensor, per_camera, frame_period_s=0.25)
+    fit = estimate_frame_sensor(room, listed, run.truth, fov=fov, frame_period_s=0.25)
+    assert check.detected() == pytest.approx(fit.p_detect, rel=1e-12)
+    assert check.clutter_per_frame() == pytest.approx(fit.clutter, rel=1e-12)
+    plain = check_sensor(room, listed, run.truth, sensor)
+    assert plain.detected() > check.detected() + 0.05  # (the listed frames alone overstate it)
+    with pytest.raises(InputError, match=r"per camera frame.*frame_period_s"):
+        check_sensor(room, listed, run.truth, sensor, per_camera)
+    with pytest.raises(InputError, match="per frame listed"):
+        check_sensor(room, listed, run.truth, sensor, frame_period_s=0.25)
+
+
+def test_check_sensor_refuses_what_it_cannot_check() -> None:
+    import math
+
+    import omniloc
+    from omniloc.track import check_sensor
+
+    xy, frames, truth = _narrow_run()
+    sensor = _narrow_sensor()
+    with pytest.raises(InputError, match="sensor must be a SensorModel"):
+        check_sensor(xy, frames, truth, "mrclam")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="config must be a TrackerConfig"):
+        check_sensor(xy, frames, truth, sensor, {"core_share": 0.5})  # type: ignore[arg-type]
+    for bad in (0.0, -1.0, float("nan"), 4.0):
+        with pytest.raises(InputError, match="gate"):
+            check_sensor(xy, frames, truth, sensor, gate=bad)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="max_gap_s"):
+        check_sensor(xy, frames, truth, sensor, max_gap_s=-1.0)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="frames must be"):
+        check_sensor(xy, "frames.csv", truth, sensor)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="ground-truth tracks"):
+        check_sensor(xy, frames, [truth, truth], sensor)  # type: ignore[arg-type]
+    # A truth of another place, beyond the sensor's range: no bearing near a landmark.
+    far = GroundTruth(truth.t, truth.x + 1e4, truth.y, truth.theta)
+    with pytest.raises(InputError, match=r"no bearing within 3\.0 deg"):
+        check_sensor(xy, frames, far, _narrow_sensor(max_range=20.0))  # type: ignore[arg-type]
+    check = check_sensor(xy, frames, truth, sensor)  # type: ignore[arg-type]
+    for p in (0.0, 1.0, -0.5, float("nan"), True, "0.9"):
+        with pytest.raises(InputError, match="probability"):
+            check.inside(p)  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="no bearing to check"):
+        check.of_run(3).inside(0.99)
+    # An exactly known landmark bearing (no noise at all) scores at level 0, not NaN.
+    exact = check_sensor(xy, frames, truth, omniloc.SensorModel(sigma=math.radians(0.5)))
+    assert np.isfinite(exact.levels()).all()
+
+
+def test_a_sensor_check_is_drawn(tmp_path: Path) -> None:
+    import math
+
+    import omniloc
+    from omniloc.plot import plot_sensor_check
+    from omniloc.track import TrackerConfig, check_sensor
+
+    xy, frames, truth = _sharp_core_run()
+    sensor = omniloc.SensorModel(sigma=math.radians(1.2))
+    mixture = TrackerConfig(core_share=0.6, core_sigma=math.radians(0.3))
+    out = plot_sensor_check(check_sensor(xy, frames, truth, sensor, mixture), tmp_path / "s.svg")
+    text = out.read_text()
+    assert out.suffix == ".svg" and "inside the 50 % region" in text and "the model" in text
+
+
+def test_check_sensor_on_the_command_line_says_when_a_model_is_too_sure(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from omniloc.cli import main
+
+    xy, frames, truth = _narrow_run()
+    lm, fr, gt = _write_recording(tmp_path, xy, frames, truth)
+    argv = ["check-sensor", "--map", str(lm), "--frames", str(fr), "--groundtruth", str(gt)]
+    view = ["--set", "fov=1.5707963267948966", "--set", "p_detect=0.6", "--set", "clutter=0.4"]
+    assert main([*argv, *view, "--set", "sigma=0.008726646259971648"]) == 0
+    text = capsys.readouterr().out
+    assert f"{fr}: " in text and "bearings within 3 deg of a landmark" in text
+    assert "the model: p_detect 0.600 (measured 0.6" in text
+    assert "the model's 99 % regions hold at least 95 % of the bearing errors" in text
+    assert main([*argv, *view, "--set", "sigma=0.003"]) == 0
+    assert "the model is too sure of these bearings: widen it" in capsys.readouterr().out
+    # Its centre too sure: a sharp core the bearings do not have.
+    core = ["--set", "core_share=0.5", "--set", "core_sigma=0.0017"]
+    assert main([*argv, *view, "--set", "sigma=0.014", *core]) == 0
+    assert "too sure of these bearings at its centre" in capsys.readouterr().out
+    # Two runs: each run's share; a figure.
+    two = [*argv, "--frames", str(fr), "--groundtruth", str(gt), *view]
+    png = tmp_path / "check.png"
+    assert main([*two, "--set", "sigma=0.0087", "--plot", str(png)]) == 0
+    text = capsys.readouterr().out
+    assert text.count("; inside the 99 % region: ") == 2 and "bearings in all" in text
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # Mismatched files, an unknown setting, a plot format matplotlib cannot write: one line,
+    # status 1.
+    for bad in (
+        [*argv, "--frames", str(fr)],
+        [*argv, "--set", "sigmaa=1"],
+        [*argv, "--plot", str(tmp_path / "x.unknown")],
+    ):
+        assert main(bad) == 1
+        err = capsys.readouterr().err.strip()
+        assert err and err.count("\n") == 0, err
+
+
+def test_fit_sensor_reports_its_check_in_sample(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import re
+
+    from omniloc.cli import main
+
+    # Robust sigma against a sharp core and a wider tail: the one Gaussian the fit writes is
+    # too sure of its own run's errors, and the fit says so; the mixture is not.
+    xy, frames, truth = _sharp_core_run()
+    lm, fr, gt = _write_recording(tmp_path, xy, frames, truth)
+    argv = ["fit-sensor", "--map", str(lm), "--frames", str(fr), "--groundtruth", str(gt)]
+    assert main(argv) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "(in sample)" in x)
+    assert "under the settings --out writes" in line and "omniloc check-sensor" in line
+    shares = re.search(r"\(in sample\): ([\d.]+) / ([\d.]+) %", line)
+    assert shares is not None and float(shares.group(2)) < 95.0, line
+    assert main([*argv, "--mixture"]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "(in sample)" in x)
+    assert "--mixture writes" in line
+    shares = re.search(r"\(in sample\): ([\d.]+) / ([\d.]+) %", line)
+    assert shares is not None and float(shares.group(2)) > 96.0, line

@@ -425,6 +425,7 @@ def _build_parser() -> argparse.ArgumentParser:
         "keeps one Gaussian (docs/tracking.md, 'A sharp core and a heavier tail')",
     )
     _add_settings_out(fs)
+    _add_check_sensor_parser(sub)
     _add_fit_confidence_parser(sub)
     return parser
 
@@ -466,6 +467,43 @@ def _add_check_motion_parser(sub: Any) -> None:
         metavar="OUT.png",
         help="save a figure: the heading errors against the model's band, and the squared "
         "errors against the chi-square curves",
+    )
+
+
+def _add_check_sensor_parser(sub: Any) -> None:
+    cs = sub.add_parser(
+        "check-sensor",
+        help="check a bearing sensor model (a preset, fit-sensor's settings) against frames and "
+        "a ground-truth track it was not fitted on",
+    )
+    cs.add_argument("--map", required=True, type=Path, help="landmark map, CSV (id,x,y) or JSON")
+    _add_run_files(
+        cs,
+        ("--frames", "frames: CSV t,bearing or MRCLAM robotR_frames.csv (landmark ids not used)"),
+        ("--groundtruth", "true track of the same run: CSV t,x,y,theta or a TUM file"),
+    )
+    cs.add_argument("--degrees", action="store_true", help="the frames' bearings are in degrees")
+    _add_preset_and_settings(
+        cs,
+        "the sensor model checked (and the tracker's core_share, core_sigma, turn_noise_s), "
+        "before --config and --set",
+    )
+    cs.add_argument(
+        "--gate", type=_positive, default=3.0, help="a bearing within this of a landmark, deg"
+    )
+    cs.add_argument(
+        "--frame-period",
+        type=_positive,
+        metavar="S",
+        help="the camera's frame period, s, for a model whose rates are per camera frame "
+        "(nonempty_frames true, as fit-sensor --frame-period writes it)",
+    )
+    cs.add_argument(
+        "--plot",
+        type=_out_path,
+        metavar="OUT.png",
+        help="save a figure: the errors against the model's density, and the share inside each "
+        "of the model's regions",
     )
 
 
@@ -545,6 +583,23 @@ def _add_settings_options(p: argparse.ArgumentParser, scope: str = "") -> None:
         "SensorModel, MotionModel or TrackerConfig; the value in JSON, the library's units), "
         "after --config; repeatable, e.g. --set min_age_s=10 --set region=[-1,5.5,-6,6.5]",
     )
+
+
+def _preset_and_settings(args: argparse.Namespace) -> tuple[Any, Any, Any]:
+    """The sensor model, motion model and tracker configuration of ``--preset``, changed by
+    ``--config`` and ``--set`` (refused before any file is read)."""
+    from .track import preset, with_settings
+
+    sensor, motion, config = preset(args.preset)
+    settings = _settings(args)
+    if settings:
+        sensor, motion, config = with_settings(sensor, motion, config, settings)
+    return sensor, motion, config
+
+
+def _given(args: argparse.Namespace) -> str:
+    """What a figure's title says it shows: the preset, the settings files, the settings."""
+    return ", ".join([f"the {args.preset} preset", *(str(p.name) for p in args.config), *args.set])
 
 
 def _settings(args: argparse.Namespace) -> dict[str, Any]:
@@ -1146,16 +1201,11 @@ def _cmd_track(args: argparse.Namespace) -> int:
     from .track import (
         load_groundtruth,
         load_odometry,
-        preset,
         track,
-        with_settings,
     )
     from .track.io import write_json_lines, write_tum, write_tum_truth
 
-    sensor, motion, config = preset(args.preset)
-    settings = _settings(args)
-    if settings:  # refused before the files are read
-        sensor, motion, config = with_settings(sensor, motion, config, settings)
+    sensor, motion, config = _preset_and_settings(args)
     lm = LandmarkMap.load(args.map)
     odo = load_odometry(args.odometry)
     if args.truth_out is not None and args.groundtruth is None:
@@ -1452,12 +1502,9 @@ MIN_MOTION_CHECK = 100
 
 
 def _cmd_check_motion(args: argparse.Namespace) -> int:
-    from .track import check_motion, preset, with_settings
+    from .track import check_motion
 
-    sensor, motion, config = preset(args.preset)
-    settings = _settings(args)
-    if settings:  # refused before the files are read
-        sensor, motion, config = with_settings(sensor, motion, config, settings)
+    _, motion, _ = _preset_and_settings(args)
     odometry, truths = _odometry_and_truths(args)
     check = check_motion(odometry, truths, motion, length=args.length)
     for k, path in enumerate(args.odometry):
@@ -1495,15 +1542,13 @@ def _cmd_check_motion(args: argparse.Namespace) -> int:
     if args.plot is not None:
         from .plot.motion import plot_motion_check
 
-        given = [f"the {args.preset} preset", *(str(p.name) for p in args.config), *args.set]
-        print(f"figure: {plot_motion_check(check, args.plot, title=', '.join(given))}")
+        print(f"figure: {plot_motion_check(check, args.plot, title=_given(args))}")
     return 0
 
 
-def _cmd_fit_sensor(args: argparse.Namespace) -> int:
-    from .io import write_text
-    from .maps import LandmarkMap
-    from .track import estimate_frame_sensor, estimate_mount, load_frames, load_groundtruth
+def _frames_and_truths(args: argparse.Namespace) -> tuple[list[Any], list[Any]]:
+    """The runs of ``--frames`` and ``--groundtruth``, one of each per run, read."""
+    from .track import load_frames, load_groundtruth
 
     if len(args.frames) != len(args.groundtruth):
         raise InputError(
@@ -1514,7 +1559,98 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
     for path, run in zip(args.frames, frames, strict=True):
         if not run:
             raise InputError(f"{path}: no frames")
-    truths = [load_groundtruth(path) for path in args.groundtruth]
+    return frames, [load_groundtruth(path) for path in args.groundtruth]
+
+
+def _sensor_check_line(check: Any, where: str) -> str:
+    """How often ``check``'s bearing errors lie inside the model's 50 % and 99 % regions."""
+    where = f" {where}" if where else ""
+    return (
+        f"the bearing errors inside the model's 50 % / 99 % regions over {check.errors.size} "
+        f"bearings{where}: {100 * check.inside(0.5):.1f} / {100 * check.inside(0.99):.1f} %"
+    )
+
+
+#: Fewest bearings on which ``check-sensor`` judges a model (as ``check-motion``'s
+#: stretches; a recording's errors repeat from frame to frame, so many more are worth less
+#: than they look).
+MIN_SENSOR_CHECK = 100
+#: Below this share of the errors inside its 50 % regions, ``check-sensor`` calls a model too
+#: sure at its centre (a sharp core that the bearings do not have).
+MIN_SENSOR_HALF = 0.4
+
+
+def _cmd_check_sensor(args: argparse.Namespace) -> int:
+    from .maps import LandmarkMap
+    from .track import check_sensor
+
+    sensor, _, config = _preset_and_settings(args)
+    frames, truths = _frames_and_truths(args)
+    lm = LandmarkMap.load(args.map)
+    check = check_sensor(
+        lm,
+        frames[0] if len(frames) == 1 else frames,
+        truths[0] if len(truths) == 1 else truths,
+        sensor,
+        config,
+        gate=float(np.deg2rad(args.gate)),
+        frame_period_s=args.frame_period,
+    )
+    for k, path in enumerate(args.frames):
+        run = check.of_run(k)
+        if not run.errors.size:
+            print(f"{path}: no bearing within {args.gate:g} deg of a landmark in view of the truth")
+            continue
+        line = (
+            f"{path}: {run.errors.size} bearings within {args.gate:g} deg of a landmark (their "
+            f"median {np.rad2deg(run.offset[0]):+.2f} deg left out: a turn of the camera, which "
+            f"the heading takes in), {run.frame_run.size} frames: {100 * run.detected():.1f} % "
+            f"of the landmarks in view reported, {run.clutter_per_frame():.2f} bearings a frame "
+            "taken as clutter"
+        )
+        if len(frames) > 1:
+            line += f"; inside the 99 % region: {100 * run.inside(0.99):.1f} %"
+        print(line)
+    print(
+        f"the model: p_detect {check.p_detect:.3f} (measured {check.detected():.3f}), clutter "
+        f"{check.clutter_rate:.3f} bearings a frame (measured {check.clutter_per_frame():.3f})"
+    )
+    print(_sensor_check_line(check, "in all" if len(frames) > 1 else ""))
+    if check.errors.size < MIN_SENSOR_CHECK:
+        print(
+            f"{check.errors.size} bearings: too few to tell a model too sure from an honest one "
+            f"(at least {MIN_SENSOR_CHECK}: a longer recording)"
+        )
+    elif check.inside(0.99) < 0.95:
+        print(
+            "the model is too sure of these bearings: widen it (--set sigma=..., the tail of a "
+            "core_share mixture) until its 99 % regions hold about 99 % of the errors (or do "
+            "the frames, the truth and the sensor's mount belong together?)"
+        )
+    elif check.inside(0.5) < MIN_SENSOR_HALF:
+        print(
+            f"the model is too sure of these bearings at its centre: its 50 % regions hold "
+            f"{100 * check.inside(0.5):.1f} % of the errors (a core too sharp or too large a "
+            "share: --set core_sigma=..., core_share=...)"
+        )
+    else:
+        print(
+            "the model's 99 % regions hold at least 95 % of the bearing errors, its 50 % "
+            f"regions at least {100 * MIN_SENSOR_HALF:.0f} %"
+        )
+    if args.plot is not None:
+        from .plot.sensor import plot_sensor_check
+
+        print(f"figure: {plot_sensor_check(check, args.plot, title=_given(args))}")
+    return 0
+
+
+def _cmd_fit_sensor(args: argparse.Namespace) -> int:
+    from .io import write_text
+    from .maps import LandmarkMap
+    from .track import check_sensor, estimate_frame_sensor, estimate_mount, preset, with_settings
+
+    frames, truths = _frames_and_truths(args)
     lm = LandmarkMap.load(args.map)
     fov = None if args.fov is None else float(np.deg2rad(args.fov))
     gate = float(np.deg2rad(args.gate))
@@ -1578,10 +1714,19 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
             f"  by bearing    {bins} deg (median error where the landmark was seen, around "
             "the median: a pattern is a camera calibration off, which no setting takes in)"
         )
+    settings: dict[str, Any] = fit.mixture_settings() if args.mixture else fit.settings()
+    if mount is not None:
+        settings["mount"] = list(mount)  # (the tracker needs it too)
+    fitted = with_settings(*preset("generic"), settings)
+    check = check_sensor(
+        lm, *runs[1:], fitted[0], fitted[2], gate=gate, frame_period_s=args.frame_period
+    )
+    print(
+        _sensor_check_line(check, "of the runs it was fitted on (in sample)")
+        + f" under the settings {'--mixture writes' if args.mixture else '--out writes'} (check "
+        "them on other runs: omniloc check-sensor --config SETTINGS.json)"
+    )
     if args.out is not None:
-        settings: dict[str, Any] = fit.mixture_settings() if args.mixture else fit.settings()
-        if mount is not None:
-            settings["mount"] = list(mount)  # (the tracker needs it too)
         write_text(args.out, json.dumps(settings, indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")
     return 0
@@ -1752,6 +1897,7 @@ _COMMANDS = {
     "fit-motion": _cmd_fit_motion,
     "check-motion": _cmd_check_motion,
     "fit-sensor": _cmd_fit_sensor,
+    "check-sensor": _cmd_check_sensor,
     "fit-confidence": _cmd_fit_confidence,
 }
 

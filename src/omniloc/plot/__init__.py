@@ -7,8 +7,8 @@ without a display and in threads.
 * :mod:`.scene` -- maps, bearings and solutions (like the seed paper's Figs. 4-6);
 * :mod:`.evaluation` -- figures of Monte Carlo sweeps and real-data runs;
 * :mod:`.vision` -- the vision front end's detections, its conventions, and the vision demo;
-* :mod:`.track` -- a run over time; :mod:`.motion` -- a motion model checked against a
-  ground truth.
+* :mod:`.track` -- a run over time; :mod:`.motion` and :mod:`.sensor` -- a motion model and
+  a bearing sensor model checked against a ground truth.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from .evaluation import (
 )
 from .motion import plot_motion_check
 from .scene import draw_scene, plot_localization, plot_solutions_grid
+from .sensor import plot_sensor_check
 from .vision import plot_conventions, plot_detections, vision_demo
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "plot_motion_check",
     "plot_reliability",
     "plot_rmse_vs_crlb",
+    "plot_sensor_check",
     "plot_solutions_grid",
     "plot_success_vs_noise",
     "vision_demo",

@@ -46,11 +46,12 @@ import logging
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import minimize
+from scipy.special import erf
 
 from ..angles import wrap
 from ..errors import InputError
@@ -58,7 +59,9 @@ from ..io import shorten
 from ..maps import LandmarkMap, as_landmark_map
 from ..pose import compose
 from ..sensor import SensorModel, chi2_quantile, clutter_by_detections
+from .config import TrackerConfig
 from .data import Frame, GroundTruth, Odometry
+from .likelihood import FrameModel
 from .motion import MOTION_MAX, MotionModel, between, integrate
 
 log = logging.getLogger(__name__)
@@ -68,9 +71,11 @@ __all__ = [
     "MotionCheck",
     "MotionFit",
     "MountFit",
+    "SensorCheck",
     "SensorFit",
     "bias_by_bearing",
     "check_motion",
+    "check_sensor",
     "empty_frame_times",
     "estimate_frame_sensor",
     "estimate_motion",
@@ -1289,129 +1294,293 @@ def estimate_frame_sensor(
     if frame_period_s is not None:
         _positive("frame_period_s", frame_period_s, MAX_STRETCH_S)
     seat = None if mount is None else SensorModel(mount=mount).mount  # type: ignore[arg-type]
-    L = lm.xy
-    half = None if fov is None else 0.5 * float(fov)
-    # Each recording's frames with its own truth, then all of them as one.
-    every: list[Frame] = []
-    at: list[FloatArray] = []
-    gap_list: list[FloatArray] = []
-    at_before: list[FloatArray] = []
-    at_after: list[FloatArray] = []
-    inferred = 0
-    at_empty: list[FloatArray] = []  # the true poses of the frames that saw nothing
-    gap_empty: list[FloatArray] = []
-    for fr, tr in pairs:
-        t = np.array([f.t for f in fr], dtype=np.float64)
-        every += fr
-        if frame_period_s is not None:
-            try:
-                te = empty_frame_times(np.sort(t), frame_period_s)
-            except InputError as exc:
-                raise InputError(f"frame_period_s: {exc}") from None
-            inferred += te.size
-            if inferred > MAX_EMPTY_FRAMES:
-                raise InputError(
-                    f"frame_period_s: a period of {frame_period_s:g} s makes more than "
-                    f"{MAX_EMPTY_FRAMES:,} frames of the gaps: is it the frame period in seconds?"
-                )
-            pe, ge = tr.at(te) if te.size else (np.zeros((0, 3)), np.zeros(0))
-            at_empty.append(pe)
-            gap_empty.append(ge)
-        p, g = tr.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
-        at.append(p)
-        gap_list.append(g)
-        at_before.append(tr.at(t - 0.1)[0] if t.size else np.zeros((0, 3)))
-        at_after.append(tr.at(t + 0.1)[0] if t.size else np.zeros((0, 3)))
-    poses, gaps = np.concatenate(at), np.concatenate(gap_list)
-    before, after = np.concatenate(at_before), np.concatenate(at_after)
-    # The bearings were measured from the sensor: the truth is the robot's (its turn rate,
-    # read from before and after, is the sensor's too).
-    if seat is not None:
-        poses = compose(poses, np.asarray(seat))
-        at_empty = [compose(p, np.asarray(seat)) for p in at_empty]
-    errors: list[float] = []
-    rates: list[float] = []
-    where: list[float] = []  # the bearing of each error
-    seen = visible = unmatched = used = total = 0
-    per_frame: list[tuple[int, int]] = []  # (landmarks reported, clutter) of each frame used
-    for k, f in enumerate(every):
-        x = poses[k]
-        if not (np.isfinite(x).all() and gaps[k] <= max_gap_s):
-            continue
-        used += 1
-        total += f.bearings.size
-        h, near, plain = _landmarks_seen_from(L, x, max_range, half, gate)
-        cand = np.flatnonzero(near)
-        taken = np.zeros(L.shape[0], dtype=bool)
-        rate = float(wrap(after[k, 2] - before[k, 2])) / 0.2
-        unmatched0 = unmatched
-        for b in f.bearings:
-            if cand.size == 0:
-                unmatched += 1
-                continue
-            e = np.asarray(wrap(b - h[cand]))
-            j = int(np.argmin(np.abs(e)))
-            if abs(e[j]) <= gate and not taken[cand[j]]:
-                taken[cand[j]] = True
-                errors.append(float(e[j]))
-                rates.append(rate)
-                where.append(float(b))
-            else:
-                unmatched += 1
-        per_frame.append((int(taken.sum()), unmatched - unmatched0))
-        visible += int(plain.sum())
-        seen += int((plain & taken).sum())
-    empty = 0
-    for x, g in zip(
-        np.concatenate(at_empty) if at_empty else np.zeros((0, 3)),
-        np.concatenate(gap_empty) if gap_empty else np.zeros(0),
-        strict=True,
-    ):
-        # A frame that saw nothing: its landmarks in view count as not reported.
-        if not (np.isfinite(x).all() and g <= max_gap_s):
-            continue
-        empty += 1
-        visible += int(_landmarks_seen_from(L, x, max_range, half, gate)[2].sum())
-    used += empty
-    if len(errors) < MIN_ERRORS:
+    seen = _sightings(
+        lm.xy,
+        pairs,
+        fov=fov,
+        max_range=max_range,
+        min_range=None,
+        gate=gate,
+        max_gap_s=max_gap_s,
+        frame_period_s=frame_period_s,
+        mount=seat,
+    )
+    if seen.errors.size < MIN_ERRORS:
         raise InputError(
-            f"only {len(errors)} bearings within {math.degrees(gate):.1f} deg of a landmark "
-            f"seen from the true {'sensor pose (truth and mount)' if seat else 'pose'}: too "
-            "few to fit the sensor (do the frames, the map"
+            f"only {seen.errors.size} bearings within {math.degrees(gate):.1f} deg of a "
+            f"landmark seen from the true {'sensor pose (truth and mount)' if seat else 'pose'}: "
+            "too few to fit the sensor (do the frames, the map"
             + (", the truth and the mount" if seat else " and the truth")
             + " belong together?)"
         )
+    visible = int(seen.visible.sum())
     if visible == 0:
         raise InputError(
             "no landmark was in view of the true poses (inside the field of view by more than "
             "the gate, within the range): p_detect cannot be measured; check fov and max_range"
         )
-    err = np.array(errors)
+    listed, err = seen.listed, seen.errors
+    used = int(seen.frame_run.size)
     sigma = 1.4826 * float(np.median(np.abs(err - np.median(err))))
-    turn = turn_noise_fit(err, np.array(rates))
+    turn = turn_noise_fit(err, seen.rates)
     tn = float(turn["turn_noise_s"])  # type: ignore[arg-type]
     mix = fit_core_and_tail(err)
     return SensorFit(
         sigma=sigma,
         turn_noise_s=tn if math.isfinite(tn) else 0.0,
-        p_detect=seen / visible,
-        clutter=unmatched / used,
+        p_detect=int(seen.seen.sum()) / visible,
+        clutter=int(seen.clutter.sum()) / used,
         frames=used,
-        matched=len(errors),
-        bearings=total,
-        clutter_by_detections=clutter_by_detections(*np.array(per_frame).reshape(-1, 2).T),
+        matched=int(err.size),
+        bearings=seen.bearings,
+        clutter_by_detections=clutter_by_detections(seen.reported[listed], seen.clutter[listed]),
         core_share=mix.core_share,
         core_sigma=mix.core_sigma,
         tail_sigma=mix.tail_sigma,
-        bias_by_bearing=bias_by_bearing(np.array(where), err - np.median(err)),
-        empty_frames=empty,
+        bias_by_bearing=bias_by_bearing(seen.where, err - np.median(err)),
+        empty_frames=int(np.count_nonzero(~listed)),
         fov=None if fov is None else float(fov),
         max_range=None if max_range is None else float(max_range),
     )
 
 
+@dataclass(frozen=True)
+class SensorCheck:
+    """How a sensor model meets frames of bearings and a ground truth (:func:`check_sensor`):
+    each bearing taken as the landmark whose bearing from the true sensor pose is nearest
+    (within the gate), its error, and how likely the model makes an error that large; each
+    frame's landmarks in view and reported, and its clutter.
+
+    Attributes
+    ----------
+    errors : ndarray, shape (m,)
+        The bearings taken as landmarks less those landmarks' bearings from the truth (rad),
+        less their run's median (:attr:`offset`: a constant turn of the camera, which the
+        tracker's heading takes in, is not noise).
+    sd, core_sd : ndarray, shape (m,)
+        The model's bearing error at each (rad): one Gaussian of sd ``sd``, or with
+        :attr:`core_share` a sharp core of sd ``core_sd`` and a wider tail of sd ``sd`` (the
+        frame model's, widened by the truth's turn rate).
+    core_share : float
+        The core's share of the errors (0: one Gaussian).
+    run : ndarray of int, shape (m,)
+        Which run (0, 1, ... in the order given) each error is of.
+    offset : ndarray, shape (runs,)
+        Each run's median error (rad; NaN for a run with none).
+    frame_run, visible, seen, clutter : ndarray of int, shape (F,)
+        Per frame with a true pose (with ``frame_period_s``, the frames the log's gaps left
+        out too): its run, the landmarks plainly in view of it (inside the field of view by
+        more than the gate, within the range), how many of those it reported, and its
+        bearings taken as clutter.
+    p_detect, clutter_rate : float
+        The model's detection probability and clutter (bearings per frame), as the tracker
+        takes them (its defaults where the sensor states none).
+    gate : float
+        The gate (rad).
+    """
+
+    errors: FloatArray = field(repr=False)
+    sd: FloatArray = field(repr=False)
+    core_sd: FloatArray = field(repr=False)
+    core_share: float
+    run: NDArray[np.int64] = field(repr=False)
+    offset: FloatArray
+    frame_run: NDArray[np.int64] = field(repr=False)
+    visible: NDArray[np.int64] = field(repr=False)
+    seen: NDArray[np.int64] = field(repr=False)
+    clutter: NDArray[np.int64] = field(repr=False)
+    p_detect: float
+    clutter_rate: float
+    gate: float
+
+    def below(self, size: ArrayLike) -> FloatArray:
+        """The model's probability, at each bearing, of an error smaller than ``size`` (rad;
+        one value, or one per bearing) -- not cut at the gate."""
+        a = np.abs(np.asarray(size, dtype=np.float64))
+        wide = erf(a / (np.sqrt(2.0) * self.sd))
+        if not self.core_share > 0:
+            return np.asarray(wide)
+        return np.asarray(
+            (1.0 - self.core_share) * wide
+            + self.core_share * erf(a / (np.sqrt(2.0) * self.core_sd))
+        )
+
+    def levels(self) -> FloatArray:
+        """Each error's level under the model: the probability of an error no larger in size,
+        the model cut at the gate as the errors are. An honest model's levels are uniform on
+        [0, 1]."""
+        cut = np.maximum(self.below(self.gate), 1e-300)
+        return np.asarray(np.minimum(self.below(self.errors) / cut, 1.0))
+
+    def inside(self, probability: float = 0.99) -> float:
+        """The share of the errors inside the model's central region of ``probability``:
+        about ``probability`` for an honest model, less for one too sure of the bearings."""
+        if not (
+            isinstance(probability, (int, float))
+            and not isinstance(probability, bool)
+            and 0.0 < probability < 1.0
+        ):
+            raise InputError(f"probability must be a number in (0, 1), got {shorten(probability)}")
+        if not self.errors.size:
+            raise InputError("no bearing to check: the share inside a region needs one")
+        return float(np.mean(self.levels() <= probability))
+
+    def detected(self) -> float:
+        """The share of the landmarks plainly in view that the frames reported (the model
+        says :attr:`p_detect`); NaN when none was in view."""
+        n = int(self.visible.sum())
+        return int(self.seen.sum()) / n if n else math.nan
+
+    def clutter_per_frame(self) -> float:
+        """The frames' bearings taken as clutter, per frame (the model says
+        :attr:`clutter_rate`); NaN without frames."""
+        return float(self.clutter.mean()) if self.clutter.size else math.nan
+
+    def of_run(self, k: int) -> SensorCheck:
+        """The bearings and frames of run ``k`` alone (0, 1, ... in the order given)."""
+        mine, frames = self.run == k, self.frame_run == k
+        return replace(
+            self,
+            errors=self.errors[mine],
+            sd=self.sd[mine],
+            core_sd=self.core_sd[mine],
+            run=self.run[mine],
+            offset=self.offset[k : k + 1],
+            frame_run=self.frame_run[frames],
+            visible=self.visible[frames],
+            seen=self.seen[frames],
+            clutter=self.clutter[frames],
+        )
+
+
+def check_sensor(
+    landmarks: LandmarkMap | ArrayLike,
+    frames: Sequence[Frame] | Sequence[Sequence[Frame]],
+    truth: GroundTruth | Sequence[GroundTruth],
+    sensor: SensorModel,
+    config: TrackerConfig | None = None,
+    *,
+    gate: float = math.radians(3.0),
+    max_gap_s: float = 0.5,
+    frame_period_s: float | None = None,
+) -> SensorCheck:
+    """The bearings of frames against a ground truth under a sensor model, to check a model
+    (a fit, a preset, one widened by hand) on runs it was not fitted on.
+
+    Each bearing is taken as the landmark whose bearing from the true sensor pose is nearest,
+    within ``gate``, as :func:`estimate_frame_sensor` takes it, and its error is scored under
+    the bearing error the tracker's frame model assumes: the sensor's ``sigma`` (or
+    ``threshold / 3``), with ``config``'s ``core_share`` and ``core_sigma`` a sharp core and
+    a wider tail, both widened by ``config.turn_noise_s`` times the truth's turn rate. The
+    view is the sensor's (its field of view, range and mount); the detections and the
+    clutter are counted as the fit counts them, for the model's ``p_detect`` and ``clutter``.
+
+    Parameters
+    ----------
+    landmarks : LandmarkMap or array_like, shape (N, 2)
+    frames : sequence of Frame, or a list of them
+        One run's frames, or a list of several runs' (as :func:`estimate_frame_sensor`).
+    truth : GroundTruth, or a list of them
+        The true track of the same run (runs, in the same order): the robot's, the sensor
+        sitting at ``sensor.mount`` on it.
+    sensor : SensorModel
+        The model checked.
+    config : TrackerConfig, optional
+        The tracker's settings that shape the bearing error (``core_share``, ``core_sigma``,
+        ``turn_noise_s``) and what a frame is (``nonempty_frames``); None: the defaults.
+    gate : float
+        A bearing further than this (rad) from every landmark is clutter.
+    max_gap_s : float
+        Frames where the truth has a gap longer than this (s) are left out.
+    frame_period_s : float, optional
+        The camera's frame period (s), for a log that lists only frames with a bearing, when
+        the model's rates are per camera frame (``config.nonempty_frames``): required then,
+        refused otherwise.
+
+    Returns
+    -------
+    SensorCheck
+        ``inside(0.99)`` is the share of the errors inside the model's 99 % region.
+
+    Raises
+    ------
+    InputError
+        ``sensor`` or ``config`` of the wrong type, a gate or gap out of range, the runs
+        given wrongly, a frame period the model's rates do not call for (or none where they
+        do), or no bearing within the gate of a landmark.
+    """
+    if not isinstance(sensor, SensorModel):
+        raise InputError(f"sensor must be a SensorModel, got {type(sensor).__name__}")
+    if config is None:
+        config = TrackerConfig()
+    elif not isinstance(config, TrackerConfig):
+        raise InputError(f"config must be a TrackerConfig or None, got {type(config).__name__}")
+    lm = as_landmark_map(landmarks)
+    pairs = _paired(frames, truth, _frame_list, "frames", "recording")
+    _check_view(gate, max_gap_s, None, None)
+    if frame_period_s is not None:
+        _positive("frame_period_s", frame_period_s, MAX_STRETCH_S)
+        if not config.nonempty_frames:
+            raise InputError(
+                "frame_period_s counts the frames a log left out, but the model's p_detect "
+                "and clutter are per frame listed (nonempty_frames false): give no frame "
+                "period, or check a model whose rates are per camera frame"
+            )
+    elif config.nonempty_frames:
+        raise InputError(
+            "the model's p_detect and clutter are per camera frame (nonempty_frames true): "
+            "give the camera's frame_period_s, so that the frames the log left out count"
+        )
+    seen = _sightings(
+        lm.xy,
+        pairs,
+        fov=sensor.fov,
+        max_range=sensor.max_range,
+        min_range=sensor.min_range,
+        gate=gate,
+        max_gap_s=max_gap_s,
+        frame_period_s=frame_period_s,
+        mount=sensor.mount,
+    )
+    if not seen.errors.size:
+        raise InputError(
+            f"no bearing within {math.degrees(gate):.1f} deg of a landmark in view of the "
+            "true sensor pose: nothing to check (do the frames, the map, the truth and the "
+            "sensor's view and mount belong together?)"
+        )
+    model = FrameModel.of(sensor)
+    offset = np.full(len(pairs), math.nan)
+    errors = seen.errors.copy()
+    for k in np.unique(seen.run):
+        mine = seen.run == k
+        offset[k] = float(np.median(errors[mine]))
+        errors[mine] -= offset[k]
+    extra = (seen.rates * config.turn_noise_s) ** 2
+    core = config.core_share > 0
+    return SensorCheck(
+        errors=errors,
+        sd=np.sqrt(model.sigma2 + extra),
+        core_sd=np.sqrt((config.core_sigma**2 if core else model.sigma2) + extra),
+        core_share=float(config.core_share) if core else 0.0,
+        run=seen.run,
+        offset=offset,
+        frame_run=seen.frame_run,
+        visible=seen.visible,
+        seen=seen.seen,
+        clutter=seen.clutter,
+        p_detect=model.p_detect,
+        clutter_rate=math.exp(model.log_kappa) * sensor.fov_width,
+        gate=float(gate),
+    )
+
+
 def _landmarks_seen_from(
-    L: FloatArray, x: FloatArray, max_range: float | None, half: float | None, gate: float
+    L: FloatArray,
+    x: FloatArray,
+    max_range: float | None,
+    half: float | None,
+    gate: float,
+    min_range: float | None = None,
 ) -> tuple[FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
     """From the true pose ``x``: each landmark's bearing, which are within range (a bearing's
     candidates), and which are plainly in view (inside the field of view by more than
@@ -1422,8 +1591,125 @@ def _landmarks_seen_from(
     near = r > 1e-9
     if max_range is not None:
         near &= r <= max_range
+    if min_range is not None:
+        near &= r >= min_range
     plain = near & ((np.abs(h) <= half - gate) if half is not None else True)
     return h, near, plain
+
+
+class _Sightings(NamedTuple):
+    """Every bearing of some runs' frames taken as the landmark whose bearing from the true
+    sensor pose is nearest (within a gate, one bearing per landmark and frame), or as
+    clutter (:func:`_sightings`)."""
+
+    errors: FloatArray  # (m,) each bearing taken as a landmark less that landmark's (rad)
+    rates: FloatArray  # (m,) the truth's turn rate at its frame (rad/s)
+    where: FloatArray  # (m,) the bearing itself (rad)
+    run: NDArray[np.int64]  # (m,) its run
+    frame_run: NDArray[np.int64]  # (F,) each frame's run (frames that saw nothing included)
+    reported: NDArray[np.int64]  # (F,) the landmarks each frame reported
+    clutter: NDArray[np.int64]  # (F,) its bearings taken as clutter
+    visible: NDArray[np.int64]  # (F,) the landmarks plainly in view of it
+    seen: NDArray[np.int64]  # (F,) of those, the ones it reported
+    listed: NDArray[np.bool_]  # (F,) a frame of the log (False: one that saw nothing)
+    bearings: int  # the frames' bearings
+
+
+def _sightings(
+    L: FloatArray,
+    pairs: list[tuple[list[Frame], GroundTruth]],
+    *,
+    fov: float | None,
+    max_range: float | None,
+    min_range: float | None,
+    gate: float,
+    max_gap_s: float,
+    frame_period_s: float | None,
+    mount: Sequence[float] | None,
+) -> _Sightings:
+    """Each run's frames (and, with ``frame_period_s``, the frames its log's gaps left out)
+    read against its true track: frames where the truth has a gap longer than ``max_gap_s``
+    are left out; the bearings are measured from the truth composed with ``mount``."""
+    half = None if fov is None else 0.5 * float(fov)
+    errors: list[float] = []
+    rates: list[float] = []
+    where: list[float] = []
+    run: list[int] = []
+    rows: list[tuple[int, int, int, int, int, bool]] = []  # per frame, as _Sightings's
+    total = 0
+    inferred = 0
+    seat = None if mount is None else np.asarray(mount, dtype=np.float64)
+    for k, (fr, tr) in enumerate(pairs):
+        t = np.array([f.t for f in fr], dtype=np.float64)
+        poses, gaps = tr.at(t) if t.size else (np.zeros((0, 3)), np.zeros(0))
+        before = tr.at(t - 0.1)[0] if t.size else np.zeros((0, 3))
+        after = tr.at(t + 0.1)[0] if t.size else np.zeros((0, 3))
+        # The bearings were measured from the sensor: the truth is the robot's (its turn
+        # rate, read from before and after, is the sensor's too).
+        if seat is not None:
+            poses = compose(poses, seat)
+        for i, f in enumerate(fr):
+            x = poses[i]
+            if not (np.isfinite(x).all() and gaps[i] <= max_gap_s):
+                continue
+            total += f.bearings.size
+            h, near, plain = _landmarks_seen_from(L, x, max_range, half, gate, min_range)
+            cand = np.flatnonzero(near)
+            taken = np.zeros(L.shape[0], dtype=bool)
+            rate = float(wrap(after[i, 2] - before[i, 2])) / 0.2
+            unmatched = 0
+            for b in f.bearings:
+                if cand.size == 0:
+                    unmatched += 1
+                    continue
+                e = np.asarray(wrap(b - h[cand]))
+                j = int(np.argmin(np.abs(e)))
+                if abs(e[j]) <= gate and not taken[cand[j]]:
+                    taken[cand[j]] = True
+                    errors.append(float(e[j]))
+                    rates.append(rate)
+                    where.append(float(b))
+                    run.append(k)
+                else:
+                    unmatched += 1
+            reported = int(taken.sum())
+            rows.append(
+                (k, reported, unmatched, int(plain.sum()), int((plain & taken).sum()), True)
+            )
+        if frame_period_s is None:
+            continue
+        try:
+            te = empty_frame_times(np.sort(t), frame_period_s)
+        except InputError as exc:
+            raise InputError(f"frame_period_s: {exc}") from None
+        inferred += te.size
+        if inferred > MAX_EMPTY_FRAMES:
+            raise InputError(
+                f"frame_period_s: a period of {frame_period_s:g} s makes more than "
+                f"{MAX_EMPTY_FRAMES:,} frames of the gaps: is it the frame period in seconds?"
+            )
+        pe, ge = tr.at(te) if te.size else (np.zeros((0, 3)), np.zeros(0))
+        if seat is not None:
+            pe = compose(pe, seat)
+        for x, g in zip(pe, ge, strict=True):
+            # A frame that saw nothing: its landmarks in view count as not reported.
+            if np.isfinite(x).all() and g <= max_gap_s:
+                plain = _landmarks_seen_from(L, x, max_range, half, gate, min_range)[2]
+                rows.append((k, 0, 0, int(plain.sum()), 0, False))
+    table = np.array(rows, dtype=np.int64).reshape(-1, 6)
+    return _Sightings(
+        np.array(errors, dtype=np.float64),
+        np.array(rates, dtype=np.float64),
+        np.array(where, dtype=np.float64),
+        np.array(run, dtype=np.int64),
+        table[:, 0],
+        table[:, 1],
+        table[:, 2],
+        table[:, 3],
+        table[:, 4],
+        table[:, 5].astype(bool),
+        total,
+    )
 
 
 #: Most frames :func:`estimate_frame_sensor` infers from a log's gaps (each is scored at the
