@@ -964,9 +964,22 @@ def test_a_log_of_frames_with_a_bearing_gives_the_rates_per_camera_frame(
     assert main([*argv, "--fov", "60", "--frame-period", "0.25", "--out", str(out)]) == 0
     text = capsys.readouterr().out
     assert f"  of them {dropped.size} saw nothing" in text
+    assert "(in sample)" in text  # (checked per camera frame, as the settings say)
     settings = load_settings(out)
     assert settings["nonempty_frames"] is True
     assert settings["p_detect"] == pytest.approx(fit.p_detect, rel=1e-9)
+    # A log with a frame period but no gaps: rates per frame listed, no nonempty_frames, and
+    # the check in sample is made on them (not refused for the period).
+    busy = simulate_run(
+        room, sensor.replace(fov=None, p_detect=0.9), omniloc.Pose(4.0, 3.0, 0.3),
+        duration_s=30.0, frame_hz=4.0, rng=5,
+    )  # fmt: skip
+    assert all(f.bearings.size for f in busy.frames)
+    lm, fr, gt = _write_recording(tmp_path, room.xy, busy.frames, busy.truth)
+    assert main([*argv, "--frame-period", "0.25", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "(in sample)" in text and "not checked" not in text
+    assert "nonempty_frames" not in load_settings(out)
 
 
 def test_check_motion_holds_a_models_own_noise_and_not_a_narrower_one() -> None:

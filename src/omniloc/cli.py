@@ -1718,14 +1718,18 @@ def _cmd_fit_sensor(args: argparse.Namespace) -> int:
     if mount is not None:
         settings["mount"] = list(mount)  # (the tracker needs it too)
     fitted = with_settings(*preset("generic"), settings)
-    check = check_sensor(
-        lm, *runs[1:], fitted[0], fitted[2], gate=gate, frame_period_s=args.frame_period
-    )
-    print(
-        _sensor_check_line(check, "of the runs it was fitted on (in sample)")
-        + f" under the settings {'--mixture writes' if args.mixture else '--out writes'} (check "
-        "them on other runs: omniloc check-sensor --config SETTINGS.json)"
-    )
+    # (The rates are per camera frame only where the log's gaps held frames that saw nothing.)
+    period = args.frame_period if settings.get("nonempty_frames") else None
+    try:
+        check = check_sensor(lm, *runs[1:], fitted[0], fitted[2], gate=gate, frame_period_s=period)
+    except InputError as exc:  # (the settings are still written)
+        print(f"not checked in sample: {exc}")
+    else:
+        print(
+            _sensor_check_line(check, "of the runs it was fitted on (in sample)")
+            + f" under the settings {'--mixture writes' if args.mixture else '--out writes'} "
+            "(check them on other runs: omniloc check-sensor --config SETTINGS.json)"
+        )
     if args.out is not None:
         write_text(args.out, json.dumps(settings, indent=1) + "\n", InputError)
         print(f"written: {args.out} (omniloc track --config {args.out})")
