@@ -1224,6 +1224,17 @@ def test_check_sensor_holds_a_sensors_own_noise_and_not_a_narrower_one() -> None
     )
     wide = check_sensor(xy, frames, truth, _narrow_sensor(sigma=math.radians(1.5)))
     assert wide.inside(0.5) > 0.8 and wide.inside(0.99) > 0.99
+    # Errors as wide as half the gate: the model is cut at the gate as the errors are, so an
+    # honest model's regions still hold their share (uncut, every error would lie inside
+    # its 95.4 % region).
+    import omniloc
+    from omniloc.track import simulate_run
+
+    noisy = _narrow_sensor(sigma=math.radians(1.5), clutter=0.0)
+    run = simulate_run(omniloc.demo_room(), noisy, omniloc.Pose(4.0, 3.0, 0.3), rng=11)  # type: ignore[arg-type]
+    cut = check_sensor(xy, run.frames, run.truth, noisy)  # type: ignore[arg-type]
+    assert cut.inside(0.9) == pytest.approx(0.9, abs=0.03)
+    assert cut.inside(0.99) == pytest.approx(0.99, abs=0.008)
     # A constant turn of the camera is taken out (the tracker's heading takes it in).
     turned = [Frame(f.t, f.bearings + math.radians(0.7), f.truth) for f in frames]
     moved = check_sensor(xy, turned, truth, _narrow_sensor())
