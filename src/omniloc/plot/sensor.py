@@ -21,6 +21,10 @@ if TYPE_CHECKING:
 
 __all__ = ["plot_sensor_check"]
 
+#: Bearings whose model density is summed at once (the density's grid times this many
+#: values in memory).
+DENSITY_CHUNK = 4096
+
 
 def plot_sensor_check(check: SensorCheck, path: str | Path, *, title: str | None = None) -> Path:
     """Draw a :class:`~omniloc.track.SensorCheck` and save it (the format from the
@@ -57,9 +61,12 @@ def plot_sensor_check(check: SensorCheck, path: str | Path, *, title: str | None
     cut = np.maximum(check.below(check.gate), 1e-300)
     density = np.zeros(x.size)
     for share, sd in ((1.0 - check.core_share, check.sd), (check.core_share, check.core_sd)):
-        if share > 0:
-            g = np.exp(-0.5 * (x[:, None] / sd) ** 2) / (np.sqrt(2.0 * np.pi) * sd)
-            density += share * np.mean(g / cut, axis=1)
+        if not share > 0:
+            continue
+        for lo in range(0, sd.size, DENSITY_CHUNK):  # (a long recording: in blocks)
+            s, c = sd[lo : lo + DENSITY_CHUNK], cut[lo : lo + DENSITY_CHUNK]
+            g = np.exp(-0.5 * (x[:, None] / s) ** 2) / (np.sqrt(2.0 * np.pi) * s)
+            density += share * np.sum(g / c, axis=1) / sd.size
     left.plot(np.degrees(x), np.radians(1.0) * density, color="C3", lw=1.2, label="the model")
     left.set_yscale("log")
     left.set_xlabel("bearing error, deg (less the run's median)")
