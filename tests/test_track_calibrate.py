@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 
 from _odometry import lagging_recording
 from omniloc.errors import InputError
+from omniloc.sensor import SensorModel
 from omniloc.track import (
     Frame,
     GroundTruth,
@@ -1178,10 +1179,8 @@ def _narrow_run() -> tuple[np.ndarray, list[Frame], GroundTruth]:
     return room.xy, run.frames, run.truth
 
 
-def _narrow_sensor(**changes: object) -> object:
+def _narrow_sensor(**changes: object) -> SensorModel:
     import math
-
-    import omniloc
 
     values: dict[str, object] = {
         "sigma": math.radians(0.5),
@@ -1189,7 +1188,7 @@ def _narrow_sensor(**changes: object) -> object:
         "p_detect": 0.6,
         "clutter": 0.4,
     }
-    return omniloc.SensorModel(**{**values, **changes})  # type: ignore[arg-type]
+    return SensorModel(**{**values, **changes})
 
 
 def test_check_sensor_holds_a_sensors_own_noise_and_not_a_narrower_one() -> None:
@@ -1231,8 +1230,8 @@ def test_check_sensor_holds_a_sensors_own_noise_and_not_a_narrower_one() -> None
     from omniloc.track import simulate_run
 
     noisy = _narrow_sensor(sigma=math.radians(1.5), clutter=0.0)
-    run = simulate_run(omniloc.demo_room(), noisy, omniloc.Pose(4.0, 3.0, 0.3), rng=11)  # type: ignore[arg-type]
-    cut = check_sensor(xy, run.frames, run.truth, noisy)  # type: ignore[arg-type]
+    run = simulate_run(omniloc.demo_room(), noisy, omniloc.Pose(4.0, 3.0, 0.3), rng=11)
+    cut = check_sensor(xy, run.frames, run.truth, noisy)
     assert cut.inside(0.9) == pytest.approx(0.9, abs=0.03)
     assert cut.inside(0.99) == pytest.approx(0.99, abs=0.008)
     # A constant turn of the camera is taken out (the tracker's heading takes it in).
@@ -1279,12 +1278,12 @@ def test_check_sensor_of_several_runs_keeps_each_runs_bearings_and_frames_apart(
     room = omniloc.demo_room()
     sensor = _narrow_sensor()
     runs = [
-        simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=60.0, rng=k)  # type: ignore[arg-type]
+        simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=60.0, rng=k)
         for k in (7, 8)
     ]
-    both = check_sensor(room, [r.frames for r in runs], [r.truth for r in runs], sensor)  # type: ignore[arg-type]
+    both = check_sensor(room, [r.frames for r in runs], [r.truth for r in runs], sensor)
     for k, r in enumerate(runs):
-        alone = check_sensor(room, r.frames, r.truth, sensor)  # type: ignore[arg-type]
+        alone = check_sensor(room, r.frames, r.truth, sensor)
         mine = both.of_run(k)
         np.testing.assert_array_equal(mine.errors, alone.errors)
         np.testing.assert_array_equal(mine.seen, alone.seen)
@@ -1304,9 +1303,9 @@ def test_check_sensor_reads_the_bearings_from_the_sensors_mount() -> None:
     room = omniloc.demo_room()
     seat = (0.3, 0.1, math.radians(25.0))
     sensor = _narrow_sensor(mount=seat)
-    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=120.0, rng=9)  # type: ignore[arg-type]
-    on = check_sensor(room, run.frames, run.truth, sensor)  # type: ignore[arg-type]
-    off = check_sensor(room, run.frames, run.truth, _narrow_sensor())  # type: ignore[arg-type]
+    run = simulate_run(room, sensor, omniloc.Pose(4.0, 3.0, 0.3), duration_s=120.0, rng=9)
+    on = check_sensor(room, run.frames, run.truth, sensor)
+    off = check_sensor(room, run.frames, run.truth, _narrow_sensor())
     assert on.inside(0.99) > 0.95 and on.detected() == pytest.approx(0.6, abs=0.07)
     assert off.inside(0.99) < on.inside(0.99) - 0.1 or off.errors.size < 0.8 * on.errors.size
 
@@ -1353,7 +1352,7 @@ def test_check_sensor_refuses_what_it_cannot_check() -> None:
         with pytest.raises(InputError, match="gate"):
             check_sensor(xy, frames, truth, sensor, gate=bad)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="max_gap_s"):
-        check_sensor(xy, frames, truth, sensor, max_gap_s=-1.0)  # type: ignore[arg-type]
+        check_sensor(xy, frames, truth, sensor, max_gap_s=-1.0)
     with pytest.raises(InputError, match="frames must be"):
         check_sensor(xy, "frames.csv", truth, sensor)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="ground-truth tracks"):
@@ -1361,8 +1360,8 @@ def test_check_sensor_refuses_what_it_cannot_check() -> None:
     # A truth of another place, beyond the sensor's range: no bearing near a landmark.
     far = GroundTruth(truth.t, truth.x + 1e4, truth.y, truth.theta)
     with pytest.raises(InputError, match=r"no bearing within 3\.0 deg"):
-        check_sensor(xy, frames, far, _narrow_sensor(max_range=20.0))  # type: ignore[arg-type]
-    check = check_sensor(xy, frames, truth, sensor)  # type: ignore[arg-type]
+        check_sensor(xy, frames, far, _narrow_sensor(max_range=20.0))
+    check = check_sensor(xy, frames, truth, sensor)
     for p in (0.0, 1.0, -0.5, float("nan"), True, "0.9"):
         with pytest.raises(InputError, match="probability"):
             check.inside(p)  # type: ignore[arg-type]
