@@ -1367,9 +1367,11 @@ def test_check_sensor_refuses_what_it_cannot_check() -> None:
             check.inside(p)  # type: ignore[arg-type]
     with pytest.raises(InputError, match="no bearing to check"):
         check.of_run(3).inside(0.99)
-    # An exactly known landmark bearing (no noise at all) scores at level 0, not NaN.
-    exact = check_sensor(xy, frames, truth, omniloc.SensorModel(sigma=math.radians(0.5)))
-    assert np.isfinite(exact.levels()).all()
+    # A sensor stated by its threshold alone is scored as the tracker takes it: sigma is
+    # threshold / 3.
+    told = check_sensor(xy, frames, truth, omniloc.SensorModel(threshold=math.radians(1.5)))
+    assert np.all(told.sd == pytest.approx(math.radians(0.5)))
+    assert told.inside(0.99) == check.inside(0.99)
 
 
 def test_a_sensor_check_is_drawn(tmp_path: Path) -> None:
