@@ -404,7 +404,10 @@ def _build_parser() -> argparse.ArgumentParser:
         "the sensor from it; --out writes the mount too",
     )
     fs.add_argument(
-        "--gate", type=_positive, default=3.0, help="a bearing within this of a landmark, deg"
+        "--gate",
+        type=_positive,
+        default=3.0,
+        help="a bearing within this of a landmark is taken as it, deg (default 3)",
     )
     fs.add_argument(
         "--frame-period",
@@ -489,7 +492,10 @@ def _add_check_sensor_parser(sub: Any) -> None:
         "before --config and --set",
     )
     cs.add_argument(
-        "--gate", type=_positive, default=3.0, help="a bearing within this of a landmark, deg"
+        "--gate",
+        type=_positive,
+        default=3.0,
+        help="a bearing within this of a landmark is taken as it, deg (default 3)",
     )
     cs.add_argument(
         "--frame-period",
