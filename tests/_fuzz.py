@@ -1840,7 +1840,10 @@ def _settings_targets() -> list[Target]:
                 "frame_period_s": view_arg("frame_period_s"),
             },
             check=lambda kw, v: _finite(
-                np.array([v.inside(0.99), v.inside(0.5), v.detected(), v.clutter_per_frame()]),
+                np.array(
+                    [v.inside(0.99), v.inside(0.5), v.clutter_per_frame()]
+                    + ([v.detected()] if v.visible.sum() else [])
+                ),
                 "share",
             ),
         ),

@@ -1270,7 +1270,6 @@ def test_check_sensor_scores_a_sharp_core_as_the_frame_model_takes_it() -> None:
 
 
 def test_check_sensor_of_several_runs_keeps_each_runs_bearings_and_frames_apart() -> None:
-    import math
 
     import omniloc
     from omniloc.track import check_sensor, simulate_run
@@ -1291,7 +1290,11 @@ def test_check_sensor_of_several_runs_keeps_each_runs_bearings_and_frames_apart(
         assert mine.detected() == alone.detected() and mine.offset[0] == alone.offset[0]
         assert np.all(mine.run == k) and np.all(mine.frame_run == k)
     assert both.errors.size == sum(both.of_run(k).errors.size for k in (0, 1))
-    assert math.isnan(both.of_run(5).detected()) and both.of_run(5).errors.size == 0
+    assert both.of_run(5).errors.size == 0
+    with pytest.raises(InputError, match="no landmark was plainly in view"):
+        both.of_run(5).detected()
+    with pytest.raises(InputError, match="no frame"):
+        both.of_run(5).clutter_per_frame()
 
 
 def test_check_sensor_reads_the_bearings_from_the_sensors_mount() -> None:
@@ -1409,6 +1412,20 @@ def test_check_sensor_on_the_command_line_says_when_a_model_is_too_sure(
     core = ["--set", "core_share=0.5", "--set", "core_sigma=0.0017"]
     assert main([*argv, *view, "--set", "sigma=0.014", *core]) == 0
     assert "too sure of these bearings at its centre" in capsys.readouterr().out
+    # A few seconds: too few bearings to judge. A view so narrow that no landmark is
+    # plainly inside it: said in words, not as a NaN rate.
+    short = tmp_path / "short"
+    short.mkdir()
+    lm2, fr2, gt2 = _write_recording(short, xy, frames[:12], truth)
+    few = ["check-sensor", "--map", str(lm2), "--frames", str(fr2), "--groundtruth", str(gt2)]
+    assert main([*few, *view]) == 0
+    text = capsys.readouterr().out
+    assert "bearings: too few to tell a model too sure from an honest one" in text
+    assert "the model is too sure" not in text and "hold at least" not in text
+    assert main([*argv, "--set", "fov=0.07"]) == 0
+    text = capsys.readouterr().out
+    assert "no landmark plainly in view" in text and "(measured none in view)" in text
+    assert "nan" not in text
     # Two runs: each run's share; a figure.
     two = [*argv, "--frames", str(fr), "--groundtruth", str(gt), *view]
     png = tmp_path / "check.png"

@@ -1577,6 +1577,13 @@ def _sensor_check_line(check: Any, where: str) -> str:
     )
 
 
+def _reported(check: Any) -> str:
+    """The share of the landmarks plainly in view that ``check``'s frames reported, said."""
+    if not check.visible.sum():
+        return "no landmark plainly in view"
+    return f"{100 * check.detected():.1f} % of the landmarks in view reported"
+
+
 #: Fewest bearings on which ``check-sensor`` judges a model (as ``check-motion``'s
 #: stretches; a recording's errors repeat from frame to frame, so many more are worth less
 #: than they look).
@@ -1610,15 +1617,15 @@ def _cmd_check_sensor(args: argparse.Namespace) -> int:
         line = (
             f"{path}: {run.errors.size} bearings within {args.gate:g} deg of a landmark (their "
             f"median {np.rad2deg(run.offset[0]):+.2f} deg left out: a turn of the camera, which "
-            f"the heading takes in), {run.frame_run.size} frames: {100 * run.detected():.1f} % "
-            f"of the landmarks in view reported, {run.clutter_per_frame():.2f} bearings a frame "
-            "taken as clutter"
+            f"the heading takes in), {run.frame_run.size} frames: {_reported(run)}, "
+            f"{run.clutter_per_frame():.2f} bearings a frame taken as clutter"
         )
         if len(frames) > 1:
             line += f"; inside the 99 % region: {100 * run.inside(0.99):.1f} %"
         print(line)
+    measured = f"{check.detected():.3f}" if check.visible.sum() else "none in view"
     print(
-        f"the model: p_detect {check.p_detect:.3f} (measured {check.detected():.3f}), clutter "
+        f"the model: p_detect {check.p_detect:.3f} (measured {measured}), clutter "
         f"{check.clutter_rate:.3f} bearings a frame (measured {check.clutter_per_frame():.3f})"
     )
     print(_sensor_check_line(check, "in all" if len(frames) > 1 else ""))

@@ -1427,14 +1427,21 @@ class SensorCheck:
 
     def detected(self) -> float:
         """The share of the landmarks plainly in view that the frames reported (the model
-        says :attr:`p_detect`); NaN when none was in view."""
+        says :attr:`p_detect`). Refused when none was in view (no rate to give)."""
         n = int(self.visible.sum())
-        return int(self.seen.sum()) / n if n else math.nan
+        if not n:
+            raise InputError(
+                "no landmark was plainly in view of the true poses: the share reported cannot "
+                "be measured (check the sensor's fov, range and mount)"
+            )
+        return int(self.seen.sum()) / n
 
     def clutter_per_frame(self) -> float:
         """The frames' bearings taken as clutter, per frame (the model says
-        :attr:`clutter_rate`); NaN without frames."""
-        return float(self.clutter.mean()) if self.clutter.size else math.nan
+        :attr:`clutter_rate`). Refused without frames."""
+        if not self.clutter.size:
+            raise InputError("no frame to count clutter in")
+        return float(self.clutter.mean())
 
     def of_run(self, k: int) -> SensorCheck:
         """The bearings and frames of run ``k`` alone (0, 1, ... in the order given)."""
