@@ -1467,3 +1467,34 @@ def test_fit_sensor_reports_its_check_in_sample(
     assert "--mixture writes" in line
     shares = re.search(r"\(in sample\): ([\d.]+) / ([\d.]+) %", line)
     assert shares is not None and float(shares.group(2)) > 96.0, line
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.integers(-3, 3), min_size=0, max_size=9), st.booleans())
+def test_the_median_of_the_others_is_that_of_each_value_left_out(
+    values: list[int], spread: bool
+) -> None:
+    from omniloc.track.calibrate import _median_of_others
+
+    x = np.asarray(values, dtype=np.float64) * (np.pi / 7 if spread else 1.0)
+    got = _median_of_others(x)
+    want = [np.median(np.delete(x, i)) if x.size > 1 else 0.0 for i in range(x.size)]
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-15)
+
+
+def test_check_sensor_does_not_make_a_run_of_few_bearings_look_tight() -> None:
+
+    from omniloc.track import check_sensor
+
+    # Short runs of the narrow camera, a few bearings each: less each run's own median, the
+    # middle one of three would be no error at all and the model would look too wide.
+    xy, frames, truth = _narrow_run()
+    runs = [frames[i : i + 3] for i in range(0, 600, 3)]
+    check = check_sensor(xy, runs, [truth] * len(runs), _narrow_sensor())
+    sizes = np.bincount(check.run)
+    assert np.median(sizes[sizes > 0]) <= 6
+    assert np.count_nonzero(check.errors == 0.0) == 0
+    # The 50 % region holds no more of them than of the whole run's (less each run's own
+    # median, 55 % against 48 %).
+    whole = check_sensor(xy, frames[:600], truth, _narrow_sensor())
+    assert whole.inside(0.5) - 0.06 < check.inside(0.5) < whole.inside(0.5) + 0.03

@@ -1355,8 +1355,9 @@ class SensorCheck:
     ----------
     errors : ndarray, shape (m,)
         The bearings taken as landmarks less those landmarks' bearings from the truth (rad),
-        less their run's median (:attr:`offset`: a constant turn of the camera, which the
-        tracker's heading takes in, is not noise).
+        each less the median of its run's other errors (a constant turn of the camera, which
+        the tracker's heading takes in, is not noise; the others', so that a run of few
+        bearings does not look tighter than its noise; a run's one bearing as it is).
     sd, core_sd : ndarray, shape (m,)
         The model's bearing error at each (rad): one Gaussian of sd ``sd``, or with
         :attr:`core_share` a sharp core of sd ``core_sd`` and a wider tail of sd ``sd`` (the
@@ -1561,7 +1562,10 @@ def check_sensor(
     for k in np.unique(seen.run):
         mine = seen.run == k
         offset[k] = float(np.median(errors[mine]))
-        errors[mine] -= offset[k]
+        # (Each error less the median of its run's others: less its run's own median, a
+        # run of a handful would look tighter than its noise -- the middle one of three
+        # would be no error at all.)
+        errors[mine] -= _median_of_others(errors[mine])
     extra = (seen.rates * config.turn_noise_s) ** 2
     core = config.core_share > 0
     return SensorCheck(
@@ -1579,6 +1583,28 @@ def check_sensor(
         clutter_rate=math.exp(model.log_kappa) * sensor.fov_width,
         gate=float(gate),
     )
+
+
+def _median_of_others(x: FloatArray) -> FloatArray:
+    """For each value, the median of the others (0 for a value alone: no offset can be told
+    from it)."""
+    n = x.size
+    if n < 2:
+        return np.zeros(n)
+    order = np.argsort(x, kind="stable")
+    s = x[order]
+    rank = np.empty(n, dtype=np.int64)
+    rank[order] = np.arange(n)
+
+    def other(j: int) -> FloatArray:
+        # The j-th smallest of the others: the j-th of all, or the next one from the value's
+        # own rank down.
+        return np.where(rank > j, s[j], s[min(j + 1, n - 1)])
+
+    m = n - 1  # the others' count
+    if m % 2:
+        return other(m // 2)
+    return 0.5 * (other(m // 2 - 1) + other(m // 2))
 
 
 def _landmarks_seen_from(
