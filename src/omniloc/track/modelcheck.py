@@ -114,6 +114,9 @@ def misfit(
         if sensor.fov is not None:
             plain &= np.abs(pred) <= 0.5 * sensor.fov - gate
         expected = int(plain.sum())
+        newest = len(frames) == 1
+        over = "in the newest frame" if newest else f"over the last {len(frames)} frames"
+        of = "of the newest frame" if newest else f"of the last {len(frames)} frames"
         seen, unexplained = 0, int(z.size)  # (no landmark in reach: every bearing unexplained)
         if z.size and idx.size:
             near = np.abs(np.asarray(wrap(z[:, None] - pred[fidx]))) <= gate[fidx]
@@ -134,9 +137,10 @@ def misfit(
             p_low = float(bdtr(seen, expected, p_detect))
             if p_low < level:
                 return (
-                    f"the best place does not fit the sensor: of the {expected} sightings of "
-                    f"landmarks plainly in view it predicts over the last {len(frames)} "
-                    f"frames, {seen} were seen (p = {p_low:.2g} at p_detect "
+                    f"the best place does not fit the sensor: of the {expected} "
+                    f"sighting{'s' if expected != 1 else ''} of "
+                    f"landmarks plainly in view it predicts {over}, {seen} "
+                    f"{'was' if seen == 1 else 'were'} seen (p = {p_low:.2g} at p_detect "
                     f"{p_detect:.2g})"
                 )
         clutter = rate * len(frames)
@@ -145,7 +149,7 @@ def misfit(
             if p_high < level:
                 return (
                     f"the best place does not fit the sensor: it leaves {unexplained} of the "
-                    f"{z.size} bearings of the last {len(frames)} frames unexplained, "
+                    f"{z.size} bearings {of} unexplained, "
                     f"{clutter:.2g} expected as clutter (p = {p_high:.2g})"
                 )
         return None

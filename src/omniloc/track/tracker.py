@@ -1512,24 +1512,31 @@ class Tracker:
     def _misfit(self, t: float, mu: FloatArray, P: FloatArray, born: float) -> str | None:
         """Whether the frames since ``born`` (the frame since which the place is held: the
         first frame of the replay of the search that found it, or with ``entry_replay`` the
-        frame its late entry was replayed from; at most the last ``model_check_s`` seconds)
-        fit the sensor model from the place ``mu`` (a sensor pose, covariance ``P``, at the
-        newest frame; ``model_check``, :func:`~omniloc.track.modelcheck.misfit`): None if
-        they do, else why not. A place held since before a kidnapping is checked on the
-        frames from before it too, and held until they have left the window."""
+        frame its late entry was replayed from; at most the last ``model_check_s`` seconds),
+        and the newest of them alone, fit the sensor model from the place ``mu`` (a sensor
+        pose, covariance ``P``, at the newest frame; ``model_check``,
+        :func:`~omniloc.track.modelcheck.misfit`): None if they do, else why not. A place
+        held since before a kidnapping is checked on the frames from before it too, and
+        held until they have left the window; the newest frame alone is what sees the jump
+        at once (its bearings, unexplained, drown in the window's clutter rate)."""
         c = self.config
         if c.model_check is None:
             return None
-        return misfit(
-            self.landmarks,
-            self.sensor,
-            mu,
-            P,
-            self._window.since(max(t - c.model_check_s, born)),
-            level=c.model_check,
-            tolerance_m=c.tolerance_m,
-            tolerance_heading=c.tolerance_heading,
-        )
+        frames = self._window.since(max(t - c.model_check_s, born))
+        for part in (frames, frames[-1:]) if len(frames) > 1 else (frames,):
+            why = misfit(
+                self.landmarks,
+                self.sensor,
+                mu,
+                P,
+                part,
+                level=c.model_check,
+                tolerance_m=c.tolerance_m,
+                tolerance_heading=c.tolerance_heading,
+            )
+            if why is not None:
+                return why
+        return None
 
     def _unexplained(self, mu: FloatArray, P: FloatArray) -> int:
         """The newest frame's bearings if it holds ``keep_unexplained`` of them or more and
