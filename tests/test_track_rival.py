@@ -61,3 +61,40 @@ def test_search_rival_nats_defaults_and_bounds() -> None:
     for bad in (-1.0, math.nan, math.inf, "3", True):
         with pytest.raises(InputError, match="search_rival_nats"):
             TrackerConfig(search_rival_nats=bad)  # type: ignore[arg-type]
+
+
+def test_a_rival_holds_the_place_for_a_replay_s_after_its_search() -> None:
+    # A tracker told its true pose and localized; a rival noted by a search 1 s ago (within
+    # replay_s, 4 s) holds the place back, one noted 10 s ago no longer does.
+    import numpy as np
+
+    from omniloc.track import Tracker
+
+    ex = _run17()
+    run = ex.run
+    config = TrackerConfig(min_age_s=0.0, search_rival_nats=3.0)
+    frames = [f for f in run.frames if 40.0 < f.t <= 45.0]
+
+    def fed(rival_age: float | None) -> bool:
+        tr = Tracker(ex.landmarks, ex.sensor, ex.motion, config)
+        q = run.truth.pose_at(frames[0].t)
+        tr.set_pose((q.x, q.y, q.theta), np.diag([0.01, 0.01, 0.002]) ** 2)
+        odo = run.odometry
+        row = max(int(np.searchsorted(odo.t, frames[0].t, side="right")) - 1, 0)
+        last = None
+        for k, f in enumerate(frames):
+            k1 = int(np.searchsorted(odo.t, f.t, side="right"))
+            if k1 > row:
+                tr.odometry(odo.t[row:k1], odo.v[row:k1], odo.w[row:k1])
+            row = k1
+            if k == len(frames) - 1 and rival_age is not None:
+                assert last is not None and last.localized
+                leader = int(tr._ids[int(np.argmax(tr._logw))])
+                tr._rival = (f.t - rival_age, leader, 1.0, 6.0)
+            last = tr.frame(f.t, f.bearings)
+        assert last is not None
+        return last.localized and "the last search found a place" not in last.reason
+
+    assert fed(None)
+    assert not fed(1.0)
+    assert fed(10.0)
