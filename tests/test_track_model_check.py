@@ -12,12 +12,12 @@ from functools import cache
 import numpy as np
 import pytest
 
+from _feeding import feed, first_row
 from omniloc import LandmarkMap
 from omniloc.errors import InputError
 from omniloc.evaluate.tracking import errors_against
 from omniloc.sensor import SensorModel
 from omniloc.track import (
-    Frame,
     MotionModel,
     SimulatedRun,
     TrackerConfig,
@@ -57,27 +57,6 @@ def _track(config: TrackerConfig) -> tuple[SimulatedRun, TrackRun]:
     )
 
 
-def _feed(
-    tr: Tracker,
-    run: SimulatedRun,
-    frames: list[Frame],
-    row: int = 0,
-    extra: Callable[[float], np.ndarray] | None = None,
-) -> list[TrackEstimate]:
-    """Feed ``tr`` the run's odometry from row ``row`` on and ``frames``, each with the
-    bearings ``extra(t)`` added; its estimates."""
-    odo = run.odometry
-    out = []
-    for f in frames:
-        k1 = int(np.searchsorted(odo.t, f.t, side="right"))
-        if k1 > row:
-            tr.odometry(odo.t[row:k1], odo.v[row:k1], odo.w[row:k1])
-        row = k1
-        b = f.bearings if extra is None else np.concatenate([f.bearings, extra(f.t)])
-        out.append(tr.frame(f.t, b))
-    return out
-
-
 def test_a_look_alike_that_predicts_unseen_landmarks_is_not_localized() -> None:
     run, off = _track(TrackerConfig(model_check=None))
     wrong = _wrong(run, off)
@@ -102,7 +81,7 @@ def test_the_window_alone_holds_the_look_alike_back() -> None:
     twin = next(e for e in off.estimates if 33.0 <= e.t and e.localized)
     lm, _ = _look_alike()
     tr = Tracker(lm, EXAMPLE_SENSOR, EXAMPLE_MOTION, TrackerConfig(model_check=None))
-    _feed(tr, run, [f for f in run.frames if f.t <= twin.t])
+    feed(tr, run, [f for f in run.frames if f.t <= twin.t])
     window = tr._window.since(30.0)
     assert window[-1].t == twin.t and len(window) >= 10
     assert EXAMPLE_SENSOR.mount is None  # (the tracker's pose is the sensor's)
@@ -157,8 +136,7 @@ def _told_and_fed(
     frames = [f for f in run.frames if 20.0 < f.t <= 26.0]
     q = run.truth.pose_at(frames[0].t)
     tr.set_pose((q.x, q.y, q.theta), np.diag([0.01, 0.01, 0.002]) ** 2)
-    row = max(int(np.searchsorted(run.odometry.t, frames[0].t, side="right")) - 1, 0)
-    return _feed(tr, run, frames, row, extra)
+    return feed(tr, run, frames, first_row(run, frames[0].t), extra)
 
 
 def test_a_frame_the_place_cannot_explain_is_not_localized() -> None:
@@ -212,7 +190,7 @@ def test_a_place_right_within_the_tolerances_but_not_the_gate_fits() -> None:
     )
     tr = Tracker(lm, EXAMPLE_SENSOR, exact)
     frames = [f for f in run.frames if f.t <= 25.0]
-    _feed(tr, run, frames)
+    feed(tr, run, frames)
     window = tr._window.since(20.0)
     q = run.truth.pose_at(frames[-1].t)
     mu = np.array([q.x, q.y, q.theta])

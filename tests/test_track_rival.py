@@ -9,6 +9,7 @@ from functools import cache
 
 import pytest
 
+from _feeding import feed, first_row
 from omniloc.errors import InputError
 from omniloc.evaluate.tracking import errors_against
 from omniloc.track import TrackerConfig, TrackRun, preset, track, with_settings
@@ -79,20 +80,14 @@ def test_a_rival_holds_the_place_for_a_replay_s_after_its_search() -> None:
         tr = Tracker(ex.landmarks, ex.sensor, ex.motion, config)
         q = run.truth.pose_at(frames[0].t)
         tr.set_pose((q.x, q.y, q.theta), np.diag([0.01, 0.01, 0.002]) ** 2)
-        odo = run.odometry
-        row = max(int(np.searchsorted(odo.t, frames[0].t, side="right")) - 1, 0)
-        last = None
-        for k, f in enumerate(frames):
-            k1 = int(np.searchsorted(odo.t, f.t, side="right"))
-            if k1 > row:
-                tr.odometry(odo.t[row:k1], odo.v[row:k1], odo.w[row:k1])
-            row = k1
-            if k == len(frames) - 1 and rival_age is not None:
-                assert last is not None and last.localized
-                leader = int(tr._ids[int(np.argmax(tr._logw))])
-                tr._rival = (f.t - rival_age, leader, 1.0, 6.0)
-            last = tr.frame(f.t, f.bearings)
-        assert last is not None
+        states = feed(tr, run, frames[:-1], first_row(run, frames[0].t))
+        assert states[-1].localized
+        if rival_age is not None:
+            leader = int(tr._ids[int(np.argmax(tr._logw))])
+            tr._rival = (frames[-1].t - rival_age, leader, 1.0, 6.0)
+        # (On from the row after those the frames before were fed.)
+        fed_to = int(np.searchsorted(run.odometry.t, frames[-2].t, side="right"))
+        (last,) = feed(tr, run, frames[-1:], fed_to)
         return last.localized and "the last search found a place" not in last.reason
 
     assert fed(None)
