@@ -60,6 +60,8 @@ def run_meta(script: str, argv: Sequence[str] | None, **extra: Any) -> dict[str,
 
 
 def write_results(path: str | Path, meta: dict[str, Any], **payload: Any) -> None:
-    """Write ``{"meta": meta, **payload}`` as indented JSON to ``path`` and say so."""
+    """Write ``{"meta": meta, **payload}`` as indented JSON to ``path`` and say so; the
+    folder is made if it is missing (a run of minutes should not end in a traceback)."""
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text(json.dumps({"meta": meta, **payload}, indent=1) + "\n")
     print(f"wrote {path}")

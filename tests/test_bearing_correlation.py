@@ -153,3 +153,15 @@ def test_results_files_say_when_where_and_how(tmp_path: Path) -> None:
 
     assert out["meta"]["libraries"]["numpy"] == version("numpy")
     assert set(out["meta"]["libraries"]) == {"numpy", "scipy", "numba", "llvmlite"}
+
+
+def test_a_results_file_in_a_missing_folder_is_written_not_lost(tmp_path: Path) -> None:
+    # A benchmark of minutes whose --out names a folder not yet made must not end in a
+    # traceback with its figures lost (track_speed.py did, 2026-12-08).
+    import json
+
+    from _results import run_meta, write_results
+
+    path = tmp_path / "new" / "deeper" / "r.json"
+    write_results(path, run_meta("x.py", []), n=3)
+    assert json.loads(path.read_text())["n"] == 3
