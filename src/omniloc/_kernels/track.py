@@ -457,6 +457,185 @@ def refine_frames_kernel(
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
+def _nearest_reading(
+    L: FloatArray,
+    x: float,
+    y: float,
+    t: float,
+    rel: FloatArray,
+    z: float,
+    s2: float,
+    gate2: float,
+    max_range2: float,
+    min_range2: float,
+    half_fov: float,
+) -> tuple[float, int, float]:
+    """The landmark in range and view of the pose ``(x, y, t)`` composed with ``rel`` (3,)
+    whose predicted bearing is nearest ``z``: its ``e^2 / s2`` capped at ``gate2``, its row
+    (-1 when none is within the gate) and its squared distance."""
+    c, s = math.cos(t), math.sin(t)
+    qx = x + c * rel[0] - s * rel[1]
+    qy = y + s * rel[0] + c * rel[1]
+    qt = t + rel[2]
+    best = gate2
+    arg = -1
+    arg_r2 = 0.0
+    for m in range(L.shape[0]):
+        dx = L[m, 0] - qx
+        dy = L[m, 1] - qy
+        r2 = dx * dx + dy * dy
+        if r2 > max_range2 or r2 < min_range2 or r2 < 1e-18:
+            continue
+        h = wrap_float(math.atan2(dy, dx) - qt)
+        if half_fov >= 0.0 and abs(h) > half_fov:
+            continue
+        e = wrap_float(z - h)
+        q = e * e / s2
+        if q < best:
+            best = q
+            arg = m
+            arg_r2 = r2
+    return best, arg, arg_r2
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def pair_scan_kernel(
+    L: FloatArray,
+    rel: FloatArray,
+    z: FloatArray,
+    base: FloatArray,
+    seeds: IntArray,
+    sigma: float,
+    gate2: float,
+    max_range2: float,
+    min_range2: float,
+    half_fov: float,
+    steps: int,
+    min_hits: int,
+    max_out: int,
+) -> tuple[FloatArray, IntArray, FloatArray]:
+    """Poses of the last frame from two landmarks seen from a moving sensor (see
+    :func:`omniloc.track.relocalize.pair_candidates`, which says what it is for), in the
+    convention of :func:`refine_frames_kernel`: bearing ``b`` (``z[b]``) is seen from the
+    pose composed with ``rel[b]``.
+
+    For each pair ``(i, j)`` of bearings of one frame (``seeds``, (S, 2)) and each ordered
+    pair of landmarks ``(A, B)`` (within twice the range of each other), the poses of that
+    frame that see A at ``z[i]`` and B at ``z[j]`` are a one-parameter family (the world
+    direction from the pose to A); ``steps`` of it are scored against every bearing: each
+    takes the landmark in range and view whose predicted bearing is nearest, a robust cost
+    ``min(e^2 / sigma^2, gate2)``; a pose that can no longer explain ``min_hits`` bearings
+    is given up with the cost of that (a plateau). Kept: the local minima of the cost along
+    the family (below the sample before, not above the one after) with at least
+    ``min_hits`` bearings within the gate that fix the family: of a third landmark, or of A
+    or B from a frame ``base[b]`` metres from the seed's, far enough for its bearing to
+    move by three ``sigma`` (``base >= 3 sigma r``; a sensor standing still sees every pose
+    of the family alike). At most ``max_out`` of them.
+
+    Returns the poses of the last frame (K, 3), each bearing's landmark row (K, n; -1
+    beyond the gate) and each pose's cost (K,)."""
+    n = z.shape[0]
+    N = L.shape[0]
+    out_p = np.empty((max_out, 3))
+    out_lm = np.full((max_out, n), -1, dtype=np.int64)
+    out_c = np.empty(max_out)
+    K = 0
+    cost = np.empty(steps)
+    pose = np.empty((steps, 3))
+    near2 = 4.0 * max_range2
+    s2 = sigma * sigma
+    for si in range(seeds.shape[0]):
+        i = seeds[si, 0]
+        j = seeds[si, 1]
+        alpha = z[j] - z[i]
+        sa = math.sin(alpha)
+        if abs(sa) < 1e-3:
+            continue  # the two bearings (nearly) in line: no finite family
+        # The seed frame's pose relative to the last frame, and its inverse.
+        fx, fy, ft = rel[i, 0], rel[i, 1], rel[i, 2]
+        cf, sf = math.cos(ft), math.sin(ft)
+        ix = -(cf * fx + sf * fy)
+        iy = -(-sf * fx + cf * fy)
+        for a in range(N):
+            for bb in range(N):
+                if a == bb:
+                    continue
+                abx = L[a, 0] - L[bb, 0]
+                aby = L[a, 1] - L[bb, 1]
+                if abx * abx + aby * aby > near2:
+                    continue
+                for k in range(steps):
+                    cost[k] = math.inf
+                    psi = 2.0 * math.pi * k / steps
+                    u1x, u1y = math.cos(psi), math.sin(psi)
+                    u2x, u2y = math.cos(psi + alpha), math.sin(psi + alpha)
+                    # P + rA u1 = A, P + rB u2 = B:  rA u1 - rB u2 = A - B.
+                    det = -(u1x * u2y - u2x * u1y)
+                    rA = (abx * (-u2y) + u2x * aby) / det
+                    rB = (u1x * aby - u1y * abx) / det
+                    if not (rA > 0.0 and rB > 0.0):
+                        continue
+                    if rA * rA > max_range2 or rB * rB > max_range2:
+                        continue
+                    if rA * rA < min_range2 or rB * rB < min_range2:
+                        continue
+                    px = L[a, 0] - rA * u1x
+                    py = L[a, 1] - rA * u1y
+                    pt = psi - z[i] - ft  # the sensor's heading at the seed frame, less rel
+                    # The last frame's pose: the seed frame's composed with rel's inverse.
+                    c0, s0 = math.cos(pt + ft), math.sin(pt + ft)
+                    x = px + c0 * ix - s0 * iy
+                    y = py + s0 * ix + c0 * iy
+                    t = wrap_float(pt)
+                    pose[k, 0] = x
+                    pose[k, 1] = y
+                    pose[k, 2] = t
+                    tot = 0.0
+                    misses = 0
+                    for b in range(n):
+                        # (The seed's two bearings are explained and fix nothing.)
+                        if misses > n - 2 - min_hits:
+                            tot = n * gate2
+                            break
+                        best, _, _ = _nearest_reading(
+                            L, x, y, t, rel[b], z[b], s2, gate2, max_range2, min_range2, half_fov
+                        )
+                        tot += best
+                        if best >= gate2:
+                            misses += 1
+                    cost[k] = tot
+                for k in range(steps):
+                    ck = cost[k]
+                    if not math.isfinite(ck) or K >= max_out:
+                        continue
+                    lo = cost[(k - 1) % steps]
+                    hi = cost[(k + 1) % steps]
+                    if not (ck < lo and ck <= hi):
+                        continue
+                    # The bearings this pose explains, and their landmarks.
+                    x, y, t = pose[k, 0], pose[k, 1], pose[k, 2]
+                    hits = 0
+                    for b in range(n):
+                        _, arg, arg_r2 = _nearest_reading(
+                            L, x, y, t, rel[b], z[b], s2, gate2, max_range2, min_range2, half_fov
+                        )
+                        out_lm[K, b] = arg
+                        if arg >= 0 and (
+                            (arg != a and arg != bb) or base[b] * base[b] >= 9.0 * s2 * arg_r2
+                        ):
+                            hits += 1
+                    if hits < min_hits:
+                        out_lm[K, :] = -1
+                        continue
+                    out_p[K, 0] = x
+                    out_p[K, 1] = y
+                    out_p[K, 2] = t
+                    out_c[K] = ck
+                    K += 1
+    return out_p[:K].copy(), out_lm[:K].copy(), out_c[:K].copy()
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def _exp(x: float) -> float:
     """``math.exp(x)``, bit for bit, without calling it below -750 (where its value, below
     1e-325, is under the smallest double: it returns 0)."""

@@ -56,6 +56,7 @@ _BOOLS = {
     "nonempty_frames",
     "exclusive_landmarks",
     "entry_replay",
+    "pair_search",
 }
 #: The confidence tables (:mod:`omniloc.track.confidence`).
 _CONFIDENCE_TABLES = (
@@ -350,6 +351,14 @@ class TrackerConfig:
         look-alikes: 3 took the simulated battery's wrong frames from 84 to 38 for 1.2 % of
         the right ones, but on runs not read while building it from 41 to 37 for 0.8 %
         (docs/tracking-notebook.md, "A rival the last search found").
+    pair_search : bool
+        False (default): a search proposes the places its interpretation tree finds on the
+        window's bearings stacked by the odometry's rotation, which needs three distinct
+        landmarks among them. True: also the places that two landmarks seen from a moving
+        sensor fix (:func:`~omniloc.track.relocalize.pair_candidates`, over the last
+        ``search_window_s``): a robot that sees two landmarks at a time, whose near one's
+        sightings turn as it travels, is proposed too. Every pair of landmarks is tried at
+        every search: for maps of at most 100 landmarks (a larger one is refused).
     replay_s : float
         New hypotheses are replayed through the frames of the last this many seconds.
     entry_replay : bool
@@ -513,6 +522,7 @@ class TrackerConfig:
     covariance_inflation: float = 1.0
     search_miss: float | None = None
     search_rival_nats: float = 0.0
+    pair_search: bool = False
     replay_s: float = 4.0
     entry_replay: bool = True
     max_candidates: int = 3000

@@ -22,15 +22,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .._kernels.track import refine_frames_kernel
-from ..errors import OmnilocError
+from .._kernels.track import pair_scan_kernel, refine_frames_kernel
+from ..errors import InputError, OmnilocError
 from ..maps import LandmarkMap
 from ..search import localize
 from ..sensor import SensorModel
 from .motion import between
 from .window import WindowFrame, stack_bearings
 
-__all__ = ["Candidates", "refine_on_frames", "search_window"]
+__all__ = ["Candidates", "pair_candidates", "refine_on_frames", "search_window"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -203,3 +203,112 @@ def refine_on_frames(
         float(sigma),
         int(iterations),
     )
+
+
+#: Samples of the family of poses that see two landmarks at a frame's two bearings.
+PAIR_STEPS = 360
+#: At most this many pairs of the seed frame's bearings are tried.
+PAIR_MAX_SEEDS = 3
+#: At most this many bearings of the window are scored (the newest).
+PAIR_MAX_BEARINGS = 24
+#: At most this many places are proposed by one pair search.
+PAIR_MAX_OUT = 2000
+#: The largest map a pair search is run on: it tries every pair of landmarks (within twice
+#: the range of each other) and scores every landmark for each pose it samples.
+PAIR_MAX_LANDMARKS = 100
+
+
+def pair_candidates(
+    landmarks: LandmarkMap,
+    frames: list[WindowFrame],
+    sensor: SensorModel,
+    *,
+    min_hits: int,
+    cov_inflation: float,
+) -> Candidates:
+    """Candidate poses of the last frame from two landmarks seen from a moving sensor.
+
+    The window search stacks the frames' bearings by the odometry's rotation and asks the
+    interpretation tree for three distinct landmarks among them: a robot that sees two
+    landmarks at a time gives it none (the near one's sightings, turned by the travel, do
+    not merge and must be given distinct landmarks). Here the newest frame with two
+    bearings or more seeds the search: for each pair of its bearings and each ordered pair
+    of landmarks within twice the range of each other, the poses that see them there are a
+    one-parameter family (:data:`PAIR_STEPS` samples), each scored against every bearing of
+    ``frames`` seen from its own frame's odometry pose; the family's local minima that
+    explain ``min_hits`` bearings or more within the sensor's gate, the seed's two and
+    ``min_hits - 2`` that fix the family (of a third landmark, or seen from far enough
+    along the path: a sensor standing still fixes nothing), are refined with the exact
+    model (:func:`refine_on_frames`' Gauss-Newton on the bearings they explain).
+
+    Parameters
+    ----------
+    landmarks : LandmarkMap
+    frames : list of WindowFrame
+        The window, in time order (the last is the frame the poses are of).
+    sensor : SensorModel
+        Its noise, gate, range and field of view.
+    min_hits : int
+        Bearings a pose must explain (at least 3: the seed's two and one more that fixes
+        the family).
+    cov_inflation : float
+        Factor on the candidates' covariances.
+
+    Returns
+    -------
+    Candidates
+        Empty without a frame of two bearings or without a pose that explains enough.
+    """
+    if min_hits < 3:
+        raise ValueError(f"min_hits must be at least 3, got {min_hits}")
+    if landmarks.n > PAIR_MAX_LANDMARKS:
+        raise InputError(
+            f"a pair search on a map of {landmarks.n} landmarks: it tries every pair of "
+            f"landmarks, for maps of at most {PAIR_MAX_LANDMARKS}"
+        )
+    with_two = [k for k, f in enumerate(frames) if f.bearings.size >= 2]
+    n_all = sum(f.bearings.size for f in frames)
+    if not with_two or n_all < min_hits:
+        return _none(n_all)
+    ref = frames[-1].odom
+    rel = np.concatenate(
+        [np.repeat(between(ref, f.odom)[None], f.bearings.size, axis=0) for f in frames]
+    )
+    z = np.concatenate([f.bearings for f in frames])
+    start = np.cumsum([0] + [f.bearings.size for f in frames])
+    seed = with_two[-1]
+    a, b = np.triu_indices(frames[seed].bearings.size, k=1)
+    seeds = (np.column_stack([a, b]) + start[seed])[:PAIR_MAX_SEEDS]
+    # The newest bearings only (the seed's among them), renumbered.
+    keep = np.arange(max(0, z.size - PAIR_MAX_BEARINGS), z.size)
+    if seeds.min() < keep[0]:
+        keep = np.union1d(keep, seeds.ravel())
+    index = np.full(z.size, -1, dtype=np.int64)
+    index[keep] = np.arange(keep.size)
+    rel, z, seeds = rel[keep], z[keep], index[seeds]
+    # How far each bearing's frame lies from the seed frame.
+    base = np.hypot(rel[:, 0] - rel[seeds[0, 0], 0], rel[:, 1] - rel[seeds[0, 0], 1])
+    L = np.ascontiguousarray(landmarks.xy, dtype=np.float64)
+    sigma = sensor.noise
+    max_r2 = math.inf if sensor.max_range is None else sensor.max_range**2
+    min_r2 = 0.0 if sensor.min_range is None else sensor.min_range**2
+    half_fov = -1.0 if sensor.half_fov is None else sensor.half_fov
+    poses, lm, _ = pair_scan_kernel(
+        L,
+        np.ascontiguousarray(rel, dtype=np.float64),
+        np.ascontiguousarray(z, dtype=np.float64),
+        np.ascontiguousarray(base, dtype=np.float64),
+        np.ascontiguousarray(seeds, dtype=np.int64),
+        float(sigma),
+        float(sensor.gate_chi2),
+        float(max_r2),
+        float(min_r2),
+        float(half_fov),
+        PAIR_STEPS,
+        int(min_hits) - 2,
+        PAIR_MAX_OUT,
+    )
+    if poses.shape[0] == 0:
+        return _none(int(z.size))
+    poses, covs = refine_frames_kernel(L, rel, z, lm, poses, float(sigma), 6)
+    return Candidates(poses, covs * cov_inflation, int(z.size), True)

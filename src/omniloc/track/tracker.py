@@ -104,7 +104,7 @@ from .likelihood import (
 from .modelcheck import misfit
 from .motion import MotionModel, between, compose, integrate, inverse, move, twist_of
 from .records import Hypothesis, TrackEstimate, TrackState
-from .relocalize import search_window
+from .relocalize import PAIR_MAX_LANDMARKS, Candidates, pair_candidates, search_window
 from .window import Window, WindowFrame
 
 __all__ = ["Tracker", "TrackerConfig"]
@@ -257,6 +257,11 @@ class Tracker:
             raise InputError(
                 f"min_landmarks={c.min_landmarks} but the map has {self.landmarks.n} landmarks: "
                 "no place could ever be localized (0 turns the test off)"
+            )
+        if c.pair_search and self.landmarks.n > PAIR_MAX_LANDMARKS:
+            raise InputError(
+                f"pair_search on a map of {self.landmarks.n} landmarks: it tries every pair of "
+                f"landmarks at every search, for maps of at most {PAIR_MAX_LANDMARKS}"
             )
         self._L = np.ascontiguousarray(self.landmarks.xy, dtype=np.float64)
         self._mount = None if self.sensor.mount is None else np.array(self.sensor.mount)
@@ -1083,6 +1088,21 @@ class Tracker:
         )
         if cands.n_bearings >= c.search_min_bearings:
             self.searches += 1
+        if c.pair_search:
+            pairs = pair_candidates(
+                self.landmarks,
+                self._window.since(t - c.search_window_s),
+                self.sensor,
+                min_hits=c.search_min_bearings,
+                cov_inflation=c.candidate_cov_inflation,
+            )
+            if len(pairs):
+                cands = Candidates(
+                    np.concatenate([cands.poses, pairs.poses]),
+                    np.concatenate([cands.covs, pairs.covs]),
+                    cands.n_bearings,
+                    cands.complete,
+                )
         if len(cands) == 0:
             return 0
         poses = cands.poses[: c.max_candidates]
