@@ -581,7 +581,7 @@ def pair_scan_kernel(
                         continue
                     px = L[a, 0] - rA * u1x
                     py = L[a, 1] - rA * u1y
-                    pt = psi - z[i] - ft  # the sensor's heading at the seed frame, less rel
+                    pt = psi - z[i] - ft  # the last frame's heading (the seed's: psi - z[i])
                     # The last frame's pose: the seed frame's composed with rel's inverse.
                     c0, s0 = math.cos(pt + ft), math.sin(pt + ft)
                     x = px + c0 * ix - s0 * iy
