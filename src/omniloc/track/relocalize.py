@@ -211,7 +211,11 @@ PAIR_STEPS = 360
 PAIR_MAX_SEEDS = 3
 #: At most this many bearings of the window are scored (the newest).
 PAIR_MAX_BEARINGS = 24
-#: At most this many places are proposed by one pair search.
+#: At most this many places are proposed by one pair search: the first local minima in the
+#: scan's order (landmark pairs in map order). On the look-alikes' battery's maps of 20
+#: landmarks a search often finds more (2-6 of a run's 11-23 searches): the cut is then by
+#: that order, not by quality -- the 300 of lowest scan cost did worse (the lab notebook,
+#: "A pose from two landmarks and the odometry").
 PAIR_MAX_OUT = 2000
 #: The largest map a pair search is run on: it tries every pair of landmarks (within twice
 #: the range of each other) and scores every landmark for each pose it samples.
