@@ -468,34 +468,44 @@ def _nearest_reading(
     gate2: float,
     max_range2: float,
     min_range2: float,
+    min_q: float,
     half_fov: float,
+    pose: FloatArray,
+    h: FloatArray,
+    d: FloatArray,
+    scratch_J: FloatArray,
+    scratch_var: FloatArray,
+    zero: FloatArray,
 ) -> tuple[float, int, float]:
     """The landmark in range and view of the pose ``(x, y, t)`` composed with ``rel`` (3,)
     whose predicted bearing is nearest ``z``: its ``e^2 / s2`` capped at ``gate2``, its row
-    (-1 when none is within the gate) and its squared distance."""
+    (-1 when none is within the gate) and its squared distance. Which landmarks are in
+    range and view, and their bearings, are the frame likelihood's
+    (:func:`_predict_one` at an exactly known pose); ``pose`` (3,), ``h``, ``d``,
+    ``scratch_J`` (N, 3) and ``scratch_var`` are scratch space, ``zero`` a (3, 3) zero
+    covariance."""
     c, s = math.cos(t), math.sin(t)
-    qx = x + c * rel[0] - s * rel[1]
-    qy = y + s * rel[0] + c * rel[1]
-    qt = t + rel[2]
+    pose[0] = x + c * rel[0] - s * rel[1]
+    pose[1] = y + s * rel[0] + c * rel[1]
+    pose[2] = t + rel[2]
+    _predict_one(
+        pose, zero, L, 1.0, half_fov, max_range2, min_range2, min_q, h, scratch_J,
+        scratch_var, d, -1.0, True,
+    )  # fmt: skip
     best = gate2
     arg = -1
-    arg_r2 = 0.0
     for m in range(L.shape[0]):
-        dx = L[m, 0] - qx
-        dy = L[m, 1] - qy
-        r2 = dx * dx + dy * dy
-        if r2 > max_range2 or r2 < min_range2 or r2 < 1e-18:
+        if d[m] <= 0.0:
             continue
-        h = wrap_float(math.atan2(dy, dx) - qt)
-        if half_fov >= 0.0 and abs(h) > half_fov:
-            continue
-        e = wrap_float(z - h)
+        e = wrap_float(z - h[m])
         q = e * e / s2
         if q < best:
             best = q
             arg = m
-            arg_r2 = r2
-    return best, arg, arg_r2
+    r2 = 0.0
+    if arg >= 0:
+        r2 = (L[arg, 0] - pose[0]) ** 2 + (L[arg, 1] - pose[1]) ** 2
+    return best, arg, r2
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -509,6 +519,7 @@ def pair_scan_kernel(
     gate2: float,
     max_range2: float,
     min_range2: float,
+    min_q: float,
     half_fov: float,
     steps: int,
     min_hits: int,
@@ -544,6 +555,13 @@ def pair_scan_kernel(
     pose = np.empty((steps, 3))
     near2 = 4.0 * max_range2
     s2 = sigma * sigma
+    # (Scratch space of _nearest_reading.)
+    at = np.empty(3)
+    h = np.empty(N)
+    d = np.empty(N)
+    sJ = np.empty((N, 3))
+    svar = np.empty(N)
+    zero = np.zeros((3, 3))
     for si in range(seeds.shape[0]):
         i = seeds[si, 0]
         j = seeds[si, 1]
@@ -598,7 +616,24 @@ def pair_scan_kernel(
                             tot = n * gate2
                             break
                         best, _, _ = _nearest_reading(
-                            L, x, y, t, rel[b], z[b], s2, gate2, max_range2, min_range2, half_fov
+                            L,
+                            x,
+                            y,
+                            t,
+                            rel[b],
+                            z[b],
+                            s2,
+                            gate2,
+                            max_range2,
+                            min_range2,
+                            min_q,
+                            half_fov,
+                            at,
+                            h,
+                            d,
+                            sJ,
+                            svar,
+                            zero,
                         )
                         tot += best
                         if best >= gate2:
@@ -617,7 +652,24 @@ def pair_scan_kernel(
                     hits = 0
                     for b in range(n):
                         _, arg, arg_r2 = _nearest_reading(
-                            L, x, y, t, rel[b], z[b], s2, gate2, max_range2, min_range2, half_fov
+                            L,
+                            x,
+                            y,
+                            t,
+                            rel[b],
+                            z[b],
+                            s2,
+                            gate2,
+                            max_range2,
+                            min_range2,
+                            min_q,
+                            half_fov,
+                            at,
+                            h,
+                            d,
+                            sJ,
+                            svar,
+                            zero,
                         )
                         out_lm[K, b] = arg
                         if arg >= 0 and (

@@ -27,6 +27,7 @@ from ..errors import InputError, OmnilocError
 from ..maps import LandmarkMap
 from ..search import localize
 from ..sensor import SensorModel
+from .likelihood import MIN_RANGE_M
 from .motion import between
 from .window import WindowFrame, stack_bearings
 
@@ -307,6 +308,7 @@ def pair_candidates(
         float(sensor.gate_chi2),
         float(max_r2),
         float(min_r2),
+        MIN_RANGE_M**2,
         float(half_fov),
         PAIR_STEPS,
         int(min_hits) - 2,
