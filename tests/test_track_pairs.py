@@ -179,3 +179,17 @@ def test_a_pair_search_on_a_large_map_is_refused_with_the_reason() -> None:
     frames = _frames(_straight(np.zeros(3), 0.25, 0.0), big.xy, [0, 1])
     with pytest.raises(InputError, match="at most 100"):
         pair_candidates(big, frames, SENSOR, min_hits=4, cov_inflation=1.0)
+
+
+def test_a_clutter_bearing_first_in_the_seed_frame_does_not_spoil_every_seed() -> None:
+    # The newest frame holds a clutter bearing, the two landmarks, and another clutter
+    # bearing: the seeds must not all pair the first one (they did, until 2026-12-08).
+    L = np.array([[1.0, 1.0], [4.0, -1.0], [20.0, 20.0], [-20.0, 15.0], [15.0, -20.0]])
+    path = _straight(np.array([0.0, 0.0, 0.0]), 0.25, 0.1)
+    frames = _frames(path, L, [0, 1])
+    last = frames[-1]
+    b = np.array([-2.5, last.bearings[0], last.bearings[1], 2.9])
+    frames[-1] = WindowFrame(last.t, b, last.odom, last.delta, last.Q)
+    got = pair_candidates(LandmarkMap(L), frames, SENSOR, min_hits=4, cov_inflation=1.0)
+    err = np.hypot(*(got.poses[:, :2] - path[-1][:2]).T) if len(got) else np.array([np.inf])
+    assert err.min() < 0.01

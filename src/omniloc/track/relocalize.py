@@ -237,7 +237,8 @@ def pair_candidates(
     interpretation tree for three distinct landmarks among them: a robot that sees two
     landmarks at a time gives it none (the near one's sightings, turned by the travel, do
     not merge and must be given distinct landmarks). Here the newest frame with two
-    bearings or more seeds the search: for each pair of its bearings and each ordered pair
+    bearings or more seeds the search: for each of up to :data:`PAIR_MAX_SEEDS` pairs of its
+    bearings (neighbours in the frame's order first) and each ordered pair
     of landmarks within twice the range of each other, the poses that see them there are a
     one-parameter family (:data:`PAIR_STEPS` samples), each scored against every bearing of
     ``frames`` seen from its own frame's odometry pose; the family's local minima that
@@ -282,8 +283,11 @@ def pair_candidates(
     z = np.concatenate([f.bearings for f in frames])
     start = np.cumsum([0] + [f.bearings.size for f in frames])
     seed = with_two[-1]
-    a, b = np.triu_indices(frames[seed].bearings.size, k=1)
-    seeds = (np.column_stack([a, b]) + start[seed])[:PAIR_MAX_SEEDS]
+    # Its pairs of bearings, neighbours first ((0, 1), (1, 2), (2, 3), ...; then (0, 2), ...):
+    # the first few do not all hold one bearing, which a clutter bearing would spoil for all.
+    m = frames[seed].bearings.size
+    pairs = [(i, i + g) for g in range(1, m) for i in range(m - g)][:PAIR_MAX_SEEDS]
+    seeds = np.asarray(pairs, dtype=np.int64) + start[seed]
     # The newest bearings only (the seed's among them), renumbered.
     keep = np.arange(max(0, z.size - PAIR_MAX_BEARINGS), z.size)
     if seeds.min() < keep[0]:
