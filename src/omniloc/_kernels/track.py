@@ -553,6 +553,9 @@ def pair_scan_kernel(
     K = 0
     cost = np.empty(steps)
     pose = np.empty((steps, 3))
+    # Each sample's landmark for each bearing, and its bearings that fix the family.
+    args = np.empty((steps, n), dtype=np.int64)
+    hits = np.zeros(steps, dtype=np.int64)
     near2 = 4.0 * max_range2
     s2 = sigma * sigma
     # (Scratch space of _nearest_reading.)
@@ -610,12 +613,14 @@ def pair_scan_kernel(
                     pose[k, 2] = t
                     tot = 0.0
                     misses = 0
+                    hits[k] = 0
                     for b in range(n):
                         # (The seed's two bearings are explained and fix nothing.)
                         if misses > n - 2 - min_hits:
                             tot = n * gate2
+                            hits[k] = -1  # (given up: it cannot be kept)
                             break
-                        best, _, _ = _nearest_reading(
+                        best, arg, arg_r2 = _nearest_reading(
                             L,
                             x,
                             y,
@@ -636,52 +641,22 @@ def pair_scan_kernel(
                             zero,
                         )
                         tot += best
-                        if best >= gate2:
+                        args[k, b] = arg
+                        if arg < 0:
                             misses += 1
+                        elif (arg != a and arg != bb) or base[b] * base[b] >= 9.0 * s2 * arg_r2:
+                            hits[k] += 1
                     cost[k] = tot
                 for k in range(steps):
                     ck = cost[k]
-                    if not math.isfinite(ck) or K >= max_out:
+                    if not math.isfinite(ck) or K >= max_out or hits[k] < min_hits:
                         continue
                     lo = cost[(k - 1) % steps]
                     hi = cost[(k + 1) % steps]
                     if not (ck < lo and ck <= hi):
                         continue
-                    # The bearings this pose explains, and their landmarks.
-                    x, y, t = pose[k, 0], pose[k, 1], pose[k, 2]
-                    hits = 0
-                    for b in range(n):
-                        _, arg, arg_r2 = _nearest_reading(
-                            L,
-                            x,
-                            y,
-                            t,
-                            rel[b],
-                            z[b],
-                            s2,
-                            gate2,
-                            max_range2,
-                            min_range2,
-                            min_q,
-                            half_fov,
-                            at,
-                            h,
-                            d,
-                            sJ,
-                            svar,
-                            zero,
-                        )
-                        out_lm[K, b] = arg
-                        if arg >= 0 and (
-                            (arg != a and arg != bb) or base[b] * base[b] >= 9.0 * s2 * arg_r2
-                        ):
-                            hits += 1
-                    if hits < min_hits:
-                        out_lm[K, :] = -1
-                        continue
-                    out_p[K, 0] = x
-                    out_p[K, 1] = y
-                    out_p[K, 2] = t
+                    out_p[K] = pose[k]
+                    out_lm[K] = args[k]
                     out_c[K] = ck
                     K += 1
     return out_p[:K].copy(), out_lm[:K].copy(), out_c[:K].copy()
