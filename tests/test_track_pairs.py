@@ -125,7 +125,8 @@ def test_no_frame_with_two_bearings_or_too_few_hits_asked_proposes_nothing() -> 
 
 def test_the_tracker_with_pair_search_is_right_where_a_look_alike_took_the_mass() -> None:
     # Look-alikes' run 3: the robot sees two landmarks for its first 8 s; without the pair
-    # search a place 13 m off is localized at 7.6-10.1 s.
+    # search the true place is never proposed (and until the entries from a search's own
+    # frames, 2026-12-08, a place 13 m off was localized at 7.6-10.1 s).
     ex = lookalike_run(3)
     run = ex.run
     config = preset("generic")[2]
@@ -151,7 +152,7 @@ def test_the_tracker_with_pair_search_is_right_where_a_look_alike_took_the_mass(
             right += ok
         return wrong, right
 
-    assert wrong_and_right(config)[0] >= 5
+    assert wrong_and_right(config) == (0, 0)
     wrong, right = wrong_and_right(
         with_settings(ex.sensor, ex.motion, config, {"pair_search": True})[2]
     )

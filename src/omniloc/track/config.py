@@ -362,19 +362,23 @@ class TrackerConfig:
     replay_s : float
         New hypotheses are replayed through the frames of the last this many seconds.
     entry_replay : bool
-        True (default): when elsewhere held the most mass at a later frame of the replay than
-        its first, the candidates are replayed again from that frame, and their entries
-        from it on are weighed by that replay; a candidate whose late entries weigh more
-        takes that replay's pose and covariance and is held to have been at its place since
-        that frame. (Elsewhere's mass, the prior of a place that enters at a frame, grows
-        while the tracked places explain the frames and is highest at the frame of a
-        kidnapping, before they stop explaining them.) The replay from the first frame
-        reaches a later entry with a state shaped by the frames before it, without their
-        evidence: a look-alike sharpened by frames from before a jump that it happened to
-        explain took the mass from the truth, which those frames had pulled off (the
-        example grid's half-turn twins after a kidnapping). Costs at most one replay more
-        per search, over the frames from that frame on. False: each entry weighed with the
-        one replay from the first frame.
+        True (default): the candidates are replayed again from the frame of the replay at
+        which elsewhere held the most mass and from the first frame of the search's window
+        (``search_window_s``), where those are later than the replay's first; the entries
+        are split at those frames and each part is weighed by the replay that starts it; a
+        candidate takes the pose and covariance of its heaviest part's replay and is held
+        to have been at its place since that part's first frame. (Elsewhere's mass, the
+        prior of a place that enters at a frame, grows while the tracked places explain
+        the frames and is highest at the frame of a kidnapping, before they stop
+        explaining them; the frames a search found a place on are frames it explains,
+        whatever came before them.) The replay from the first frame reaches a later entry
+        with a state shaped by the frames before it, without their evidence: a look-alike
+        sharpened by frames from before a jump that it happened to explain took the mass
+        from the truth, which those frames had pulled off (the example grid's half-turn
+        twins after a kidnapping), and the places found beside a look-alike, pulled off by
+        frames before their search's, left it without a rival. Costs at most two replays
+        more per search, over the frames from those frames on. False: each entry weighed
+        with the one replay from the first frame.
     max_candidates : int
         At most this many search solutions are replayed (the search's best).
     merge_chi2 : float

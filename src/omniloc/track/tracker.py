@@ -73,6 +73,7 @@ rejected call.
 
 from __future__ import annotations
 
+import itertools
 import logging
 import math
 from collections import deque
@@ -981,40 +982,58 @@ class Tracker:
         volume: FloatArray,
         logw: FloatArray,
         state: tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray],
+        found_from: float,
     ) -> None:
-        """Weigh the candidates again, in place, for entries from the frame at which
-        elsewhere held the most mass, if that is not the replay's first: replayed from that
-        frame, as places that left elsewhere there. ``state`` (the replay's poses,
-        covariances, fit counts, clutter memory and the times the places are held since) is
-        replaced, in place, by the second replay's for the candidates whose late entries
-        weigh more than their early ones.
+        """Weigh the candidates again, in place, for entries from later frames of the replay:
+        the frame at which elsewhere held the most mass, and the first frame the search
+        looked at (``found_from``, a time), each replayed from that frame, as places that
+        left elsewhere there. The entries are split at those frames; each part is weighed
+        by the replay that starts it. ``state`` (the replay's poses, covariances, fit counts,
+        clutter memory and the times the places are held since) is replaced, in place, by
+        the replay of each candidate's heaviest part (a tie: the later).
 
         The replay from the first frame reaches each later entry with a state shaped by the
         frames before it, without their evidence: sharpened by frames a look-alike happened
         to explain, or pulled off by frames from before a kidnapping that the true place
         cannot explain. A place entering after the frames that emptied the tracked places
-        would not have seen them."""
+        would not have seen them; and the frames the search found a place on are frames it
+        explains, whatever came before them (a kidnapping from a state that was not
+        localized leaves elsewhere's mass without a peak at the jump)."""
+        starts = {0}
         k = int(np.argmax(entry))
-        if k == 0 or not np.isfinite(entry[k]):
+        if np.isfinite(entry[k]):
+            starts.add(k)
+        f0 = next((i for i, f in enumerate(rframes) if f.t >= found_from), 0)
+        if np.isfinite(entry[f0]):
+            starts.add(f0)
+        if len(starts) == 1:
             return
-        sub = rframes[k:]
-        mu2, P2, vol2, end2, fm2, fn2, mw2 = self._replay(poses, covs, sub)
-        before = _logsumexp_rows(entry[None, :k] + to_end[:, :k]) + volume
-        after = _logsumexp_rows(entry[None, k:] + end2) + vol2
-        # (A candidate the second replay lost -- its pose or covariance no longer finite --
-        # keeps its early entries.)
-        after = np.where(np.isnan(after), -math.inf, after)
-        logw[:] = np.logaddexp(before, after) - self._norm
-        late = after >= before
+        bounds = [*sorted(starts), len(rframes)]
         mu, P, fit_m, fit_n, mem_w, born = state
-        mu[late], P[late], fit_m[late], fit_n[late], mem_w[late] = (
-            mu2[late],
-            P2[late],
-            fm2[late],
-            fn2[late],
-            mw2[late],
-        )
-        born[late] = sub[0].t
+        parts = [_logsumexp_rows(entry[None, : bounds[1]] + to_end[:, : bounds[1]]) + volume]
+        best = parts[0].copy()
+        for a, b in itertools.pairwise(bounds[1:]):
+            sub = rframes[a:]
+            mu2, P2, vol2, end2, fm2, fn2, mw2 = self._replay(poses, covs, sub)
+            part = _logsumexp_rows(entry[None, a:b] + end2[:, : b - a]) + vol2
+            # (A candidate this replay lost -- its pose or covariance no longer finite --
+            # keeps its other entries.)
+            part = np.where(np.isnan(part), -math.inf, part)
+            parts.append(part)
+            late = part >= best
+            best = np.where(late, part, best)
+            mu[late], P[late], fit_m[late], fit_n[late], mem_w[late] = (
+                mu2[late],
+                P2[late],
+                fm2[late],
+                fn2[late],
+                mw2[late],
+            )
+            born[late] = sub[0].t
+        total = parts[0]
+        for part in parts[1:]:
+            total = np.logaddexp(total, part)
+        logw[:] = total - self._norm
 
     def _closest_rival(
         self, t: float, mu: FloatArray, evidence: FloatArray
@@ -1131,7 +1150,9 @@ class Tracker:
         born = np.full(mu.shape[0], rframes[0].t)
         if c.entry_replay:
             state = (mu, P, fit_m, fit_n, mem_w, born)
-            self._replay_entries(poses, covs, rframes, entry, to_end, volume, logw, state)
+            self._replay_entries(
+                poses, covs, rframes, entry, to_end, volume, logw, state, t - c.search_window_s
+            )
         ok = np.isfinite(logw) & np.isfinite(mu).all(axis=1) & np.isfinite(P).all(axis=(1, 2))
         ok &= self._inside(mu)
         idx = np.flatnonzero(ok)
