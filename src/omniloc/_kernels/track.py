@@ -508,6 +508,14 @@ def _nearest_reading(
     return best, arg, r2
 
 
+#: Two bearings whose angle apart has a sine below this are nearly in line (within about
+#: 6 degrees of 0 or 180 degrees apart): the poses that see two landmarks there lie on a
+#: circle so large that a whole turn's steps step over the few of them within range, and
+#: the position along the line the landmarks stand on is barely fixed by the bearings.
+#: :func:`pair_scan_kernel` skips such a pair.
+PAIR_MIN_SINE = 0.1
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def pair_scan_kernel(
     L: FloatArray,
@@ -570,8 +578,8 @@ def pair_scan_kernel(
         j = seeds[si, 1]
         alpha = z[j] - z[i]
         sa = math.sin(alpha)
-        if abs(sa) < 1e-3:
-            continue  # the two bearings (nearly) in line: no finite family
+        if abs(sa) < PAIR_MIN_SINE:
+            continue  # the two bearings nearly in line
         # The seed frame's pose relative to the last frame, and its inverse.
         fx, fy, ft = rel[i, 0], rel[i, 1], rel[i, 2]
         cf, sf = math.cos(ft), math.sin(ft)

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from .._kernels.track import pair_scan_kernel, refine_frames_kernel
+from .._kernels.track import PAIR_MIN_SINE, pair_scan_kernel, refine_frames_kernel
 from ..errors import InputError, OmnilocError
 from ..maps import LandmarkMap
 from ..search import localize
@@ -237,7 +237,9 @@ def pair_candidates(
     interpretation tree for three distinct landmarks among them: a robot that sees two
     landmarks at a time gives it none (the near one's sightings, turned by the travel, do
     not merge and must be given distinct landmarks). Here the newest frame with two
-    bearings or more seeds the search: for each of up to :data:`PAIR_MAX_SEEDS` pairs of its
+    bearings not in line (a sine of their angle apart of at least
+    :data:`~omniloc._kernels.track.PAIR_MIN_SINE`) seeds the search: for each of up to
+    :data:`PAIR_MAX_SEEDS` pairs of its
     bearings (neighbours in the frame's order first) and each ordered pair
     of landmarks within twice the range of each other, the poses that see them there are a
     one-parameter family (:data:`PAIR_STEPS` samples), each scored against every bearing of
@@ -282,11 +284,20 @@ def pair_candidates(
     )
     z = np.concatenate([f.bearings for f in frames])
     start = np.cumsum([0] + [f.bearings.size for f in frames])
-    seed = with_two[-1]
-    # Its pairs of bearings, neighbours first ((0, 1), (1, 2), (2, 3), ...; then (0, 2), ...):
-    # the first few do not all hold one bearing, which a clutter bearing would spoil for all.
-    m = frames[seed].bearings.size
-    pairs = [(i, i + g) for g in range(1, m) for i in range(m - g)][:PAIR_MAX_SEEDS]
+    # The newest frame with a pair of bearings not nearly in line (within about 6 degrees
+    # of 0 or 180 degrees apart the kernel skips a pair: the sensor between the two
+    # landmarks or both nearly behind each other, where the whole turn's steps miss the
+    # poses and the bearings barely fix the position along the line). Its pairs of
+    # bearings, neighbours first ((0, 1), (1, 2), (2, 3), ...; then (0, 2), ...): the first
+    # few do not all hold one bearing, which a clutter bearing would spoil for all.
+    for seed in reversed(with_two):
+        b = frames[seed].bearings
+        m = b.size
+        pairs = [(i, i + g) for g in range(1, m) for i in range(m - g)][:PAIR_MAX_SEEDS]
+        if any(abs(math.sin(b[j] - b[i])) >= PAIR_MIN_SINE for i, j in pairs):
+            break
+    else:
+        return _none(n_all)
     seeds = np.asarray(pairs, dtype=np.int64) + start[seed]
     # The newest bearings only (the seed's among them), renumbered.
     keep = np.arange(max(0, z.size - PAIR_MAX_BEARINGS), z.size)
