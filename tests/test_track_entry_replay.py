@@ -24,6 +24,15 @@ def _wrong_after(run: SimulatedRun, result: TrackRun, t0: float) -> list[float]:
     ]
 
 
+def _state() -> tuple[np.ndarray, ...]:
+    """Two candidates' replayed state (poses, covariances, fit counts, clutter memory,
+    entry times), as :meth:`Tracker._replay_entries` is handed it."""
+    mu = np.array([[1.0, 1.0, 0.0], [2.0, 2.0, 0.0]])
+    P = np.stack([np.eye(3) * 0.01] * 2)
+    fit_m, fit_n = np.array([1.0, 1.0]), np.array([2.0, 2.0])
+    return mu, P, fit_m, fit_n, np.zeros((2, 0)), np.full(2, 1.0)
+
+
 @cache
 def _run(seed: int, entry_replay: bool) -> tuple[SimulatedRun, TrackRun]:
     ex = lookalike_run(seed)
@@ -92,13 +101,9 @@ def test_a_candidate_the_second_replay_loses_keeps_its_early_entries(
     monkeypatch.setattr(tracker, "_replay", fake_replay)
     entry = np.array([-20.0, -1.0, -3.0])  # elsewhere's mass highest at the second frame
     to_end = np.array([[-2.0, -1.0, 0.0], [-2.0, -1.0, 0.0]])
-    volume = np.zeros(C)
-    logw = np.zeros(C)
-    mu = np.array([[1.0, 1.0, 0.0], [2.0, 2.0, 0.0]])
-    P = np.stack([np.eye(3) * 0.01] * C)
-    fit_m, fit_n = np.array([1.0, 1.0]), np.array([2.0, 2.0])
-    mem_w, born = np.zeros((C, 0)), np.full(C, 1.0)
-    state = (mu, P, fit_m, fit_n, mem_w, born)
+    volume, logw = np.zeros(2), np.zeros(2)
+    state = _state()
+    mu, P, fit_m, fit_n, _, born = state
     tracker._replay_entries(
         np.zeros((C, 3)), P.copy(), frames, entry, to_end, volume, logw, state, 1.0
     )
@@ -144,12 +149,9 @@ def test_entries_from_the_frames_the_search_looked_at_are_weighed_by_their_own_r
     monkeypatch.setattr(tracker, "_replay", fake_replay)
     entry = np.array([-20.0, -1.0, -3.0, -2.0])
     to_end = np.array([[-2.0, -1.0, 0.0, 0.5], [-2.0, -1.0, 0.0, 0.5]])
-    volume, logw = np.zeros(C), np.zeros(C)
-    mu = np.array([[1.0, 1.0, 0.0], [2.0, 2.0, 0.0]])
-    P = np.stack([np.eye(3) * 0.01] * C)
-    fit_m, fit_n = np.array([1.0, 1.0]), np.array([2.0, 2.0])
-    mem_w, born = np.zeros((C, 0)), np.full(C, 1.0)
-    state = (mu, P, fit_m, fit_n, mem_w, born)
+    volume, logw = np.zeros(2), np.zeros(2)
+    state = _state()
+    mu, P, fit_m, fit_n, _, born = state
     tracker._replay_entries(
         np.zeros((C, 3)), P.copy(), frames, entry, to_end, volume, logw, state, 1.5
     )
