@@ -38,14 +38,17 @@ def _wrong(run: SimulatedRun, result: TrackRun) -> list[float]:
 
 
 @cache
-def _look_alike() -> tuple[LandmarkMap, SimulatedRun]:
-    """60 s on the example's grid (the same under a half turn but for one landmark) with its
-    360-degree camera, carried off at 30 s (run 55 of the look-alikes' battery). Without the
-    check the tracker is localized on the half-turn twin, 5.9-6.4 m off, at 33.1-35.9 s: the
-    twin explains the bearings since the jump as well as the truth, but it puts landmarks in
-    view that the camera does not report (of 84 sightings it predicts over the 13 frames
-    since the jump, 43 were seen)."""
-    ex = lookalike_run(55)
+def _look_alike(seed: int = 3) -> tuple[LandmarkMap, SimulatedRun]:
+    """Run ``seed`` of the look-alikes' battery with the example's 360-degree camera, 60 s,
+    carried off at 30 s. Run 3 (the default), on a random map of 14 landmarks (its robot
+    sees two landmarks at a time for its first 8 s, and no search proposes the truth):
+    without the check the tracker is localized at a look-alike 7.2 m off at 7.1-11.9 s: it
+    explains the bearings, but it puts landmarks in view that the camera does not report
+    (of 68 sightings it predicts over the 17 frames of the check's 5 s, 31 were seen).
+    Until 2026-12-08 these tests read run 55, on the example's grid, whose half-turn twin
+    after the jump was localized without the check; a search's candidates entering from
+    the first frame of its window keep that twin from the mass now."""
+    ex = lookalike_run(seed)
     assert ex.sensor == EXAMPLE_SENSOR and ex.run.kidnap_t == 30.0
     return ex.landmarks, ex.run
 
@@ -60,29 +63,29 @@ def _track(config: TrackerConfig) -> tuple[SimulatedRun, TrackRun]:
 def test_a_look_alike_that_predicts_unseen_landmarks_is_not_localized() -> None:
     run, off = _track(TrackerConfig(model_check=None))
     wrong = _wrong(run, off)
-    after = [t for t in wrong if 32.0 <= t <= 36.0]
-    assert len(after) >= 5
+    assert len([t for t in wrong if 7.0 <= t <= 12.0]) >= 5
     # Without the check the jump's own frame, 30.125 s, is localized at the place the robot
     # was carried from; with it that frame's bearings alone give the place away (the
-    # newest frame is tested alone too), and no frame after the jump is wrong.
+    # newest frame is tested alone too), and no frame is wrong.
     assert 30.125 in wrong
     run, on = _track(TrackerConfig())
-    assert [t for t in _wrong(run, on) if t >= 30.0] == []
+    assert _wrong(run, on) == []
     # The true place is still localized in most frames.
     right = sum(e.localized for e in on.estimates)
     assert right >= 0.9 * sum(e.localized for e in off.estimates) - len(wrong)
 
 
 def test_the_window_alone_holds_the_look_alike_back() -> None:
-    # The same run, its frames since the jump tested from the half-turn twin the tracker
-    # without the check is localized at: together they do not fit the sensor from it, the
-    # newest alone does (the test over the window is what sees this one through).
+    # The same run, the frames of the check's 5 s tested from the look-alike the tracker
+    # without the check is first localized at: together they do not fit the sensor from it,
+    # the newest alone does (the test over the window is what sees this one through).
     run, off = _track(TrackerConfig(model_check=None))
-    twin = next(e for e in off.estimates if 33.0 <= e.t and e.localized)
+    twin = next(e for e in off.estimates if 7.0 <= e.t and e.localized)
+    assert twin.t in _wrong(run, off)
     lm, _ = _look_alike()
     tr = Tracker(lm, EXAMPLE_SENSOR, EXAMPLE_MOTION, TrackerConfig(model_check=None))
     feed(tr, run, [f for f in run.frames if f.t <= twin.t])
-    window = tr._window.since(30.0)
+    window = tr._window.since(twin.t - TrackerConfig().model_check_s)
     assert window[-1].t == twin.t and len(window) >= 10
     assert EXAMPLE_SENSOR.mount is None  # (the tracker's pose is the sensor's)
     mu = twin.pose.as_array()
@@ -129,9 +132,9 @@ def test_unexplained_bearings_beyond_the_clutter_rate_hold_a_place() -> None:
 def _told_and_fed(
     config: TrackerConfig, extra: Callable[[float], np.ndarray]
 ) -> list[TrackEstimate]:
-    """The look-alike run's frames of 20-26 s fed to a tracker told its true pose (before
-    the first of them), each with the bearings ``extra(t)`` added."""
-    lm, run = _look_alike()
+    """Look-alikes' run 55's frames of 20-26 s (the example's grid) fed to a tracker told its
+    true pose (before the first of them), each with the bearings ``extra(t)`` added."""
+    lm, run = _look_alike(55)
     tr = Tracker(lm, EXAMPLE_SENSOR, EXAMPLE_MOTION, config)
     frames = [f for f in run.frames if 20.0 < f.t <= 26.0]
     q = run.truth.pose_at(frames[0].t)
@@ -144,7 +147,7 @@ def test_a_frame_the_place_cannot_explain_is_not_localized() -> None:
     # more that nothing explains (0.3 clutter bearings a frame expected: p = 2.7e-4). Over
     # the window they are within the clutter rate; the frame alone is not: that frame is
     # not localized, and the next ones are again.
-    _, run = _look_alike()
+    _, run = _look_alike(55)
     times = [f.t for f in run.frames if 20.0 < f.t <= 26.0]
     at = times[12]
     four = np.deg2rad([-170.0, -100.0, 80.0, 150.0])
