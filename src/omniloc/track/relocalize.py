@@ -237,10 +237,10 @@ def pair_candidates(
     interpretation tree for three distinct landmarks among them: a robot that sees two
     landmarks at a time gives it none (the near one's sightings, turned by the travel, do
     not merge and must be given distinct landmarks). Here the newest frame with two
-    bearings not in line (a sine of their angle apart of at least
+    bearings not nearly in line (the sine of their angle apart at least
     :data:`~omniloc._kernels.track.PAIR_MIN_SINE`) seeds the search: for each of up to
-    :data:`PAIR_MAX_SEEDS` pairs of its
-    bearings (neighbours in the frame's order first) and each ordered pair
+    :data:`PAIR_MAX_SEEDS` pairs of its bearings (neighbours in the frame's order first;
+    pairs nearly in line skipped) and each ordered pair
     of landmarks within twice the range of each other, the poses that see them there are a
     one-parameter family (:data:`PAIR_STEPS` samples), each scored against every bearing of
     ``frames`` seen from its own frame's odometry pose; the family's local minima that
