@@ -131,7 +131,7 @@ def test_no_frame_with_two_bearings_or_too_few_hits_asked_proposes_nothing() -> 
     assert (
         len(pair_candidates(LandmarkMap(L), one_each, SENSOR, min_hits=4, cov_inflation=1.0)) == 0
     )
-    with pytest.raises(ValueError, match="min_hits must be at least 3"):
+    with pytest.raises(InputError, match="min_hits must be at least 3"):
         pair_candidates(LandmarkMap(L), one_each, SENSOR, min_hits=2, cov_inflation=1.0)
 
 

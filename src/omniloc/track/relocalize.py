@@ -150,6 +150,16 @@ def search_window(
     return Candidates(poses, covs, m, res.complete)
 
 
+def _seen_from(frames: list[WindowFrame]) -> tuple[FloatArray, FloatArray]:
+    """Every bearing of ``frames`` in order (n,) and, for each, the odometry from its frame
+    to the last (n, 3): the pose it was seen from is the last frame's composed with it."""
+    ref = frames[-1].odom
+    rel = np.concatenate(
+        [np.repeat(between(ref, f.odom)[None], f.bearings.size, axis=0) for f in frames]
+    )
+    return rel, np.concatenate([f.bearings for f in frames])
+
+
 def refine_on_frames(
     landmarks_xy: FloatArray,
     frames: list[WindowFrame],
@@ -187,11 +197,7 @@ def refine_on_frames(
     C = poses.shape[0]
     if C == 0:
         return poses, np.zeros((0, 3, 3))
-    ref = frames[-1].odom
-    rel = np.concatenate(
-        [np.repeat(between(ref, f.odom)[None], f.bearings.size, axis=0) for f in frames]
-    )
-    z = np.concatenate([f.bearings for f in frames])
+    rel, z = _seen_from(frames)
     use = member >= 0
     rel, z, member = rel[use], z[use], member[use]
     lm = np.where(member[None, :] >= 0, assign[:, member], -1)  # (C, n)
@@ -268,7 +274,7 @@ def pair_candidates(
         Empty without a frame of two bearings or without a pose that explains enough.
     """
     if min_hits < 3:
-        raise ValueError(f"min_hits must be at least 3, got {min_hits}")
+        raise InputError(f"min_hits must be at least 3, got {min_hits}")
     if landmarks.n > PAIR_MAX_LANDMARKS:
         raise InputError(
             f"a pair search on a map of {landmarks.n} landmarks: it tries every pair of "
@@ -278,11 +284,7 @@ def pair_candidates(
     n_all = sum(f.bearings.size for f in frames)
     if not with_two or n_all < min_hits:
         return _none(n_all)
-    ref = frames[-1].odom
-    rel = np.concatenate(
-        [np.repeat(between(ref, f.odom)[None], f.bearings.size, axis=0) for f in frames]
-    )
-    z = np.concatenate([f.bearings for f in frames])
+    rel, z = _seen_from(frames)
     start = np.cumsum([0] + [f.bearings.size for f in frames])
     # The newest frame with a pair of bearings not nearly in line (within about 6 degrees
     # of 0 or 180 degrees apart the kernel skips a pair: the sensor between the two
